@@ -1,0 +1,204 @@
+"""Pressure laws: operating point -> friction parameter dict (the calcparams pattern).
+
+Friction laws know nothing about pressure. A pressure law maps the chamber pressure(s) to
+the keyword parameters of a friction law, so the pressure-dependent model is a composition::
+
+    stribeck(v, **params_at_pressure(p, THESIS_2016.coefficients))
+
+A *coefficient set* is a dict whose keys are friction-parameter names; each value is either a
+constant (float, SI) or a dict of the coefficients of a scalar pressure law, e.g.
+``{"F_c": {"intercept": 70.2, "slope": 0.5e-5}, "v_r": 0.010, "alpha": 1.0}`` for the thesis'
+linear law (eq. 2.10, 4.1-4.3). Which chamber pressure a law sees is the explicit
+``reference`` argument of :func:`operating_pressure`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ._checks import check_signal
+
+__all__ = [
+    "PRESSURE_LAWS",
+    "PRESSURE_REFERENCES",
+    "linear",
+    "quadratic",
+    "exponential",
+    "operating_pressure",
+    "params_at_pressure",
+    "simscape_cylinder_friction",
+]
+
+
+def linear(pressure, intercept, slope):
+    """Linear pressure law ``a + b p`` (thesis eq. 2.10 and 4.1-4.3).
+
+    Parameters
+    ----------
+    pressure : float or array_like
+        Operating pressure [Pa].
+    intercept : float
+        Value at p = 0 [unit of the parameter].
+    slope : float
+        Rise per pascal [unit/Pa] (thesis N/bar: divide by 1e5).
+    """
+    return intercept + slope * np.asarray(pressure, dtype=float)
+
+
+def quadratic(pressure, intercept, slope, curvature):
+    """Quadratic pressure law ``a + b p + c p^2``; ``curvature`` in [unit/Pa^2]."""
+    p = np.asarray(pressure, dtype=float)
+    return intercept + slope * p + curvature * p * p
+
+
+def exponential(pressure, intercept, amplitude, rate):
+    """Exponential pressure law ``a + b (exp(c p) - 1)``.
+
+    The form the composite-seal (Bosch Rexroth) data of thesis ch. 2 suggested. The value at
+    p = 0 is ``intercept``, the initial slope ``amplitude * rate``; it tends to the linear law
+    as ``rate -> 0``. ``rate`` in [1/Pa], ``amplitude`` in the unit of the parameter.
+    """
+    p = np.asarray(pressure, dtype=float)
+    return intercept + amplitude * np.expm1(rate * p)
+
+
+PRESSURE_LAWS = {"linear": linear, "quadratic": quadratic, "exponential": exponential}
+"""Scalar pressure laws by name; each maps (pressure [Pa], coefficients) to a value."""
+
+PRESSURE_REFERENCES = {
+    "a": lambda pa, pb: pa,
+    "b": lambda pa, pb: pb,
+    "sum": lambda pa, pb: pa + pb,
+    "mean": lambda pa, pb: 0.5 * (pa + pb),
+    "max": lambda pa, pb: np.maximum(pa, pb),
+}
+"""How two chamber pressures combine into the pressure a law sees."""
+
+
+def operating_pressure(pressure_a, pressure_b=None, *, reference="mean"):
+    """Combine chamber pressures into the pressure a pressure law uses [Pa].
+
+    Parameters
+    ----------
+    pressure_a : float or array_like
+        Pressure in chamber A (cap side) [Pa].
+    pressure_b : float or array_like, optional
+        Pressure in chamber B (rod side) [Pa]; defaults to ``pressure_a`` (both chambers at
+        the same pressure, as in the thesis rig).
+    reference : {"a", "b", "sum", "mean", "max"}
+        Which pressure the law sees. The thesis law uses the common chamber pressure
+        (``"mean"`` of two equal pressures); Simscape's Cylinder Friction uses ``"sum"``.
+    """
+    if reference not in PRESSURE_REFERENCES:
+        raise ValueError(
+            f"unknown pressure reference {reference!r}; valid: {sorted(PRESSURE_REFERENCES)}"
+        )
+    pa = check_signal("pressure_a", pressure_a)
+    pb = pa if pressure_b is None else check_signal("pressure_b", pressure_b)
+    return PRESSURE_REFERENCES[reference](pa, pb)
+
+
+def params_at_pressure(pressure, coefficients, *, law="linear"):
+    """Evaluate a coefficient set at an operating pressure -> friction parameter dict.
+
+    Parameters
+    ----------
+    pressure : float or array_like
+        Operating pressure [Pa] (see :func:`operating_pressure`).
+    coefficients : dict
+        Friction-parameter name -> constant (SI) or dict of coefficients of ``law``
+        (e.g. ``{"intercept": 70.2, "slope": 5e-6}`` for ``linear``). A nested dict may carry
+        its own ``"law"`` key to mix laws.
+    law : {"linear", "quadratic", "exponential"}
+        Default scalar pressure law for the nested dicts.
+
+    Returns
+    -------
+    dict
+        Parameter name -> value at ``pressure`` (float for scalar pressure, else ndarray),
+        ready for ``stribeck(v, **params)``.
+
+    Examples
+    --------
+    >>> from cylfric.friction.literature import THESIS_2016
+    >>> p = params_at_pressure(55e5, THESIS_2016.coefficients)
+    >>> round(p["F_c"], 2), round(p["sigma_2"], 1)
+    (97.7, 384.0)
+    """
+    check_signal("pressure", pressure)
+    out = {}
+    for name, spec in coefficients.items():
+        if isinstance(spec, Mapping):
+            spec = dict(spec)
+            law_name = spec.pop("law", law)
+            if law_name not in PRESSURE_LAWS:
+                raise ValueError(
+                    f"unknown pressure law {law_name!r}; valid: {sorted(PRESSURE_LAWS)}"
+                )
+            try:
+                value = PRESSURE_LAWS[law_name](pressure, **spec)
+            except TypeError as exc:
+                raise ValueError(
+                    f"coefficients of {name} do not fit the {law_name} pressure law: {exc}"
+                ) from None
+        else:
+            value = np.broadcast_to(np.asarray(spec, dtype=float), np.shape(pressure))
+        out[name] = float(value) if np.ndim(value) == 0 else np.asarray(value)
+    return out
+
+
+def simscape_cylinder_friction(
+    pressure_a,
+    pressure_b,
+    *,
+    preload_force,
+    coulomb_friction_coefficient,
+    breakaway_ratio,
+    viscous_coefficient,
+    transition_coefficient,
+):
+    """Parameters of Simscape's "Cylinder Friction" block as a Stribeck parameter dict.
+
+    Simscape Fluids models ``F_C = F_pr + f_cfr (p_A + p_B)`` (reference fixed to the *sum*
+    of the chamber pressures), breakaway ``F_brk = K_brk F_C`` (constant ratio), a constant
+    viscous coefficient ``f_vfr`` and the transition ``exp(-c_v |v|)``. That is eq. 2.7 with
+    ``alpha = 1`` and ``v_r = 1 / c_v``.
+
+    Parameters
+    ----------
+    pressure_a, pressure_b : float or array_like
+        Chamber pressures [Pa].
+    preload_force : float
+        Seal preload force ``F_pr`` [N].
+    coulomb_friction_coefficient : float
+        ``f_cfr`` [N/Pa].
+    breakaway_ratio : float
+        ``K_brk = F_brk / F_C`` [-], >= 1.
+    viscous_coefficient : float
+        ``f_vfr`` [N*s/m].
+    transition_coefficient : float
+        ``c_v`` [s/m], > 0.
+
+    Returns
+    -------
+    dict
+        ``F_c``, ``F_s``, ``sigma_2``, ``v_r``, ``alpha`` for :func:`~cylfric.friction.stribeck`.
+    """
+    if breakaway_ratio < 1:
+        raise ValueError(f"breakaway_ratio = {breakaway_ratio} is out of range; expected >= 1")
+    if transition_coefficient <= 0:
+        raise ValueError(
+            f"transition_coefficient = {transition_coefficient} is out of range; expected > 0 s/m"
+        )
+    p = operating_pressure(pressure_a, pressure_b, reference="sum")
+    F_c = preload_force + coulomb_friction_coefficient * p
+    out = {
+        "F_c": F_c,
+        "F_s": breakaway_ratio * F_c,
+        "sigma_2": viscous_coefficient,
+        "v_r": 1.0 / transition_coefficient,
+        "alpha": 1.0,
+    }
+    return {k: (float(v) if np.ndim(v) == 0 else v) for k, v in out.items()}

@@ -1,0 +1,188 @@
+"""Units at the edges: engineering units in, SI inside.
+
+cylfric computes in SI (N, m, s, kg, Pa, N*s/m). Users, bench files and the command
+line speak bar, mm, mm/s, kN, ms and N*s/mm; this module is the one place that converts.
+It imports nothing of cylfric, so every layer may use it.
+
+Examples
+--------
+>>> parse_quantity("10mm/s", "velocity")
+0.01
+>>> parse_quantity("55 bar", "pressure")
+5500000.0
+>>> parse_quantity("7", "pressure", default_unit="bar")
+700000.0
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = [
+    "UNITS",
+    "UnitError",
+    "to_si",
+    "from_si",
+    "parse_quantity",
+    "unit_dimension",
+    "BAR",
+    "MM",
+    "MM_S",
+]
+
+BAR = 1e5
+"""One bar in pascal [Pa/bar]."""
+MM = 1e-3
+"""One millimetre in metre [m/mm]."""
+MM_S = 1e-3
+"""One mm/s in m/s [(m/s)/(mm/s)]."""
+
+# unit symbol (lower-cased, spaces removed) -> (dimension, factor to SI)
+UNITS: dict[str, tuple[str, float]] = {
+    # time
+    "s": ("time", 1.0),
+    "sec": ("time", 1.0),
+    "secs": ("time", 1.0),
+    "second": ("time", 1.0),
+    "seconds": ("time", 1.0),
+    "ms": ("time", 1e-3),
+    "msec": ("time", 1e-3),
+    "min": ("time", 60.0),
+    "h": ("time", 3600.0),
+    # length
+    "m": ("length", 1.0),
+    "mm": ("length", 1e-3),
+    "cm": ("length", 1e-2),
+    "um": ("length", 1e-6),
+    "µm": ("length", 1e-6),
+    "in": ("length", 0.0254),
+    "inch": ("length", 0.0254),
+    # force
+    "n": ("force", 1.0),
+    "kn": ("force", 1e3),
+    "dan": ("force", 10.0),
+    "mn": ("force", 1e6),
+    "lbf": ("force", 4.4482216152605),
+    "kgf": ("force", 9.80665),
+    # pressure
+    "pa": ("pressure", 1.0),
+    "kpa": ("pressure", 1e3),
+    "mpa": ("pressure", 1e6),
+    "bar": ("pressure", 1e5),
+    "mbar": ("pressure", 1e2),
+    "psi": ("pressure", 6894.757293168),
+    "barg": ("pressure", 1e5),
+    # velocity
+    "m/s": ("velocity", 1.0),
+    "mm/s": ("velocity", 1e-3),
+    "mms": ("velocity", 1e-3),
+    "mm_s": ("velocity", 1e-3),
+    "cm/s": ("velocity", 1e-2),
+    "mm/min": ("velocity", 1e-3 / 60),
+    "in/s": ("velocity", 0.0254),
+    # viscous friction coefficient
+    "ns/m": ("damping", 1.0),
+    "n*s/m": ("damping", 1.0),
+    "n.s/m": ("damping", 1.0),
+    "ns/mm": ("damping", 1e3),
+    "n*s/mm": ("damping", 1e3),
+    "n.s/mm": ("damping", 1e3),
+    # stiffness
+    "n/m": ("stiffness", 1.0),
+    "n/mm": ("stiffness", 1e3),
+    # mass
+    "kg": ("mass", 1.0),
+    "g": ("mass", 1e-3),
+    # electric (raw sensor channels)
+    "v": ("voltage", 1.0),
+    "mv": ("voltage", 1e-3),
+    # dimensionless
+    "-": ("dimensionless", 1.0),
+    "1": ("dimensionless", 1.0),
+    "": ("dimensionless", 1.0),
+}
+
+
+class UnitError(ValueError):
+    """A unit symbol is unknown or of the wrong dimension."""
+
+
+def _key(unit: str) -> str:
+    return unit.strip().replace(" ", "").replace("·", "*").lower()
+
+
+def unit_dimension(unit: str) -> str:
+    """Return the dimension name of a unit symbol (``"time"``, ``"force"``, ...).
+
+    Raises
+    ------
+    UnitError
+        If the unit is unknown; the message lists the known symbols.
+    """
+    try:
+        return UNITS[_key(unit)][0]
+    except KeyError:
+        raise UnitError(
+            f"unknown unit {unit!r}; known units: {', '.join(sorted(k for k in UNITS if k))}"
+        ) from None
+
+
+def _factor(unit: str, dimension: str | None) -> float:
+    dim = unit_dimension(unit)
+    if dimension is not None and dim != dimension:
+        raise UnitError(f"unit {unit!r} is a {dim} unit, expected a {dimension} unit")
+    return UNITS[_key(unit)][1]
+
+
+def to_si(value, unit: str, dimension: str | None = None):
+    """Convert ``value`` given in ``unit`` to SI (scalar or ndarray).
+
+    Parameters
+    ----------
+    value : float or array_like
+        Value in ``unit``.
+    unit : str
+        Unit symbol, e.g. ``"bar"``, ``"mm/s"``, ``"kN"``, ``"N*s/mm"``.
+    dimension : str, optional
+        If given, the unit must be of this dimension.
+    """
+    return value * _factor(unit, dimension)
+
+
+def from_si(value, unit: str, dimension: str | None = None):
+    """Convert an SI ``value`` to ``unit`` (inverse of :func:`to_si`)."""
+    return value / _factor(unit, dimension)
+
+
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)?$")
+
+
+def parse_quantity(text: str, dimension: str, default_unit: str | None = None) -> float:
+    """Parse ``"10mm/s"``, ``"55 bar"`` or ``"5MPa"`` into an SI float.
+
+    Parameters
+    ----------
+    text : str
+        A number with an optional unit. A bare number is read in ``default_unit``.
+    dimension : str
+        Expected dimension (``"pressure"``, ``"velocity"``, ...).
+    default_unit : str, optional
+        Unit of a bare number; without it a bare number is taken as SI.
+
+    Raises
+    ------
+    UnitError
+        If the text is not a number with a known unit of ``dimension``.
+    """
+    match = _QUANTITY.match(str(text).replace(",", "."))
+    if not match:
+        raise UnitError(
+            f"cannot read {text!r} as a {dimension} (expected e.g. a number and a unit)"
+        )
+    number = float(match.group(1))
+    unit = match.group(2)
+    if unit is None:
+        if default_unit is None:
+            return number
+        unit = default_unit
+    return float(to_si(number, unit, dimension))
