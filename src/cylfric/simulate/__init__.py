@@ -1,0 +1,27 @@
+"""Time-domain simulation of a cylinder with dynamic pressure-dependent friction."""
+
+from .plant import (
+    DEFAULT_FIXED_STEP,
+    THESIS_CYLINDER,
+    AppliedForce,
+    Cylinder,
+    FrictionModel,
+    PositionServo,
+    PrescribedMotion,
+    SpringPull,
+    simulate,
+)
+from .result import SimulationResult
+
+__all__ = [
+    "Cylinder",
+    "FrictionModel",
+    "PrescribedMotion",
+    "AppliedForce",
+    "SpringPull",
+    "PositionServo",
+    "SimulationResult",
+    "simulate",
+    "THESIS_CYLINDER",
+    "DEFAULT_FIXED_STEP",
+]

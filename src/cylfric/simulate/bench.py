@@ -1,0 +1,401 @@
+"""Virtual test bench: the thesis experiment (ch. 3) as a simulation that writes raw files.
+
+A testing machine (MTS 858 Mini Bionix) drives the rod of a symmetric cylinder whose two
+chambers sit at the same pressure: descend the stroke, then ascend, at constant speed, with a
+trapezoidal velocity reference (finite acceleration) followed through a first-order servo
+lag. The load cell reads (eq. 3.1 with A1 p1 = A2 p2)::
+
+    F_l = m x'' + F_f(v, z, p) + F_cushion(x, v) + W + noise (+ rare spikes)
+
+``W`` is the constant weight offset: the thesis saw the descending curves 35.67 N below the
+ascending ones (Fig. 4.3), i.e. ``W = 35.67 / 2`` N in this signed reading. Friction is the
+dynamic LuGre model with the pressure laws, integrated with the exact z update.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from ..io.writers import write_manifest, write_mts_text
+from . import kernels
+from .plant import THESIS_CYLINDER, Cylinder, FrictionModel
+
+__all__ = [
+    "BenchSettings",
+    "VirtualRun",
+    "run_virtual_test",
+    "generate_campaign",
+    "THESIS_PRESSURES_BAR",
+    "THESIS_SPEEDS_MM_S",
+    "run_file_name",
+]
+
+THESIS_PRESSURES_BAR = (0.1, 20.7, 38.0, 55.0, 69.0, 83.0, 103.0, 124.0, 141.0, 159.0)
+"""Ten pressure levels 0.1-159 bar [bar]: the thesis' first two (0.1, 20.7) and the four of
+Table 4.1 (55, 83, 124, 159); the other four are spread between them."""
+
+THESIS_SPEEDS_MM_S = (
+    1,
+    2,
+    3,
+    4,
+    5,
+    6,
+    7,
+    8,
+    10,
+    12,
+    15,
+    18,
+    20,
+    25,
+    30,
+    35,
+    40,
+    45,
+    50,
+    60,
+    70,
+    80,
+    90,
+    100,
+    110,
+    120,
+    135,
+)
+"""27 speeds 1-135 mm/s [mm/s], denser at low speed where the Stribeck dip lies."""
+
+MAX_SAMPLES = 10_001
+"""At most 10,001 samples per file, as the thesis' acquisition software allowed."""
+
+
+@dataclass(frozen=True)
+class BenchSettings:
+    """Everything the virtual bench needs (SI units unless the name says otherwise).
+
+    The friction default is the thesis law (eq. 4.1-4.3, alpha = 1, v_r = 10 mm/s) with
+    ``sigma_0 = 1e6 N/m`` (presliding deflection F_s/sigma_0 of about 0.1 mm, typical of
+    hydraulic seals) and ``sigma_1 = sqrt(sigma_0 m)`` = 1.58e3 N*s/m for m = 2.5 kg
+    (critically damped bristles); the thesis does not identify them.
+    """
+
+    cylinder: Cylinder = THESIS_CYLINDER
+    friction: FrictionModel = field(default_factory=FrictionModel)
+    pressures_bar: tuple = THESIS_PRESSURES_BAR
+    speeds_mm_s: tuple = THESIS_SPEEDS_MM_S
+    acceleration: float = 1.0  # [m/s^2] of the velocity reference
+    servo_time_constant: float = 0.010  # [s], first-order lag of the machine
+    dwell: float = 1.0  # [s] before, between and after the strokes
+    stroke_margin: float = 0.002  # [m] kept from each end of the stroke
+    cushion_length: float = 0.012  # [m] end-of-stroke cushioning zone
+    cushion_coefficient: float = 2.0e4  # [N*s^2/m^2], force c v^2 at full engagement
+    weight_offset: float = 35.67 / 2  # [N], W in the load-cell reading
+    force_noise: float = 0.8  # [N], standard deviation
+    position_noise: float = 2e-6  # [m], standard deviation
+    pressure_noise: float = 0.3e5  # [Pa], standard deviation of a pressure channel
+    spike_probability: float = 2e-4  # [-] per sample
+    spike_amplitude: float = 150.0  # [N]
+    slow_speed_count: int = 2  # the slowest speeds sampled at 20 ms, the rest at 10 ms
+    slow_interval: float = 0.020  # [s]
+    fast_interval: float = 0.010  # [s]
+    internal_step: float = 1e-4  # [s], simulation step
+    decimal_comma: bool = False
+    force_unit: str = "kN"
+    pressure_channel: bool = False
+    crlf: bool = False
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class VirtualRun:
+    """One simulated run with its ground truth.
+
+    Attributes are arrays at the sample times: ``time`` [s], ``position`` [m],
+    ``force`` [N] (load-cell reading with offset, noise, spikes), ``velocity`` [m/s] (true),
+    ``friction`` [N] (true dynamic LuGre force), ``cushion`` [N], ``pressure`` [Pa],
+    ``steady`` (bool: velocity settled within 1 % of nominal and no cushioning) and
+    ``segment`` (0 descend, 1 ascend), plus the nominal ``pressure_nominal`` [Pa],
+    ``speed`` [m/s] and ``sample_interval`` [s] and ``steps`` simulated.
+    """
+
+    time: np.ndarray
+    position: np.ndarray
+    force: np.ndarray
+    velocity: np.ndarray
+    friction: np.ndarray
+    cushion: np.ndarray
+    pressure: np.ndarray
+    steady: np.ndarray
+    segment: np.ndarray
+    pressure_nominal: float
+    speed: float
+    sample_interval: float
+    steps: int
+
+
+@njit(cache=True, nogil=True)
+def _bench_kernel(
+    h,
+    n_sub,
+    n_samples,
+    x_top,
+    speed,
+    accel,
+    dwell,
+    length,
+    tau,
+    stroke,
+    cushion_len,
+    cushion_coef,
+    sigma_0,
+    sigma_1,
+    F_c,
+    F_s,
+    sigma_2,
+    v_r,
+    alpha,
+):
+    t_acc = speed / accel
+    t_move = length / speed + t_acc  # trapezoid: accelerate, cruise, decelerate
+    starts = (dwell, 2 * dwell + t_move)
+    out = np.empty((7, n_samples))
+    x = x_top
+    v = 0.0
+    z = 0.0
+    lag = -math.expm1(-h / tau)
+    for i in range(n_samples):
+        for j in range(n_sub if i > 0 else 0):
+            t = ((i - 1) * n_sub + j + 0.5) * h
+            v_ref = 0.0
+            for seg in range(2):
+                s = t - starts[seg]
+                if 0.0 <= s <= t_move:
+                    shape = min(1.0, s / t_acc, (t_move - s) / t_acc)
+                    v_ref = speed * shape if seg == 1 else -speed * shape
+            v_old = v
+            v = v + (v_ref - v) * lag
+            vm = 0.5 * (v_old + v)
+            x += vm * h
+            z, _ = kernels.z_step(z, vm, h, sigma_0, F_c, F_s, v_r, alpha)
+            out[2, i] = (v - v_old) / h
+        t = i * n_sub * h
+        in_cruise = False
+        for seg in range(2):
+            s = t - starts[seg]
+            if t_acc <= s <= t_move - t_acc:
+                in_cruise = True
+        if i == 0:
+            out[2, i] = 0.0
+        out[0, i] = x
+        out[1, i] = v
+        out[3, i] = kernels.lugre_instant(v, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha)
+        if v < 0:
+            engage = (cushion_len - x) / cushion_len
+        else:
+            engage = (x - (stroke - cushion_len)) / cushion_len
+        engage = min(1.0, max(0.0, engage))
+        out[4, i] = cushion_coef * v * abs(v) * engage
+        steady = in_cruise and engage == 0.0 and abs(abs(v) - speed) <= 0.01 * speed
+        out[5, i] = 1.0 if steady else 0.0
+        out[6, i] = 0.0 if t < starts[1] else 1.0
+    return out
+
+
+def _stroke_plan(settings: BenchSettings, speed: float, interval: float):
+    """Stroke length [m] and sample count for one speed within the 10,001-sample budget."""
+    usable = settings.cylinder.stroke - 2 * settings.stroke_margin
+    budget = (MAX_SAMPLES - 1) * interval
+    t_acc = speed / settings.acceleration
+    by_time = speed * ((budget - 3 * settings.dwell) / 2 - t_acc) * 0.98
+    length = min(usable, by_time)
+    if length < 5 * speed * t_acc:
+        raise ValueError(f"speed {speed * 1e3:g} mm/s does not fit the stroke and sample budget")
+    duration = 2 * (length / speed + t_acc) + 3 * settings.dwell
+    n = min(MAX_SAMPLES, int(math.ceil(duration / interval)) + 1)
+    return length, n
+
+
+def run_virtual_test(
+    pressure_bar: float,
+    speed_mm_s: float,
+    settings: BenchSettings | None = None,
+    *,
+    rng=None,
+    slow: bool | None = None,
+) -> VirtualRun:
+    """Simulate one run of the virtual bench at ``pressure_bar`` [bar] and ``speed_mm_s`` [mm/s].
+
+    ``slow`` forces the 20 ms sample interval (default: the slowest ``slow_speed_count``
+    speeds of ``settings.speeds_mm_s``).
+    """
+    s = settings or BenchSettings()
+    rng = rng if rng is not None else np.random.default_rng(s.seed)
+    pressure = pressure_bar * 1e5
+    speed = speed_mm_s * 1e-3
+    if not (pressure >= 0 and speed > 0):
+        raise ValueError(
+            f"need pressure >= 0 bar and speed > 0 mm/s; got {pressure_bar}, {speed_mm_s}"
+        )
+    if slow is None:
+        slow = speed_mm_s in sorted(s.speeds_mm_s)[: s.slow_speed_count]
+    interval = s.slow_interval if slow else s.fast_interval
+    n_sub = max(1, int(round(interval / s.internal_step)))
+    h = interval / n_sub
+    length, n = _stroke_plan(s, speed, interval)
+    stroke = s.cylinder.stroke
+    x_top = stroke / 2 + length / 2
+    params = s.friction.parameters(pressure)
+    raw = _bench_kernel(
+        h,
+        n_sub,
+        n,
+        x_top,
+        speed,
+        s.acceleration,
+        s.dwell,
+        length,
+        s.servo_time_constant,
+        stroke,
+        s.cushion_length,
+        s.cushion_coefficient,
+        s.friction.sigma_0,
+        s.friction.sigma_1,
+        params["F_c"],
+        params["F_s"],
+        params["sigma_2"],
+        params["v_r"],
+        params["alpha"],
+    )
+    position, velocity, acceleration, friction, cushion = raw[:5]
+    force = s.cylinder.mass * acceleration + friction + cushion + s.weight_offset
+    force = force + rng.normal(0.0, s.force_noise, n)
+    spikes = rng.random(n) < s.spike_probability
+    force[spikes] += rng.choice([-1.0, 1.0], spikes.sum()) * s.spike_amplitude
+    return VirtualRun(
+        time=np.arange(n) * interval,
+        position=position + rng.normal(0.0, s.position_noise, n),
+        force=force,
+        velocity=velocity,
+        friction=friction,
+        cushion=cushion,
+        pressure=pressure + rng.normal(0.0, s.pressure_noise, n),
+        steady=raw[5].astype(bool),
+        segment=raw[6].astype(np.int8),
+        pressure_nominal=pressure,
+        speed=speed,
+        sample_interval=interval,
+        steps=(n - 1) * n_sub,
+    )
+
+
+def run_file_name(index: int, pressure_bar: float, speed_mm_s: float) -> str:
+    """``run_007_p55bar_v10mms.txt``: file-name tokens the campaign reader understands."""
+    return f"run_{index:03d}_p{pressure_bar:g}bar_v{speed_mm_s:g}mms.txt"
+
+
+_FORCE_SCALE = {"N": 1.0, "kN": 1e-3}
+
+
+def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int):
+    scale = _FORCE_SCALE[s.force_unit]
+    units = {"Time": "s", "Axial Displacement": "mm", "Axial Force": s.force_unit}
+    decimals = {"Time": 3, "Axial Displacement": 4, "Axial Force": 5 if s.force_unit == "kN" else 2}
+    if s.pressure_channel:
+        units["Pressure"] = "bar"
+        decimals["Pressure"] = 2
+    segments = []
+    for seg in (0, 1):
+        sel = run.segment == seg
+        cols = {
+            "Time": run.time[sel],
+            "Axial Displacement": run.position[sel] * 1e3,
+            "Axial Force": run.force[sel] * scale,
+        }
+        if s.pressure_channel:
+            cols["Pressure"] = run.pressure[sel] / 1e5
+        segments.append(cols)
+    header = {
+        "Station Name": "858 Mini Bionix (virtual)",
+        "Test File Name": f"friction_{index:03d}.tst",
+        "Test Run Name": path.stem,
+        "Pressure": f"{run.pressure_nominal / 1e5:g} bar",
+        "Nominal velocity": f"{run.speed * 1e3:g} mm/s",
+        "Sample interval": f"{run.sample_interval * 1e3:g} ms",
+    }
+    write_mts_text(
+        path,
+        segments,
+        header=header,
+        units=units,
+        decimals=decimals,
+        decimal_comma=s.decimal_comma,
+        newline="\r\n" if s.crlf else "\n",
+    )
+
+
+def generate_campaign(
+    out_dir, settings: BenchSettings | None = None, *, progress=None, workers: int | None = None
+) -> dict:
+    """Write a virtual campaign: one file per pressure x speed, plus ``manifest.csv``.
+
+    Deterministic for a given ``settings.seed`` (each run draws from its own seeded stream).
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Folder to create or fill.
+    settings : BenchSettings, optional
+        Bench, cylinder, friction and noise settings.
+    progress : callable, optional
+        Called with the file name after each file is written.
+    workers : int, optional
+        Threads (default: the number of cores, at most 2 on this project's machines).
+
+    Returns
+    -------
+    dict
+        ``files`` (paths), ``steps`` (simulated steps), ``samples`` and ``settings``.
+    """
+    s = settings or BenchSettings()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    slow = set(sorted(s.speeds_mm_s)[: s.slow_speed_count])
+    jobs = [
+        (i, p, v) for i, (p, v) in enumerate((p, v) for p in s.pressures_bar for v in s.speeds_mm_s)
+    ]
+    seeds = np.random.SeedSequence(s.seed).spawn(len(jobs))
+
+    def one(job):
+        i, p, v = job
+        run = run_virtual_test(p, v, s, rng=np.random.default_rng(seeds[i]), slow=v in slow)
+        path = out / run_file_name(i, p, v)
+        _write_run(path, run, s, i)
+        if progress is not None:
+            progress(path.name)
+        return path, run.steps, run.time.size
+
+    workers = workers or min(2, os.cpu_count() or 1)
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        results = list(pool.map(one, jobs))
+    write_manifest(
+        out / "manifest.csv",
+        [(path.name, p, v) for (path, _, _), (_, p, v) in zip(results, jobs, strict=True)],
+    )
+    return {
+        "files": [r[0] for r in results],
+        "steps": int(sum(r[1] for r in results)),
+        "samples": int(sum(r[2] for r in results)),
+        "settings": s,
+    }
+
+
+def with_seed(settings: BenchSettings, seed: int) -> BenchSettings:
+    """A copy of ``settings`` with another seed."""
+    return replace(settings, seed=seed)

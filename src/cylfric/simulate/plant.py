@@ -1,0 +1,428 @@
+"""A hydraulic cylinder with dynamic, pressure-dependent friction (thesis eq. 3.1/3.2).
+
+    (m_p + m_lc) x'' = A_1 p_1 - A_2 p_2 + F_l - F_f
+
+``simulate(cylinder, friction, drive, duration)`` returns a :class:`SimulationResult`.
+Drives: :class:`PrescribedMotion` (the testing machine), :class:`AppliedForce`,
+:class:`SpringPull` (the stick-slip set-up) and :class:`PositionServo` (PID).
+Integrators: ``"fixed"`` (compiled impulse scheme with exact z), ``"dopri"`` (compiled adaptive
+Dormand-Prince 5(4)), ``"scipy"`` (``solve_ivp``, the validation backend, any law).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from ..friction import get_law, law_params, operating_pressure, params_at_pressure
+from ..friction.literature import THESIS_2016
+from . import kernels
+from .result import SimulationResult
+
+__all__ = [
+    "Cylinder",
+    "FrictionModel",
+    "PrescribedMotion",
+    "AppliedForce",
+    "SpringPull",
+    "PositionServo",
+    "simulate",
+    "THESIS_CYLINDER",
+    "DEFAULT_FIXED_STEP",
+]
+
+DEFAULT_FIXED_STEP = 1e-4
+"""Default internal step of the ``"fixed"`` integrator [s]: reaches RMS(F - F_ref)/F_c <= 1e-4
+against Radau on the stick-slip and sinusoidal reference cases (see tests/test_simulate.py)."""
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """Cylinder geometry and moving mass.
+
+    Attributes
+    ----------
+    mass : float
+        Moving mass ``m_p + m_lc`` (rod, piston, load cell) [kg].
+    area_a, area_b : float
+        Piston areas of chamber A (cap) and B (rod side) [m^2]; 0 for a rig without pressure.
+    stroke : float
+        Stroke length [m].
+    """
+
+    mass: float
+    area_a: float = 0.0
+    area_b: float = 0.0
+    stroke: float = math.inf
+
+    def __post_init__(self):
+        if not self.mass > 0:
+            raise ValueError(f"Cylinder mass = {self.mass} is out of range; expected > 0 kg")
+        if self.area_a < 0 or self.area_b < 0:
+            raise ValueError("Cylinder areas must be >= 0 m^2")
+
+    @classmethod
+    def from_diameters(cls, bore, rod, mass, *, double_rod=False, stroke=math.inf):
+        """Build from bore and rod diameters [m]; ``double_rod`` for a symmetric cylinder."""
+        if not 0 <= rod < bore:
+            raise ValueError(
+                f"rod diameter {rod} m must be >= 0 and smaller than the bore {bore} m"
+            )
+        piston = math.pi / 4 * bore**2
+        annulus = piston - math.pi / 4 * rod**2
+        return cls(mass, annulus if double_rod else piston, annulus, stroke)
+
+
+THESIS_CYLINDER = Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, stroke=0.150)
+"""Bosch Rexroth CGM1MF3/40/28/150 of the thesis (symmetric, bore 40 mm, rod 28 mm, stroke
+150 mm). The moving mass of rod, piston and load cell is not given in the thesis: 2.5 kg is
+an assumption."""
+
+
+@dataclass(frozen=True)
+class FrictionModel:
+    """A friction law with pressure laws composed on top.
+
+    Attributes
+    ----------
+    coefficients : mapping
+        Pressure coefficient set for :func:`cylfric.friction.params_at_pressure` (constants or
+        coefficient dicts of ``pressure_law``), with the parameters of ``law``.
+    law : str
+        Registered friction law; the compiled integrators need ``"lugre"``.
+    sigma_0 : float
+        Bristle stiffness [N/m] (LuGre).
+    sigma_1 : float
+        Bristle damping [N*s/m] (LuGre).
+    pressure_law : str
+        Default scalar pressure law of the coefficient set.
+    reference : str
+        Which chamber pressure the law sees (see :func:`cylfric.friction.operating_pressure`).
+    """
+
+    coefficients: Mapping = field(
+        default_factory=lambda: MappingProxyType(THESIS_2016.coefficients)
+    )
+    law: str = "lugre"
+    sigma_0: float = 1e6
+    sigma_1: float = 1.58e3
+    pressure_law: str = "linear"
+    reference: str = "mean"
+
+    def __post_init__(self):
+        get_law(self.law)
+        if self.law == "lugre" and not (self.sigma_0 > 0 and self.sigma_1 >= 0):
+            raise ValueError("LuGre needs sigma_0 > 0 N/m and sigma_1 >= 0 N*s/m")
+
+    def parameters(self, pressure_a, pressure_b=None) -> dict:
+        """Friction parameters (SI) at the given chamber pressures [Pa]."""
+        p = operating_pressure(pressure_a, pressure_b, reference=self.reference)
+        params = params_at_pressure(p, self.coefficients, law=self.pressure_law)
+        if self.law in ("lugre", "lugre_state"):
+            params.update(sigma_0=self.sigma_0, sigma_1=self.sigma_1)
+        return params
+
+
+Signal = float | np.ndarray | Callable
+
+
+def _on_grid(signal: Signal, time: np.ndarray, name: str) -> np.ndarray:
+    if callable(signal):
+        values = np.asarray(signal(time), dtype=float)
+    else:
+        values = np.asarray(signal, dtype=float)
+    values = np.broadcast_to(values, time.shape) if values.ndim == 0 else values
+    if values.shape != time.shape:
+        raise ValueError(
+            f"{name} has {values.shape[0]} samples; expected {time.shape[0]} "
+            "(one per grid point) or a scalar or a function of time"
+        )
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{name} contains NaN or inf; expected finite values")
+    return np.ascontiguousarray(values, dtype=float)
+
+
+@dataclass(frozen=True)
+class PrescribedMotion:
+    """The testing machine prescribes the rod velocity [m/s] (function of time or samples)."""
+
+    velocity: Signal
+    position0: float = 0.0
+
+
+@dataclass(frozen=True)
+class AppliedForce:
+    """An external force on the rod [N] (function of time, samples or constant)."""
+
+    force: Signal
+
+
+@dataclass(frozen=True)
+class SpringPull:
+    """A spring [N/m] whose far end moves at ``speed`` [m/s]: the classic stick-slip set-up."""
+
+    stiffness: float
+    speed: float
+    damping: float = 0.0
+
+    def __post_init__(self):
+        if self.stiffness <= 0:
+            raise ValueError(
+                f"SpringPull stiffness = {self.stiffness} is out of range; expected > 0 N/m"
+            )
+
+
+@dataclass(frozen=True)
+class PositionServo:
+    """PID position loop: force = kp e + ki int(e) + kd de/dt, e = reference - x.
+
+    ``reference`` [m] (function of time or samples), gains in [N/m], [N/(m*s)], [N*s/m];
+    ``reference_velocity`` [m/s] defaults to the numerical derivative of the reference.
+    """
+
+    reference: Signal
+    kp: float
+    ki: float = 0.0
+    kd: float = 0.0
+    reference_velocity: Signal | None = None
+
+
+def _drive_signals(drive, time, x0):
+    zeros = np.zeros_like(time)
+    if isinstance(drive, AppliedForce):
+        return zeros, zeros, _on_grid(drive.force, time, "force"), 0.0, 0.0, 0.0
+    if isinstance(drive, SpringPull):
+        return (
+            x0 + drive.speed * time,
+            np.full_like(time, drive.speed),
+            zeros,
+            drive.stiffness,
+            drive.damping,
+            0.0,
+        )
+    if isinstance(drive, PositionServo):
+        ref = _on_grid(drive.reference, time, "reference")
+        if drive.reference_velocity is None:
+            vref = np.gradient(ref, time) if time.size > 1 else zeros
+        else:
+            vref = _on_grid(drive.reference_velocity, time, "reference_velocity")
+        return ref, vref, zeros, drive.kp, drive.kd, drive.ki
+    raise TypeError(
+        f"unknown drive {type(drive).__name__}; valid: PrescribedMotion, "
+        "AppliedForce, SpringPull, PositionServo"
+    )
+
+
+METHODS = ("fixed", "dopri", "scipy")
+
+
+def simulate(
+    cylinder: Cylinder,
+    friction: FrictionModel,
+    drive,
+    duration: float,
+    *,
+    dt: float = 1e-3,
+    pressure_a: Signal = 0.0,
+    pressure_b: Signal | None = None,
+    method: str = "fixed",
+    step: float = DEFAULT_FIXED_STEP,
+    rtol: float = 1e-9,
+    x0: float = 0.0,
+    v0: float = 0.0,
+    z0: float = 0.0,
+) -> SimulationResult:
+    """Simulate the cylinder over ``duration`` [s], with outputs every ``dt`` [s].
+
+    Parameters
+    ----------
+    cylinder : Cylinder
+        Geometry and moving mass.
+    friction : FrictionModel
+        Friction law and pressure laws.
+    drive : PrescribedMotion, AppliedForce, SpringPull or PositionServo
+        What moves the rod.
+    duration : float
+        Simulated time [s].
+    dt : float
+        Output (and input-grid) interval [s].
+    pressure_a, pressure_b : float, array or callable
+        Chamber pressures [Pa]; ``pressure_b`` defaults to ``pressure_a``.
+    method : {"fixed", "dopri", "scipy"}
+        Integrator for the velocity-as-state drives. For PrescribedMotion, ``"scipy"`` gives
+        the Radau reference and anything else the exact z update with mid-step velocity.
+    step : float
+        Internal step of ``"fixed"`` and of prescribed motion [s] (rounded to divide ``dt``).
+    rtol : float
+        Relative tolerance of ``"dopri"`` and ``"scipy"``.
+    x0, v0, z0 : float
+        Initial position [m], velocity [m/s], bristle deflection [m].
+
+    Returns
+    -------
+    SimulationResult
+    """
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; valid: {list(METHODS)}")
+    if not (duration > 0 and dt > 0 and dt <= duration):
+        raise ValueError(f"need 0 < dt <= duration; got dt = {dt} s, duration = {duration} s")
+    n = int(round(duration / dt)) + 1
+    time = np.arange(n) * dt
+    pa = _on_grid(pressure_a, time, "pressure_a")
+    pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
+    params = friction.parameters(pa, pb)
+    f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
+    info = {"method": method, "dt": dt}
+
+    if isinstance(drive, PrescribedMotion):
+        velocity = _on_grid(drive.velocity, time, "velocity")
+        position = drive.position0 + np.concatenate(
+            ([0.0], np.cumsum(0.5 * (velocity[1:] + velocity[:-1]) * dt))
+        )
+        if friction.law == "lugre" and method == "scipy":
+            from .reference import solve_prescribed_reference
+
+            z, force = solve_prescribed_reference(time, velocity, z0, params, rtol=rtol)
+            info["method"] = "scipy Radau prescribed velocity"
+        elif friction.law == "lugre":
+            substeps = max(1, int(math.ceil(dt / step - 1e-9)))
+            z, force = kernels.prescribed_velocity(
+                time,
+                velocity,
+                z0,
+                friction.sigma_0,
+                friction.sigma_1,
+                _arr(params["F_c"], n),
+                _arr(params["F_s"], n),
+                _arr(params["sigma_2"], n),
+                _const(params, "v_r"),
+                _const(params, "alpha"),
+                substeps,
+            )
+            info.update(
+                method="exact-z prescribed velocity", step=dt / substeps, steps=(n - 1) * substeps
+            )
+        else:
+            z = np.zeros(n)
+            force = get_law(friction.law).function(velocity, **law_params(friction.law, params))
+        acceleration = np.gradient(velocity, time)
+        load = cylinder.mass * acceleration + force - f_pressure
+        return SimulationResult(
+            time,
+            {"position": position, "velocity": velocity, "z": z},
+            {"friction_force": force, "drive_force": load, "pressure_a": pa, "pressure_b": pb},
+            info,
+        )
+
+    x_ref, v_ref, f_ext, k, c, ki = _drive_signals(drive, time, x0)
+    f_ext = f_ext + f_pressure
+    if method == "scipy" or friction.law != "lugre":
+        from .reference import solve_reference
+
+        if method != "scipy":
+            raise ValueError(
+                f"law {friction.law!r} runs only with method='scipy'; the compiled "
+                "integrators need 'lugre'"
+            )
+        states, force, info_extra = solve_reference(
+            time,
+            cylinder.mass,
+            k,
+            c,
+            ki,
+            x_ref,
+            v_ref,
+            f_ext,
+            friction,
+            params,
+            x0,
+            v0,
+            z0,
+            rtol=rtol,
+        )
+        info.update(info_extra)
+    elif method == "fixed":
+        substeps = max(1, int(math.ceil(dt / step - 1e-9)))
+        pos, vel, z, force, mean_force, iterations = kernels.fixed_step(
+            dt,
+            substeps,
+            x0,
+            v0,
+            z0,
+            cylinder.mass,
+            k,
+            c,
+            ki,
+            x_ref,
+            v_ref,
+            f_ext,
+            _arr(params["F_c"], n),
+            _arr(params["F_s"], n),
+            _arr(params["sigma_2"], n),
+            friction.sigma_0,
+            friction.sigma_1,
+            _const(params, "v_r"),
+            _const(params, "alpha"),
+            1e-10,
+        )
+        states = {"position": pos, "velocity": vel, "z": z}
+        info.update(step=dt / substeps, steps=(n - 1) * substeps, iterations=int(iterations))
+    else:
+        pos, vel, z, force, accepted, rejected, reached = kernels.dopri(
+            dt,
+            x0,
+            v0,
+            z0,
+            cylinder.mass,
+            k,
+            c,
+            ki,
+            x_ref,
+            v_ref,
+            f_ext,
+            _arr(params["F_c"], n),
+            _arr(params["F_s"], n),
+            _arr(params["sigma_2"], n),
+            friction.sigma_0,
+            friction.sigma_1,
+            _const(params, "v_r"),
+            _const(params, "alpha"),
+            rtol,
+            1e-12,
+            1e-9,
+            1e-13,
+            50_000_000,
+        )
+        if reached < n:
+            raise RuntimeError(
+                f"dopri stopped at t = {(reached - 1) * dt} s after 5e7 steps; "
+                "loosen rtol or use method='fixed'"
+            )
+        states = {"position": pos, "velocity": vel, "z": z}
+        info.update(accepted=int(accepted), rejected=int(rejected))
+    error = x_ref - states["position"]
+    error_integral = np.concatenate(([0.0], np.cumsum(0.5 * (error[1:] + error[:-1]) * dt)))
+    drive_force = (
+        k * error + c * (v_ref - states["velocity"]) + ki * error_integral + f_ext - f_pressure
+    )
+    return SimulationResult(
+        time,
+        states,
+        {"friction_force": force, "drive_force": drive_force, "pressure_a": pa, "pressure_b": pb},
+        info,
+    )
+
+
+def _arr(value, n):
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), (n,)))
+
+
+def _const(params, name):
+    values = np.asarray(params[name], dtype=float)
+    if values.ndim and not np.all(values == values.flat[0]):
+        raise ValueError(f"{name} must not vary with pressure in the compiled integrators")
+    return float(values.flat[0])
