@@ -1,0 +1,299 @@
+"""Campaigns: a folder of runs, their per-run metadata and the rig configuration.
+
+Per-run metadata (chamber pressure, nominal speed, temperature) comes from, in this order:
+``manifest.csv`` in the folder (``file,pressure_bar,velocity_mm_s`` and optional columns),
+``campaign.toml`` (a file-name pattern with named groups), ``key: value`` header lines of the
+file, and file-name tokens (``55bar``, ``p55bar``, ``55.5bar``, ``10mms``, ``v10mms``,
+``10mm_s``). Measured pressure and velocity columns win over these nominal values.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..units import UnitError, parse_quantity
+from .matfile import read_mat
+from .text import BenchFileError, read_bench_text
+
+__all__ = [
+    "CampaignConfig",
+    "RunInfo",
+    "load_config",
+    "discover_runs",
+    "read_run",
+    "name_tokens",
+    "CONFIG_NAME",
+    "MANIFEST_NAME",
+]
+
+CONFIG_NAME = "campaign.toml"
+MANIFEST_NAME = "manifest.csv"
+_SKIP_NAMES = {CONFIG_NAME, MANIFEST_NAME, "points.csv", "datasheet.json", "README.md", "LICENSE"}
+_PRESSURE_TOKEN = re.compile(
+    r"(?:^|[^A-Za-z0-9.])p?(\d+(?:[.,]\d+)?)\s*(bar|mpa|kpa|psi)(?![a-z])", re.IGNORECASE
+)
+_VELOCITY_TOKEN = re.compile(
+    r"(?:^|[^A-Za-z0-9.])v?(\d+(?:[.,]\d+)?)\s*(mms|mm_s|mm-s|mmps|mm/s)", re.IGNORECASE
+)
+_HEADER_KEYS = {
+    "pressure": ("pressure", "chamber pressure", "druck", "tryck", "system pressure"),
+    "velocity": ("nominal velocity", "velocity", "speed", "test speed", "geschwindigkeit"),
+    "temperature": ("temperature", "oil temperature", "temp"),
+}
+
+
+@dataclass(frozen=True)
+class CampaignConfig:
+    """Rig and file configuration of a campaign (``campaign.toml``), SI units.
+
+    Attributes
+    ----------
+    glob : str
+        Which files of the folder are runs.
+    name_pattern : str or None
+        Regular expression with named groups (``pressure_bar``, ``velocity_mm_s`` and any
+        others, e.g. ``seal``) matched against the file name.
+    columns, units : list of str or None
+        Column map of headerless files.
+    delimiter, decimal : str
+        As for :func:`cylfric.io.read_bench_text`.
+    area_a, area_b : float
+        Piston areas seen by chambers A and B [m^2] (from bore/rod diameters and ``kind``).
+    load_cell_sign : float
+        +1 if the load cell reads positive when it pushes the rod towards extension.
+    position_sign : float
+        +1 if the position column grows on extension.
+    moving_mass : float
+        Rod, piston and load-cell mass for the inertia term [kg] (0: neglected).
+    extraction : dict
+        Keyword options for :func:`cylfric.steady_state.extract_points`.
+    """
+
+    glob: str = "*"
+    name_pattern: str | None = None
+    columns: list | None = None
+    units: list | None = None
+    delimiter: str = "auto"
+    decimal: str = "auto"
+    area_a: float = 0.0
+    area_b: float = 0.0
+    load_cell_sign: float = 1.0
+    position_sign: float = 1.0
+    moving_mass: float = 0.0
+    extraction: dict = field(default_factory=dict)
+    source: str | None = None
+
+
+@dataclass(frozen=True)
+class RunInfo:
+    """A run file with its nominal metadata (SI; NaN when unknown)."""
+
+    path: Path
+    pressure: float = math.nan  # [Pa]
+    velocity: float = math.nan  # [m/s]
+    extra: dict = field(default_factory=dict)
+    source: dict = field(default_factory=dict)
+
+
+def _quantity(value, dimension, default_unit, where):
+    try:
+        return parse_quantity(str(value), dimension, default_unit=default_unit)
+    except UnitError as exc:
+        raise BenchFileError(where, f"{exc}") from None
+
+
+def load_config(folder) -> CampaignConfig:
+    """Read ``campaign.toml`` of ``folder`` (defaults when absent).
+
+    The file has the tables ``[files]`` (``glob``, ``name_pattern``), ``[columns]``
+    (``names``, ``units``, ``delimiter``, ``decimal``), ``[cylinder]`` (``bore``, ``rod``,
+    ``kind`` = ``"double-rod"``, ``"single-rod"`` or ``"single-acting"``), ``[force_balance]``
+    (``load_cell_sign``, ``position_sign``, ``moving_mass``) and ``[extraction]``. Values
+    with units are strings such as ``"25 mm"``.
+    """
+    path = Path(folder) / CONFIG_NAME
+    if not path.is_file():
+        return CampaignConfig()
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise BenchFileError(path, f"invalid TOML ({exc})") from None
+    known = {"files", "columns", "cylinder", "force_balance", "extraction"}
+    unknown = set(doc) - known
+    if unknown:
+        raise BenchFileError(path, f"unknown tables {sorted(unknown)}; valid: {sorted(known)}")
+    files, cols = doc.get("files", {}), doc.get("columns", {})
+    cyl, fb = doc.get("cylinder", {}), doc.get("force_balance", {})
+    area_a = area_b = 0.0
+    if cyl:
+        bore = _quantity(cyl.get("bore", "0 mm"), "length", "mm", path)
+        rod = _quantity(cyl.get("rod", "0 mm"), "length", "mm", path)
+        kind = cyl.get("kind", "double-rod")
+        piston = math.pi / 4 * bore**2
+        annulus = piston - math.pi / 4 * rod**2
+        kinds = {
+            "double-rod": (annulus, annulus),
+            "single-rod": (piston, annulus),
+            "single-acting": (piston, 0.0),
+        }
+        if kind not in kinds:
+            raise BenchFileError(path, f"unknown cylinder kind {kind!r}; valid: {sorted(kinds)}")
+        area_a, area_b = kinds[kind]
+    names, units = cols.get("names"), cols.get("units")
+    if (names is None) != (units is None) or (names and len(names) != len(units)):
+        raise BenchFileError(path, "[columns] needs `names` and `units` of the same length")
+    for key in ("load_cell_sign", "position_sign"):
+        if fb.get(key, 1) not in (1, -1):
+            raise BenchFileError(path, f"force_balance.{key} must be 1 or -1")
+    return CampaignConfig(
+        glob=files.get("glob", "*"),
+        name_pattern=files.get("name_pattern"),
+        columns=names,
+        units=units,
+        delimiter=cols.get("delimiter", "auto"),
+        decimal=cols.get("decimal", "auto"),
+        area_a=area_a,
+        area_b=area_b,
+        load_cell_sign=float(fb.get("load_cell_sign", 1)),
+        position_sign=float(fb.get("position_sign", 1)),
+        moving_mass=_quantity(fb.get("moving_mass", "0 kg"), "mass", "kg", path),
+        extraction=dict(doc.get("extraction", {})),
+        source=str(path),
+    )
+
+
+def name_tokens(name: str) -> dict:
+    """Pressure [Pa] and velocity [m/s] from file-name tokens such as ``p55bar_v10mms``."""
+    out = {}
+    match = _PRESSURE_TOKEN.search(name)
+    if match:
+        out["pressure"] = parse_quantity(match.group(1) + match.group(2), "pressure")
+    match = _VELOCITY_TOKEN.search(name)
+    if match:
+        out["velocity"] = float(match.group(1).replace(",", ".")) * 1e-3
+    return out
+
+
+def _read_manifest(folder: Path) -> dict:
+    path = folder / MANIFEST_NAME
+    if not path.is_file():
+        return {}
+    rows = {}
+    with path.open(newline="", encoding="utf-8-sig") as handle:
+        reader = csv.DictReader(handle)
+        if not reader.fieldnames or "file" not in reader.fieldnames:
+            raise BenchFileError(
+                path,
+                "expected a header row starting with 'file' (file,pressure_bar,velocity_mm_s)",
+                line=1,
+            )
+        for number, row in enumerate(reader, start=2):
+            extra = {
+                k: v
+                for k, v in row.items()
+                if k not in ("file", "pressure_bar", "velocity_mm_s") and k
+            }
+            try:
+                pressure = float(row["pressure_bar"]) * 1e5 if row.get("pressure_bar") else math.nan
+                velocity = (
+                    float(row["velocity_mm_s"]) * 1e-3 if row.get("velocity_mm_s") else math.nan
+                )
+            except ValueError:
+                raise BenchFileError(
+                    path, "pressure_bar and velocity_mm_s must be numbers", line=number
+                ) from None
+            rows[row["file"]] = (pressure, velocity, extra)
+    return rows
+
+
+def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]:
+    """List the run files of a campaign folder with their nominal metadata (sorted by name)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise BenchFileError(folder, "not a folder; expected a campaign folder of run files")
+    config = config or load_config(folder)
+    manifest = _read_manifest(folder)
+    pattern = re.compile(config.name_pattern) if config.name_pattern else None
+    runs = []
+    candidates = sorted(
+        p
+        for p in folder.glob(config.glob)
+        if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
+    )
+    if manifest:
+        missing = [name for name in manifest if not (folder / name).is_file()]
+        if missing:
+            raise BenchFileError(
+                folder / MANIFEST_NAME, f"lists files that do not exist: {missing[:5]}"
+            )
+        candidates = [folder / name for name in manifest]
+    for path in candidates:
+        pressure = velocity = math.nan
+        extra, source = {}, {}
+        if path.name in manifest:
+            pressure, velocity, extra = manifest[path.name]
+            source = {"pressure": "manifest", "velocity": "manifest"}
+        if pattern is not None:
+            match = pattern.search(path.name)
+            if match:
+                groups = {k: v for k, v in match.groupdict().items() if v is not None}
+                if math.isnan(pressure) and "pressure_bar" in groups:
+                    pressure = float(groups.pop("pressure_bar").replace(",", ".")) * 1e5
+                    source["pressure"] = "campaign.toml name_pattern"
+                if math.isnan(velocity) and "velocity_mm_s" in groups:
+                    velocity = float(groups.pop("velocity_mm_s").replace(",", ".")) * 1e-3
+                    source["velocity"] = "campaign.toml name_pattern"
+                groups.pop("pressure_bar", None)
+                groups.pop("velocity_mm_s", None)
+                extra = {**groups, **extra}
+        runs.append(RunInfo(path, pressure, velocity, extra, source))
+    if not runs:
+        raise BenchFileError(folder, f"no run files matching {config.glob!r}")
+    return runs
+
+
+def read_run(info: RunInfo, config: CampaignConfig):
+    """Read one run and complete its nominal metadata from header lines and the file name.
+
+    Returns ``(data, metadata)`` as :func:`cylfric.io.read_bench_text`, with ``pressure``
+    [Pa], ``velocity`` [m/s], ``extra`` and ``source`` (where each value came from) added.
+    """
+    if info.path.suffix.lower() == ".mat":
+        data, metadata = read_mat(info.path)
+        metadata["header"] = {}
+    else:
+        data, metadata = read_bench_text(
+            info.path,
+            columns=config.columns,
+            units=config.units,
+            delimiter=config.delimiter,
+            decimal=config.decimal,
+        )
+    pressure, velocity = info.pressure, info.velocity
+    source = dict(info.source)
+    header = {k.lower(): v for k, v in metadata.get("header", {}).items()}
+    extra = dict(info.extra)
+    for quantity, keys in _HEADER_KEYS.items():
+        for key in keys:
+            if key in header:
+                if quantity == "pressure" and math.isnan(pressure):
+                    pressure = _quantity(header[key], "pressure", "bar", info.path)
+                    source["pressure"] = "header"
+                elif quantity == "velocity" and math.isnan(velocity):
+                    velocity = _quantity(header[key], "velocity", "mm/s", info.path)
+                    source["velocity"] = "header"
+                elif quantity == "temperature":
+                    extra.setdefault("temperature", header[key])
+                break
+    tokens = name_tokens(info.path.name)
+    if math.isnan(pressure) and "pressure" in tokens:
+        pressure, source["pressure"] = tokens["pressure"], "file name"
+    if math.isnan(velocity) and "velocity" in tokens:
+        velocity, source["velocity"] = tokens["velocity"], "file name"
+    metadata.update(pressure=pressure, velocity=velocity, extra=extra, source=source)
+    return data, metadata

@@ -1,0 +1,452 @@
+"""Reader of test-bench text files: testing-machine exports and plain delimited files.
+
+One reader covers the family the thesis met ("text files mixed with string characters"):
+a free-text / ``key: value`` preamble (``MTS793|MPT|...``, ``Pressure: 55 bar``); a header row
+with units in the cell (``Force [kN]``, ``Force (N)``) or on the next row (``Sec  mm  kN``);
+tab, semicolon, comma or whitespace separators; decimal point or comma; repeated header
+blocks, status lines and blank lines between segments; CRLF or LF; UTF-8 or latin-1.
+Headerless files take their column names and units from the caller (``campaign.toml``).
+
+Speed: data lines are found with numpy byte operations and every block of them is parsed
+by pyarrow's multithreaded CSV reader; only the few text lines are looked at in Python.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.csv as pacsv
+
+from ..units import UNITS, UnitError, unit_dimension
+
+__all__ = [
+    "BenchFileError",
+    "COLUMN_KEYWORDS",
+    "QUANTITY_DIMENSIONS",
+    "read_bench_text",
+    "read_mts_text",
+    "read_delimited",
+    "canonical_name",
+]
+
+
+class BenchFileError(ValueError):
+    """A bench file cannot be read; the message names the file, the line and what was expected."""
+
+    def __init__(self, path, message, line=None):
+        self.path = str(path)
+        self.line = line
+        where = f"{self.path}" + (f", line {line}" if line is not None else "")
+        super().__init__(f"{where}: {message}")
+
+
+# Canonical quantity -> keywords found in column names (English, German, Swedish).
+COLUMN_KEYWORDS: dict[str, tuple[str, ...]] = {
+    "time": ("time", "zeit", "tid", "sec"),
+    "position": ("displacement", "position", "weg", "stroke", "läge", "lage", "extension"),
+    "force": ("force", "load", "kraft", "last"),
+    "pressure_a": ("pressure a", "pressure_a", "p_a", "pressure 1", "p1", "druck a", "tryck a"),
+    "pressure_b": ("pressure b", "pressure_b", "p_b", "pressure 2", "p2", "druck b", "tryck b"),
+    "pressure": ("pressure", "druck", "tryck"),
+    "velocity": ("velocity", "speed", "geschwindigkeit", "hastighet"),
+    "temperature": ("temperature", "temp"),
+}
+
+QUANTITY_DIMENSIONS = {
+    "time": "time",
+    "position": "length",
+    "force": "force",
+    "pressure": "pressure",
+    "pressure_a": "pressure",
+    "pressure_b": "pressure",
+    "velocity": "velocity",
+}
+SI_UNITS = {"time": "s", "length": "m", "force": "N", "pressure": "Pa", "velocity": "m/s"}
+
+_CELL_UNIT = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$")
+_KEY_VALUE = re.compile(r"^\s*([A-Za-zÀ-ÿ][^:=|]{0,60}?)\s*[:=]\s*(.*?)\s*$")
+_DATA_START = np.zeros(256, dtype=bool)
+_DATA_START[[ord(c) for c in "0123456789+-.,"]] = True
+_BLANK = np.zeros(256, dtype=bool)
+_BLANK[[9, 10, 13, 32]] = True
+_MAX_TEXT_LINES = 5000
+
+
+def canonical_name(name: str) -> str | None:
+    """Map a column name such as ``Axial Force`` or ``Zeit`` to a canonical quantity."""
+    low = " ".join(name.lower().replace("_", " ").split())
+    if any(word in low.split() for word in ("raw", "volt", "voltage", "signal")):
+        return None  # raw sensor channels are kept as read, never taken for a quantity
+    if low in {"t", "s", "sec"}:
+        return "time"
+    if low in {"x", "pos"}:
+        return "position"
+    if low in {"f", "fl"}:
+        return "force"
+    if low in {"p", "pa", "pb"}:
+        return {"p": "pressure", "pa": "pressure_a", "pb": "pressure_b"}[low]
+    if low in {"v", "vel"}:
+        return "velocity"
+    for quantity, words in COLUMN_KEYWORDS.items():
+        if any(word in low for word in words):
+            return quantity
+    return None
+
+
+def _is_unit(token: str) -> bool:
+    return token.strip().replace(" ", "").lower() in UNITS
+
+
+@dataclass
+class _Header:
+    names: list
+    units: list
+    line: int
+
+
+def _split(line: str, delimiter: str | None) -> list[str]:
+    if delimiter is None:
+        return line.split()
+    return [cell.strip() for cell in line.split(delimiter)]
+
+
+def _detect_delimiter(sample: str) -> str | None:
+    """Delimiter of a data line: tab, semicolon, whitespace (None) or comma."""
+    if "\t" in sample:
+        return "\t"
+    if ";" in sample:
+        return ";"
+    if " " in sample.strip():
+        return None
+    if "," in sample:
+        return ","
+    return None
+
+
+def _decode(raw: bytes, path) -> str:
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("latin-1")
+
+
+def _line_table(raw: bytes):
+    """Start/end byte offsets of each line and the index of its first non-blank byte."""
+    buf = np.frombuffer(raw, dtype=np.uint8)
+    newlines = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], newlines + 1))
+    ends = np.concatenate((newlines, [buf.size]))
+    if starts[-1] >= buf.size:  # the file ends with a newline
+        starts, ends = starts[:-1], ends[:-1]
+    visible = np.flatnonzero(~_BLANK[buf])
+    if visible.size == 0:
+        return starts, ends, np.full(starts.size, -1), buf
+    pos = np.searchsorted(visible, starts)
+    first = np.where(pos < visible.size, visible[np.minimum(pos, visible.size - 1)], buf.size)
+    first = np.where(first < ends, first, -1)  # -1: blank line
+    return starts, ends, first, buf
+
+
+def read_bench_text(
+    path, *, columns=None, units=None, delimiter="auto", decimal="auto", encoding=None
+):
+    """Read a bench text file into SI arrays.
+
+    Parameters
+    ----------
+    path : path-like
+        The file (never modified).
+    columns : list of str, optional
+        Column names for a headerless file (``campaign.toml``); overrides a header row.
+    units : list of str, optional
+        Units of ``columns`` (e.g. ``["ms", "mm", "N"]``).
+    delimiter : {"auto", "tab", "semicolon", "comma", "whitespace"}
+        Column separator.
+    decimal : {"auto", ".", ","}
+        Decimal separator.
+    encoding : str, optional
+        Text encoding of the preamble (default: UTF-8, falling back to latin-1).
+
+    Returns
+    -------
+    data : pandas.DataFrame
+        One column per recognised quantity, in SI with the unit in the name
+        (``"time [s]"``, ``"position [m]"``, ``"force [N]"``, ``"pressure_a [Pa]"`` ...),
+        other columns as read (``"name [unit]"``), and ``"segment [-]"`` (0, 1, ...: the
+        blocks of data between header or status lines).
+    metadata : dict
+        ``file``, ``header`` (``key: value`` lines), ``columns`` (original names),
+        ``units`` (original units), ``delimiter``, ``decimal``, ``events`` (status lines
+        with line numbers), ``rows`` and ``segments``.
+
+    Raises
+    ------
+    BenchFileError
+        Empty, binary, truncated or corrupt files, unknown units, missing columns; the
+        message names the file, the line when known, and what was expected.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise BenchFileError(path, f"cannot read the file ({exc.strerror})") from None
+    if not raw.strip():
+        raise BenchFileError(path, "the file is empty; expected a bench record")
+    if b"\x00" in raw[:65536]:
+        raise BenchFileError(
+            path,
+            "binary content (NUL bytes); expected a text export "
+            "(UTF-8 or latin-1), not UTF-16 or a binary file",
+        )
+    starts, ends, first, buf = _line_table(raw)
+    is_data = np.zeros(starts.size, dtype=bool)
+    nonblank = first >= 0
+    is_data[nonblank] = _DATA_START[buf[first[nonblank]]]
+    text_idx = np.flatnonzero(nonblank & ~is_data)
+    if text_idx.size > _MAX_TEXT_LINES and text_idx.size > 0.5 * nonblank.sum():
+        raise BenchFileError(
+            path,
+            f"{text_idx.size} of {nonblank.sum()} lines are not numeric; "
+            "expected a numeric table (is this a bench file?)",
+        )
+    data_idx = np.flatnonzero(is_data)
+    if data_idx.size == 0:
+        raise BenchFileError(
+            path, "no numeric data rows; expected rows of numbers after the header"
+        )
+
+    def line_text(i):
+        return _decode(raw[starts[i] : ends[i]], path).rstrip("\r")
+
+    # Data runs: consecutive data lines, blank lines allowed inside, broken by text lines.
+    breaks = np.searchsorted(data_idx, text_idx)
+    cut = np.unique(breaks[(breaks > 0) & (breaks < data_idx.size)])
+    runs = np.split(data_idx, cut)
+
+    sample = line_text(data_idx[0])
+    delim = {
+        "auto": _detect_delimiter(sample),
+        "tab": "\t",
+        "semicolon": ";",
+        "comma": ",",
+        "whitespace": None,
+    }.get(delimiter, "?")
+    if delim == "?":
+        raise ValueError(
+            f"unknown delimiter {delimiter!r}; valid: auto, tab, semicolon, comma, whitespace"
+        )
+    if decimal == "auto":
+        probe = b"".join(raw[starts[i] : ends[i]] for i in data_idx[:50])
+        decimal = "," if delim != "," and b"," in probe else "."
+    if decimal not in (".", ","):
+        raise ValueError(f"unknown decimal separator {decimal!r}; valid: '.', ','")
+
+    header_meta: dict[str, str] = {}
+    events: list[tuple[int, str]] = []
+    text_lines = {int(i): line_text(i) for i in text_idx}
+    for i, text in text_lines.items():
+        match = _KEY_VALUE.match(text)
+        if match and match.group(2) and not text.startswith("MTS"):
+            header_meta.setdefault(match.group(1).strip(), match.group(2))
+        elif text.strip() and i != (text_idx[0] if text_idx.size else -1):
+            events.append((i + 1, text.strip()))
+
+    explicit = None
+    if columns is not None:
+        if units is None or len(units) != len(columns):
+            raise ValueError("give one unit per column in `units` (same length as `columns`)")
+        explicit = _Header(list(columns), list(units), 0)
+
+    blocks = []
+    header = explicit
+    for seg, run in enumerate(runs):
+        previous = [i for i in text_idx if i < run[0]][-3:]
+        if explicit is None:
+            ncols = len(_split(line_text(run[0]), delim))
+            found = _header_before(previous, text_lines, delim, ncols)
+            header = found or header
+        if header is None:
+            raise BenchFileError(
+                path,
+                "no header row with column names before the data; "
+                "expected e.g. 'Time  Displacement  Force' or a column "
+                "map in campaign.toml",
+                line=int(run[0]) + 1,
+            )
+        blocks.append((seg, run, header))
+
+    frames = []
+    for seg, run, hdr in blocks:
+        chunk = raw[starts[run[0]] : ends[run[-1]]]
+        values = _parse_block(chunk, len(hdr.names), delim, decimal, path, int(run[0]) + 1)
+        frames.append((seg, hdr, values))
+
+    data, col_units = _assemble(frames, path)
+    metadata = {
+        "file": str(path),
+        "header": header_meta,
+        "columns": blocks[0][2].names,
+        "units": col_units,
+        "delimiter": {None: "whitespace"}.get(delim, delim),
+        "decimal": decimal,
+        "events": events,
+        "rows": int(len(data)),
+        "segments": len(frames),
+    }
+    return data, metadata
+
+
+def _header_before(previous, text_lines, delim, ncols):
+    """Names (and units) row among the text lines just before a data block, or None.
+
+    A candidate counts only if it has as many cells as the block has columns, so a status
+    line such as ``*** Interlock 1 ***`` is never taken for a header.
+    """
+    if not previous:
+        return None
+    last = text_lines[previous[-1]]
+    cells = _split(last, delim)
+    if len(cells) != ncols:
+        return None
+    if all(_is_unit(c) for c in cells if c) and len(previous) >= 2:
+        names_line = previous[-2]
+        names = _split(text_lines[names_line], delim)
+        if len(names) == len(cells):
+            return _Header(names, cells, names_line + 1)
+    if len(cells) >= 2 and not _KEY_VALUE.match(last):
+        names, units = [], []
+        for cell in cells:
+            match = _CELL_UNIT.match(cell)
+            names.append(match.group(1) if match else cell)
+            units.append(match.group(2) if match else "")
+        return _Header(names, units, previous[-1] + 1)
+    return None
+
+
+def _parse_block(chunk: bytes, ncols: int, delim, decimal, path, first_line):
+    """Parse one block of numeric lines with pyarrow; locate the bad line on failure."""
+    body = chunk
+    sep = delim
+    if delim is None:
+        body = re.sub(rb"[ \t]+", b"\t", chunk)
+        body = re.sub(rb"(?m)^\t|\t(?=\r?$)", b"", body)
+        sep = "\t"
+    names = [f"c{i}" for i in range(ncols)]
+    try:
+        table = pacsv.read_csv(
+            io.BytesIO(body),
+            read_options=pacsv.ReadOptions(column_names=names),
+            parse_options=pacsv.ParseOptions(delimiter=sep),
+            convert_options=pacsv.ConvertOptions(
+                column_types={n: pa.float64() for n in names},
+                decimal_point=decimal,
+                strings_can_be_null=False,
+                quoted_strings_can_be_null=False,
+            ),
+        )
+    except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
+        _locate_bad_line(chunk, ncols, delim, decimal, path, first_line, exc)
+        raise BenchFileError(
+            path, f"cannot parse the numeric block: {exc}", line=first_line
+        ) from None
+    values = np.column_stack([table.column(i).to_numpy(zero_copy_only=False) for i in range(ncols)])
+    if np.isnan(values).any():
+        row = int(np.argwhere(np.isnan(values))[0, 0])
+        _locate_bad_line(chunk, ncols, delim, decimal, path, first_line, None, row)
+        raise BenchFileError(
+            path, "empty or non-numeric value in the numeric table", line=first_line
+        )
+    return values
+
+
+def _locate_bad_line(chunk, ncols, delim, decimal, path, first_line, exc, hint_row=None):
+    """Slow path for errors only: find the first malformed line and raise for it."""
+    lines = chunk.decode("latin-1").split("\n")
+    for offset, line in enumerate(lines):
+        text = line.rstrip("\r")
+        if not text.strip():
+            continue
+        cells = _split(text, delim)
+        if len(cells) != ncols:
+            raise BenchFileError(
+                path,
+                f"expected {ncols} numeric columns, found {len(cells)} "
+                f"({text[:60]!r}); truncated or corrupt row",
+                line=first_line + offset,
+            )
+        for cell in cells:
+            try:
+                float(cell.replace(",", ".") if decimal == "," else cell)
+            except ValueError:
+                raise BenchFileError(
+                    path,
+                    f"expected a number, found {cell[:30]!r} (decimal separator {decimal!r})",
+                    line=first_line + offset,
+                ) from None
+
+
+def _assemble(frames, path):
+    """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
+    parts = []
+    col_units = {}
+    for seg, hdr, values in frames:
+        cols = {}
+        for j, (name, unit) in enumerate(zip(hdr.names, hdr.units, strict=True)):
+            quantity = canonical_name(name)
+            if quantity in QUANTITY_DIMENSIONS:
+                dim = QUANTITY_DIMENSIONS[quantity]
+                if not unit:
+                    raise BenchFileError(
+                        path,
+                        f"column {name!r} has no unit; expected a {dim} "
+                        f"unit in the header ('{name} [unit]') or on a "
+                        "units row",
+                        line=hdr.line or None,
+                    )
+                try:
+                    udim = unit_dimension(unit)
+                except UnitError as exc:
+                    raise BenchFileError(
+                        path, f"column {name!r}: {exc}", line=hdr.line or None
+                    ) from None
+                if udim != dim:
+                    raise BenchFileError(
+                        path,
+                        f"column {name!r} has unit {unit!r} ({udim}); expected a {dim} unit",
+                        line=hdr.line or None,
+                    )
+                key = f"{quantity} [{SI_UNITS[dim]}]"
+                if key in cols:
+                    key = f"{name} [{SI_UNITS[dim]}]"
+                cols[key] = values[:, j] * UNITS[unit.strip().replace(" ", "").lower()][1]
+                col_units[quantity] = unit
+            else:
+                cols[f"{name} [{unit or '-'}]"] = values[:, j]
+        cols["segment [-]"] = np.full(values.shape[0], seg, dtype=np.int32)
+        parts.append(cols)
+    keys = list(parts[0])
+    for cols in parts[1:]:
+        if list(cols) != keys:
+            raise BenchFileError(
+                path,
+                "the columns change between segments; expected the same "
+                f"columns in every block ({keys} vs {list(cols)})",
+            )
+    data = pd.DataFrame({k: np.concatenate([p[k] for p in parts]) for k in keys})
+    return data, col_units
+
+
+def read_mts_text(path, **kwargs):
+    """Read a testing-machine text export (MTS-like). See :func:`read_bench_text`."""
+    return read_bench_text(path, **kwargs)
+
+
+def read_delimited(path, columns=None, units=None, **kwargs):
+    """Read a plain delimited file, with or without a header row. See :func:`read_bench_text`."""
+    return read_bench_text(path, columns=columns, units=units, **kwargs)
