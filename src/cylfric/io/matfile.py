@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from scipy.io import loadmat
+from scipy.io.matlab import MatReadError
 
 from .text import BenchFileError
 
@@ -35,7 +36,7 @@ def read_mat(path, *, variables=None, units=None):
     path = Path(path)
     try:
         content = loadmat(path, squeeze_me=True)
-    except (ValueError, TypeError, OSError, NotImplementedError) as exc:
+    except (MatReadError, ValueError, TypeError, OSError, NotImplementedError) as exc:
         raise BenchFileError(path, f"not a readable MATLAB .mat file ({exc})") from None
     arrays = {k: np.asarray(v) for k, v in content.items() if not k.startswith("__")}
     vectors = {

@@ -221,6 +221,12 @@ def read_bench_text(
             path, "no numeric data rows; expected rows of numbers after the header"
         )
 
+    if data_idx[-1] == starts.size - 1 and not raw.endswith(b"\n"):
+        raise BenchFileError(path, "the last data row has no line end: the file looks truncated "
+                                   "(a row cut mid-number would read as a wrong value); "
+                                   "expected every row to end with a newline",
+                             line=int(data_idx[-1]) + 1)
+
     def line_text(i):
         return _decode(raw[starts[i] : ends[i]], path).rstrip("\r")
 
@@ -302,6 +308,23 @@ def read_bench_text(
     return data, metadata
 
 
+def _split_header(line: str, delim, ncols: int) -> list[str]:
+    """Cells of a header row; whitespace rows may hold names with spaces or ``[unit]``."""
+    cells = _split(line, delim)
+    if delim is not None or len(cells) == ncols:
+        return cells
+    wide = [c for c in re.split(r"\s{2,}|\t", line.strip()) if c]
+    if len(wide) == ncols:
+        return wide
+    merged = []
+    for token in cells:
+        if merged and re.fullmatch(r"[\[(].*[\])]", token):
+            merged[-1] = f"{merged[-1]} {token}"
+        else:
+            merged.append(token)
+    return merged
+
+
 def _header_before(previous, text_lines, delim, ncols):
     """Names (and units) row among the text lines just before a data block, or None.
 
@@ -311,12 +334,12 @@ def _header_before(previous, text_lines, delim, ncols):
     if not previous:
         return None
     last = text_lines[previous[-1]]
-    cells = _split(last, delim)
+    cells = _split_header(last, delim, ncols)
     if len(cells) != ncols:
         return None
     if all(_is_unit(c) for c in cells if c) and len(previous) >= 2:
         names_line = previous[-2]
-        names = _split(text_lines[names_line], delim)
+        names = _split_header(text_lines[names_line], delim, ncols)
         if len(names) == len(cells):
             return _Header(names, cells, names_line + 1)
     if len(cells) >= 2 and not _KEY_VALUE.match(last):
