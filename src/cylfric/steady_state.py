@@ -15,6 +15,8 @@ unit, and :func:`find_windows` can return its intermediate components.
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -90,7 +92,7 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     n = min(n, (len(time) - 1) | 1 if len(time) % 2 == 0 else len(time))
     if n < 3:
         return sign * np.gradient(position, time)
-    return sign * savgol_filter(position, n, 2, deriv=1, delta=dt)
+    return sign * savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest")
 
 
 @dataclass
@@ -226,109 +228,96 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     return offset + lo, offset + hi
 
 
-def extract_points(
-    data: pd.DataFrame,
-    metadata: dict,
-    config: CampaignConfig | None = None,
-    *,
-    run=0,
-    spike_sigma=5.0,
-    velocity_window=0.2,
-    **window_options,
-):
+def extract_points(data: pd.DataFrame, metadata: dict, config: CampaignConfig | None = None,
+                   *, run=0, **options) -> pd.DataFrame:
     """Friction points of one run: one row per stroke window (columns :data:`POINT_COLUMNS`).
 
-    Spikes (|F - median| > spike_sigma robust sigmas) are dropped from each window and
-    counted. The run offset ``(F_up + F_down)/2`` uses the ok windows of both directions;
-    a run with one direction only gets NaN offset and the flag ``"no_offset"`` until the
-    campaign offset is applied by :func:`extract_campaign`.
+    Spikes (|F - median| > ``spike_sigma`` robust sigmas, default 5) are dropped from each
+    window and counted. The run offset ``(F_up + F_down)/2`` uses the ok windows of both
+    directions; a run with one direction only gets NaN offset and the flag ``"no_offset"``
+    until :func:`extract_campaign` applies the campaign offset. Other keywords go to
+    :func:`find_windows` (``velocity_window`` [s] to the velocity smoothing).
     """
-    config = config or CampaignConfig()
-    options = {**config.extraction, **window_options}
+    rows = _offset_rows(_point_rows(data, metadata, config or CampaignConfig(), run, options))
+    return pd.DataFrame(rows, columns=_columns(rows))
+
+
+def _columns(rows):
+    extra = [k for k in rows[0] if k not in POINT_COLUMNS] if rows else []
+    return POINT_COLUMNS + extra
+
+
+def _point_rows(data, metadata, config, run, options):
+    options = {**config.extraction, **options}
+    spike_sigma = options.pop("spike_sigma", 5.0)
+    velocity_window = options.pop("velocity_window", 0.2)
     file = metadata.get("file", "")
     time = data["time [s]"].to_numpy()
     if "velocity [m/s]" in data:
         velocity = config.position_sign * data["velocity [m/s]"].to_numpy()
     elif "position [m]" in data:
-        velocity = smoothed_velocity(
-            time, data["position [m]"].to_numpy(), window=velocity_window, sign=config.position_sign
-        )
+        velocity = smoothed_velocity(time, data["position [m]"].to_numpy(),
+                                     window=velocity_window, sign=config.position_sign)
     else:
-        raise BenchFileError(
-            file,
-            "no position or velocity column; expected one named "
-            "Displacement/Position/Weg or Velocity",
-        )
+        raise BenchFileError(file, "no position or velocity column; expected one named "
+                                   "Displacement/Position/Weg or Velocity")
     force = friction_signal(data, config, velocity)
+    pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
+    if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
+        raise BenchFileError(file, "no pressure for this run; expected manifest.csv, a "
+                                   "'Pressure: 55 bar' header line, a file-name token such as "
+                                   "55bar, or a pressure column")
+    pressure = None if pressure_col is None else pressure_col.to_numpy()
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
-    pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
+    extra = metadata.get("extra", {})
     rows = []
     for w in windows:
-        sl = slice(w.start, w.stop)
-        f = force[sl]
-        if w.stop > w.start:
+        f = force[w.start:w.stop]
+        v = velocity[w.start:w.stop]
+        keep = np.zeros(0, bool)
+        if f.size:
             med = np.median(f)
-            sigma = 1.4826 * np.median(np.abs(f - med)) or np.std(f)
+            sigma = 1.4826 * np.median(np.abs(f - med)) or float(np.std(f))
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
-        else:
-            keep = np.zeros(0, bool)
-        if pressure_col is not None and w.stop > w.start:
-            p = pressure_col.to_numpy()[sl]
-            p_mean, p_std = float(np.mean(p)), float(np.std(p))
+        n = int(keep.sum())
+        if pressure is not None and n:
+            p = pressure[w.start:w.stop][keep]
+            p_mean, p_std = float(p.mean()), float(p.std())
         else:
             p_mean, p_std = float(metadata.get("pressure", math.nan)), 0.0
-        n = int(keep.sum())
-        rows.append(
-            {
-                "run": run,
-                "file": file,
-                "stroke": w.stroke,
-                "direction [-]": w.direction,
-                "pressure [Pa]": p_mean,
-                "pressure_std [Pa]": p_std,
-                "velocity [m/s]": float(np.mean(velocity[sl][keep])) if n else math.nan,
-                "velocity_std [m/s]": float(np.std(velocity[sl][keep])) if n else math.nan,
-                "force [N]": float(np.mean(f[keep])) if n else math.nan,
-                "friction_std [N]": float(np.std(f[keep])) if n else math.nan,
-                "n [-]": n,
-                "window_start [s]": float(time[w.start]) if n else math.nan,
-                "window_end [s]": float(time[w.stop - 1]) if n else math.nan,
-                "spikes [-]": int(keep.size - n),
-                "flag": w.flag,
-            }
-        )
-    points = pd.DataFrame(
-        rows, columns=[c for c in POINT_COLUMNS if c not in ("friction [N]", "offset [N]")]
-    )
-    if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
-        raise BenchFileError(
-            file,
-            "no pressure for this run; expected manifest.csv, a "
-            "'Pressure: 55 bar' header line, a file-name token such as "
-            "55bar, or a pressure column",
-        )
-    for key, value in metadata.get("extra", {}).items():
-        points[key] = value
-    return _apply_offset(points)
+        nan = math.nan
+        rows.append({
+            "run": run, "file": file, "stroke": w.stroke, "direction [-]": w.direction,
+            "pressure [Pa]": p_mean, "pressure_std [Pa]": p_std,
+            "velocity [m/s]": float(v[keep].mean()) if n else nan,
+            "velocity_std [m/s]": float(v[keep].std()) if n else nan,
+            "force [N]": float(f[keep].mean()) if n else nan, "friction [N]": nan,
+            "friction_std [N]": float(f[keep].std()) if n else nan,
+            "n [-]": n, "window_start [s]": float(time[w.start]) if n else nan,
+            "window_end [s]": float(time[w.stop - 1]) if n else nan,
+            "spikes [-]": int(keep.size - n), "offset [N]": nan,
+            "flag": w.flag if n else ("unsettled" if w.flag == "ok" else w.flag), **extra,
+        })
+    return rows
 
 
-def _apply_offset(points: pd.DataFrame, campaign_offset=None) -> pd.DataFrame:
-    ok = points["flag"].eq("ok")
-    up = points.loc[ok & (points["direction [-]"] > 0), "force [N]"]
-    down = points.loc[ok & (points["direction [-]"] < 0), "force [N]"]
-    if len(up) and len(down):
-        offset = 0.5 * (up.mean() + down.mean())
+def _offset_rows(rows, campaign_offset=None):
+    """Set the run offset (F_up + F_down)/2 and the friction magnitude of every row."""
+    up = [r["force [N]"] for r in rows if r["flag"] == "ok" and r["direction [-]"] > 0]
+    down = [r["force [N]"] for r in rows if r["flag"] == "ok" and r["direction [-]"] < 0]
+    if up and down:
+        offset = 0.5 * (float(np.mean(up)) + float(np.mean(down)))
     elif campaign_offset is not None:
         offset = campaign_offset
     else:
         offset = math.nan
-    points = points.copy()
-    points["offset [N]"] = offset
-    points["friction [N]"] = points["direction [-]"] * (points["force [N]"] - offset)
-    if math.isnan(offset):
-        points.loc[ok, "flag"] = "no_offset"
-    return points[[c for c in POINT_COLUMNS] + [c for c in points if c not in POINT_COLUMNS]]
+    for r in rows:
+        r["offset [N]"] = offset
+        r["friction [N]"] = r["direction [-]"] * (r["force [N]"] - offset)
+        if math.isnan(offset) and r["flag"] == "ok":
+            r["flag"] = "no_offset"
+    return rows
 
 
 @dataclass
@@ -365,53 +354,61 @@ class Extraction:
 
 
 def extract_campaign(
-    folder, config: CampaignConfig | None = None, *, skip_bad=False, progress=None, **options
+    folder, config: CampaignConfig | None = None, *, skip_bad=False, progress=None, workers=None,
+    **options,
 ) -> Extraction:
     """Read every run of a campaign folder and extract its friction points.
 
     Files are read one at a time (memory does not grow with the number of files).
     By default the first bad file raises :class:`~cylfric.io.BenchFileError`; with
     ``skip_bad`` it is listed in ``Extraction.skipped`` with the reason and the rest goes on.
-    ``progress`` is called with each file name. Input files are never modified.
+    ``progress`` is called with each file name; ``workers`` threads read files (default:
+    up to 2). Input files are never modified.
     """
     config = config or load_config(folder)
     infos = discover_runs(folder, config)
-    frames, skipped, runs = [], [], []
+    per_run, skipped, runs = [], [], []
     total = 0
-    for index, info in enumerate(infos):
+
+    def one(item):
+        index, info = item
         try:
             data, metadata = read_run(info, config)
-            points = extract_points(data, metadata, config, run=index, **options)
+            rows = _offset_rows(_point_rows(data, metadata, config, index, dict(options)))
         except BenchFileError as exc:
-            if not skip_bad:
-                raise
-            skipped.append({"file": str(info.path), "reason": str(exc)})
-        else:
-            frames.append(points)
-            runs.append(
-                {
-                    "file": str(info.path),
-                    "rows": metadata["rows"],
-                    "segments": metadata.get("segments", 1),
-                    "source": metadata["source"],
-                    "events": len(metadata.get("events", [])),
-                }
-            )
-        total += info.path.stat().st_size
-        if progress is not None:
-            progress(info.path.name)
-    if not frames:
+            return info, None, None, exc
+        summary = {"file": str(info.path), "rows": metadata["rows"],
+                   "segments": metadata.get("segments", 1), "source": metadata["source"],
+                   "events": len(metadata.get("events", []))}
+        return info, rows, summary, None
+
+    # Two files in flight (pyarrow and numpy release the GIL); each task returns only its
+    # points, so memory does not grow with the number of files.
+    with ThreadPoolExecutor(max_workers=workers or min(2, os.cpu_count() or 1)) as pool:
+        for info, rows, summary, error in pool.map(one, enumerate(infos)):
+            if error is not None:
+                if not skip_bad:
+                    raise error
+                skipped.append({"file": str(info.path), "reason": str(error)})
+            else:
+                per_run.append(rows)
+                runs.append(summary)
+            total += info.path.stat().st_size
+            if progress is not None:
+                progress(info.path.name)
+    if not per_run:
         raise BenchFileError(folder, "no run could be read; see the skipped files")
-    points = pd.concat(frames, ignore_index=True)
-    run_offsets = points.groupby("run")["offset [N]"].first().dropna()
-    offset = float(run_offsets.median()) if len(run_offsets) else math.nan
-    offset_std = float(run_offsets.std()) if len(run_offsets) > 1 else math.nan
-    if points["flag"].eq("no_offset").any() and not math.isnan(offset):
-        fixed = []
-        for _, group in points.groupby("run", sort=False):
-            if group["flag"].eq("no_offset").any():
-                group = group.assign(flag=group["flag"].replace("no_offset", "ok"))
-                group = _apply_offset(group, campaign_offset=offset)
-            fixed.append(group)
-        points = pd.concat(fixed, ignore_index=True)
+    run_offsets = [rows[0]["offset [N]"] for rows in per_run
+                   if rows and not math.isnan(rows[0]["offset [N]"])]
+    offset = float(np.median(run_offsets)) if run_offsets else math.nan
+    offset_std = float(np.std(run_offsets, ddof=1)) if len(run_offsets) > 1 else math.nan
+    if not math.isnan(offset):
+        for rows in per_run:
+            if any(r["flag"] == "no_offset" for r in rows):
+                for r in rows:
+                    r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
+                _offset_rows(rows, campaign_offset=offset)
+    rows = [r for run_rows in per_run for r in run_rows]
+    points = pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(
+        columns=POINT_COLUMNS)
     return Extraction(points, skipped, offset, offset_std, runs, total)

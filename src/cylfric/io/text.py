@@ -7,23 +7,22 @@ tab, semicolon, comma or whitespace separators; decimal point or comma; repeated
 blocks, status lines and blank lines between segments; CRLF or LF; UTF-8 or latin-1.
 Headerless files take their column names and units from the caller (``campaign.toml``).
 
-Speed: data lines are found with numpy byte operations and every block of them is parsed
-by pyarrow's multithreaded CSV reader; only the few text lines are looked at in Python.
+Speed: a compiled byte-level scanner (:mod:`cylfric.io._scan`) classifies the lines and
+parses every numeric block in one pass each; only the few text lines are looked at in
+Python.
 """
 
 from __future__ import annotations
 
-import io
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import pyarrow as pa
-import pyarrow.csv as pacsv
 
 from ..units import UNITS, UnitError, unit_dimension
+from ._scan import NUMERIC, TEXT, parse_block, scan_lines
 
 __all__ = [
     "BenchFileError",
@@ -71,10 +70,6 @@ SI_UNITS = {"time": "s", "length": "m", "force": "N", "pressure": "Pa", "velocit
 
 _CELL_UNIT = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$")
 _KEY_VALUE = re.compile(r"^\s*([A-Za-zÀ-ÿ][^:=|]{0,60}?)\s*[:=]\s*(.*?)\s*$")
-_DATA_START = np.zeros(256, dtype=bool)
-_DATA_START[[ord(c) for c in "0123456789+-.,"]] = True
-_BLANK = np.zeros(256, dtype=bool)
-_BLANK[[9, 10, 13, 32]] = True
 _MAX_TEXT_LINES = 5000
 
 
@@ -136,23 +131,6 @@ def _decode(raw: bytes, path) -> str:
         return raw.decode("latin-1")
 
 
-def _line_table(raw: bytes):
-    """Start/end byte offsets of each line and the index of its first non-blank byte."""
-    buf = np.frombuffer(raw, dtype=np.uint8)
-    newlines = np.flatnonzero(buf == 10)
-    starts = np.concatenate(([0], newlines + 1))
-    ends = np.concatenate((newlines, [buf.size]))
-    if starts[-1] >= buf.size:  # the file ends with a newline
-        starts, ends = starts[:-1], ends[:-1]
-    visible = np.flatnonzero(~_BLANK[buf])
-    if visible.size == 0:
-        return starts, ends, np.full(starts.size, -1), buf
-    pos = np.searchsorted(visible, starts)
-    first = np.where(pos < visible.size, visible[np.minimum(pos, visible.size - 1)], buf.size)
-    first = np.where(first < ends, first, -1)  # -1: blank line
-    return starts, ends, first, buf
-
-
 def read_bench_text(
     path, *, columns=None, units=None, delimiter="auto", decimal="auto", encoding=None
 ):
@@ -204,28 +182,29 @@ def read_bench_text(
             "binary content (NUL bytes); expected a text export "
             "(UTF-8 or latin-1), not UTF-16 or a binary file",
         )
-    starts, ends, first, buf = _line_table(raw)
-    is_data = np.zeros(starts.size, dtype=bool)
-    nonblank = first >= 0
-    is_data[nonblank] = _DATA_START[buf[first[nonblank]]]
-    text_idx = np.flatnonzero(nonblank & ~is_data)
-    if text_idx.size > _MAX_TEXT_LINES and text_idx.size > 0.5 * nonblank.sum():
+    buf = np.frombuffer(raw, dtype=np.uint8)
+    starts, ends, kinds = scan_lines(buf)
+    text_idx = np.flatnonzero(kinds == TEXT)
+    data_idx = np.flatnonzero(kinds == NUMERIC)
+    if text_idx.size > _MAX_TEXT_LINES and text_idx.size > data_idx.size:
         raise BenchFileError(
             path,
-            f"{text_idx.size} of {nonblank.sum()} lines are not numeric; "
+            f"{text_idx.size} of {text_idx.size + data_idx.size} lines are not numeric; "
             "expected a numeric table (is this a bench file?)",
         )
-    data_idx = np.flatnonzero(is_data)
     if data_idx.size == 0:
         raise BenchFileError(
             path, "no numeric data rows; expected rows of numbers after the header"
         )
 
     if data_idx[-1] == starts.size - 1 and not raw.endswith(b"\n"):
-        raise BenchFileError(path, "the last data row has no line end: the file looks truncated "
-                                   "(a row cut mid-number would read as a wrong value); "
-                                   "expected every row to end with a newline",
-                             line=int(data_idx[-1]) + 1)
+        raise BenchFileError(
+            path,
+            "the last data row has no line end: the file looks truncated "
+            "(a row cut mid-number would read as a wrong value); "
+            "expected every row to end with a newline",
+            line=int(data_idx[-1]) + 1,
+        )
 
     def line_text(i):
         return _decode(raw[starts[i] : ends[i]], path).rstrip("\r")
@@ -288,9 +267,26 @@ def read_bench_text(
         blocks.append((seg, run, header))
 
     frames = []
+    sep = 0 if delim is None else ord(delim)
     for seg, run, hdr in blocks:
-        chunk = raw[starts[run[0]] : ends[run[-1]]]
-        values = _parse_block(chunk, len(hdr.names), delim, decimal, path, int(run[0]) + 1)
+        values, bad, code, field = parse_block(
+            buf, starts, ends, run, len(hdr.names), sep, ord(decimal)
+        )
+        if bad >= 0:
+            text = line_text(bad)[:60]
+            if code == 1:
+                message = (
+                    f"expected {len(hdr.names)} numeric columns, found {field} ({text!r}); "
+                    "truncated or corrupt row"
+                )
+            else:
+                cells = _split(text, delim)
+                cell = cells[field] if field < len(cells) else ""
+                message = (
+                    f"expected a number in column {field + 1}, found {cell[:30]!r} "
+                    f"(decimal separator {decimal!r})"
+                )
+            raise BenchFileError(path, message, line=int(bad) + 1)
         frames.append((seg, hdr, values))
 
     data, col_units = _assemble(frames, path)
@@ -352,68 +348,6 @@ def _header_before(previous, text_lines, delim, ncols):
     return None
 
 
-def _parse_block(chunk: bytes, ncols: int, delim, decimal, path, first_line):
-    """Parse one block of numeric lines with pyarrow; locate the bad line on failure."""
-    body = chunk
-    sep = delim
-    if delim is None:
-        body = re.sub(rb"[ \t]+", b"\t", chunk)
-        body = re.sub(rb"(?m)^\t|\t(?=\r?$)", b"", body)
-        sep = "\t"
-    names = [f"c{i}" for i in range(ncols)]
-    try:
-        table = pacsv.read_csv(
-            io.BytesIO(body),
-            read_options=pacsv.ReadOptions(column_names=names),
-            parse_options=pacsv.ParseOptions(delimiter=sep),
-            convert_options=pacsv.ConvertOptions(
-                column_types={n: pa.float64() for n in names},
-                decimal_point=decimal,
-                strings_can_be_null=False,
-                quoted_strings_can_be_null=False,
-            ),
-        )
-    except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
-        _locate_bad_line(chunk, ncols, delim, decimal, path, first_line, exc)
-        raise BenchFileError(
-            path, f"cannot parse the numeric block: {exc}", line=first_line
-        ) from None
-    values = np.column_stack([table.column(i).to_numpy(zero_copy_only=False) for i in range(ncols)])
-    if np.isnan(values).any():
-        row = int(np.argwhere(np.isnan(values))[0, 0])
-        _locate_bad_line(chunk, ncols, delim, decimal, path, first_line, None, row)
-        raise BenchFileError(
-            path, "empty or non-numeric value in the numeric table", line=first_line
-        )
-    return values
-
-
-def _locate_bad_line(chunk, ncols, delim, decimal, path, first_line, exc, hint_row=None):
-    """Slow path for errors only: find the first malformed line and raise for it."""
-    lines = chunk.decode("latin-1").split("\n")
-    for offset, line in enumerate(lines):
-        text = line.rstrip("\r")
-        if not text.strip():
-            continue
-        cells = _split(text, delim)
-        if len(cells) != ncols:
-            raise BenchFileError(
-                path,
-                f"expected {ncols} numeric columns, found {len(cells)} "
-                f"({text[:60]!r}); truncated or corrupt row",
-                line=first_line + offset,
-            )
-        for cell in cells:
-            try:
-                float(cell.replace(",", ".") if decimal == "," else cell)
-            except ValueError:
-                raise BenchFileError(
-                    path,
-                    f"expected a number, found {cell[:30]!r} (decimal separator {decimal!r})",
-                    line=first_line + offset,
-                ) from None
-
-
 def _assemble(frames, path):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
     parts = []
@@ -461,7 +395,7 @@ def _assemble(frames, path):
                 "the columns change between segments; expected the same "
                 f"columns in every block ({keys} vs {list(cols)})",
             )
-    data = pd.DataFrame({k: np.concatenate([p[k] for p in parts]) for k in keys})
+    data = pd.DataFrame({k: np.concatenate([p[k] for p in parts]) for k in keys}, copy=False)
     return data, col_units
 
 
