@@ -228,8 +228,9 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     return offset + lo, offset + hi
 
 
-def extract_points(data: pd.DataFrame, metadata: dict, config: CampaignConfig | None = None,
-                   *, run=0, **options) -> pd.DataFrame:
+def extract_points(
+    data: pd.DataFrame, metadata: dict, config: CampaignConfig | None = None, *, run=0, **options
+) -> pd.DataFrame:
     """Friction points of one run: one row per stroke window (columns :data:`POINT_COLUMNS`).
 
     Spikes (|F - median| > ``spike_sigma`` robust sigmas, default 5) are dropped from each
@@ -256,25 +257,32 @@ def _point_rows(data, metadata, config, run, options):
     if "velocity [m/s]" in data:
         velocity = config.position_sign * data["velocity [m/s]"].to_numpy()
     elif "position [m]" in data:
-        velocity = smoothed_velocity(time, data["position [m]"].to_numpy(),
-                                     window=velocity_window, sign=config.position_sign)
+        velocity = smoothed_velocity(
+            time, data["position [m]"].to_numpy(), window=velocity_window, sign=config.position_sign
+        )
     else:
-        raise BenchFileError(file, "no position or velocity column; expected one named "
-                                   "Displacement/Position/Weg or Velocity")
+        raise BenchFileError(
+            file,
+            "no position or velocity column; expected one named "
+            "Displacement/Position/Weg or Velocity",
+        )
     force = friction_signal(data, config, velocity)
     pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
     if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
-        raise BenchFileError(file, "no pressure for this run; expected manifest.csv, a "
-                                   "'Pressure: 55 bar' header line, a file-name token such as "
-                                   "55bar, or a pressure column")
+        raise BenchFileError(
+            file,
+            "no pressure for this run; expected manifest.csv, a "
+            "'Pressure: 55 bar' header line, a file-name token such as "
+            "55bar, or a pressure column",
+        )
     pressure = None if pressure_col is None else pressure_col.to_numpy()
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
     extra = metadata.get("extra", {})
     rows = []
     for w in windows:
-        f = force[w.start:w.stop]
-        v = velocity[w.start:w.stop]
+        f = force[w.start : w.stop]
+        v = velocity[w.start : w.stop]
         keep = np.zeros(0, bool)
         if f.size:
             med = np.median(f)
@@ -282,23 +290,33 @@ def _point_rows(data, metadata, config, run, options):
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
         n = int(keep.sum())
         if pressure is not None and n:
-            p = pressure[w.start:w.stop][keep]
+            p = pressure[w.start : w.stop][keep]
             p_mean, p_std = float(p.mean()), float(p.std())
         else:
             p_mean, p_std = float(metadata.get("pressure", math.nan)), 0.0
         nan = math.nan
-        rows.append({
-            "run": run, "file": file, "stroke": w.stroke, "direction [-]": w.direction,
-            "pressure [Pa]": p_mean, "pressure_std [Pa]": p_std,
-            "velocity [m/s]": float(v[keep].mean()) if n else nan,
-            "velocity_std [m/s]": float(v[keep].std()) if n else nan,
-            "force [N]": float(f[keep].mean()) if n else nan, "friction [N]": nan,
-            "friction_std [N]": float(f[keep].std()) if n else nan,
-            "n [-]": n, "window_start [s]": float(time[w.start]) if n else nan,
-            "window_end [s]": float(time[w.stop - 1]) if n else nan,
-            "spikes [-]": int(keep.size - n), "offset [N]": nan,
-            "flag": w.flag if n else ("unsettled" if w.flag == "ok" else w.flag), **extra,
-        })
+        rows.append(
+            {
+                "run": run,
+                "file": file,
+                "stroke": w.stroke,
+                "direction [-]": w.direction,
+                "pressure [Pa]": p_mean,
+                "pressure_std [Pa]": p_std,
+                "velocity [m/s]": float(v[keep].mean()) if n else nan,
+                "velocity_std [m/s]": float(v[keep].std()) if n else nan,
+                "force [N]": float(f[keep].mean()) if n else nan,
+                "friction [N]": nan,
+                "friction_std [N]": float(f[keep].std()) if n else nan,
+                "n [-]": n,
+                "window_start [s]": float(time[w.start]) if n else nan,
+                "window_end [s]": float(time[w.stop - 1]) if n else nan,
+                "spikes [-]": int(keep.size - n),
+                "offset [N]": nan,
+                "flag": w.flag if n else ("unsettled" if w.flag == "ok" else w.flag),
+                **extra,
+            }
+        )
     return rows
 
 
@@ -354,7 +372,12 @@ class Extraction:
 
 
 def extract_campaign(
-    folder, config: CampaignConfig | None = None, *, skip_bad=False, progress=None, workers=None,
+    folder,
+    config: CampaignConfig | None = None,
+    *,
+    skip_bad=False,
+    progress=None,
+    workers=None,
     **options,
 ) -> Extraction:
     """Read every run of a campaign folder and extract its friction points.
@@ -377,9 +400,13 @@ def extract_campaign(
             rows = _offset_rows(_point_rows(data, metadata, config, index, dict(options)))
         except BenchFileError as exc:
             return info, None, None, exc
-        summary = {"file": str(info.path), "rows": metadata["rows"],
-                   "segments": metadata.get("segments", 1), "source": metadata["source"],
-                   "events": len(metadata.get("events", []))}
+        summary = {
+            "file": str(info.path),
+            "rows": metadata["rows"],
+            "segments": metadata.get("segments", 1),
+            "source": metadata["source"],
+            "events": len(metadata.get("events", [])),
+        }
         return info, rows, summary, None
 
     # Two files in flight (pyarrow and numpy release the GIL); each task returns only its
@@ -398,8 +425,9 @@ def extract_campaign(
                 progress(info.path.name)
     if not per_run:
         raise BenchFileError(folder, "no run could be read; see the skipped files")
-    run_offsets = [rows[0]["offset [N]"] for rows in per_run
-                   if rows and not math.isnan(rows[0]["offset [N]"])]
+    run_offsets = [
+        rows[0]["offset [N]"] for rows in per_run if rows and not math.isnan(rows[0]["offset [N]"])
+    ]
     offset = float(np.median(run_offsets)) if run_offsets else math.nan
     offset_std = float(np.std(run_offsets, ddof=1)) if len(run_offsets) > 1 else math.nan
     if not math.isnan(offset):
@@ -409,6 +437,7 @@ def extract_campaign(
                     r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
                 _offset_rows(rows, campaign_offset=offset)
     rows = [r for run_rows in per_run for r in run_rows]
-    points = pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(
-        columns=POINT_COLUMNS)
+    points = (
+        pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)
+    )
     return Extraction(points, skipped, offset, offset_std, runs, total)

@@ -1,0 +1,104 @@
+"""Sensitivity of the whole model to alpha and v_r (thesis 4.1.1-4.1.2, Tables 4.2-4.4).
+
+At fixed ``alpha`` and ``v_r`` the pressure-dependent model is linear in the remaining six
+coefficients, so every grid point is one linear least-squares solve: the RMSE ("SME",
+eq. 4.4) of the whole model refit with alpha and v_r held.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import minimize
+
+from .stribeck_fit import design_columns
+
+__all__ = ["rmse_at", "sensitivity_grid", "thesis_tables", "THESIS_ALPHAS", "THESIS_V_R"]
+
+THESIS_ALPHAS = (0.5, 0.77, 0.8, 1.0, 1.5, 2.0)
+"""alpha values of thesis Tables 4.2 and 4.3 [-]."""
+THESIS_V_R = (0.005, 0.00743, 0.010, 0.015)
+"""v_r values of thesis Table 4.4 [m/s]; Tables 4.2/4.3 use 7.43 and 10 mm/s."""
+
+
+def rmse_at(velocity, pressure, friction, v_r, alpha):
+    """RMSE [N] of the linear-law model refit at fixed ``v_r`` [m/s] and ``alpha`` [-]."""
+    speed = np.abs(np.asarray(velocity, dtype=float))
+    p_bar = np.asarray(pressure, dtype=float) / 1e5
+    force = np.asarray(friction, dtype=float)
+    a = design_columns(speed, p_bar, v_r, alpha)
+    coef, *_ = np.linalg.lstsq(a, force, rcond=None)
+    return float(np.sqrt(np.mean((a @ coef - force) ** 2)))
+
+
+def sensitivity_grid(velocity, pressure, friction, *, alphas=None, v_rs=None):
+    """RMSE over a grid of alpha and v_r, and the recommended fixed values.
+
+    Returns a DataFrame with columns ``alpha [-]``, ``v_r [m/s]``, ``rmse [N]``, and the
+    minimum as a dict ``{"alpha", "v_r", "rmse"}``: the best grid node refined by a local
+    Nelder-Mead search in (log v_r, alpha).
+    """
+    speed = np.abs(np.asarray(velocity, dtype=float))
+    alphas = np.linspace(0.4, 2.5, 22) if alphas is None else np.asarray(alphas, dtype=float)
+    v_rs = (
+        np.geomspace(max(speed.min(), 1e-4), max(speed.max(), 1e-3), 30)
+        if v_rs is None
+        else np.asarray(v_rs, dtype=float)
+    )
+    rows = [
+        {"alpha [-]": a, "v_r [m/s]": v, "rmse [N]": rmse_at(velocity, pressure, friction, v, a)}
+        for a in alphas
+        for v in v_rs
+    ]
+    table = pd.DataFrame(rows)
+    best = table.loc[table["rmse [N]"].idxmin()]
+
+    def objective(x):
+        return rmse_at(velocity, pressure, friction, float(np.exp(x[0])), float(x[1]))
+
+    local = minimize(
+        objective,
+        [np.log(best["v_r [m/s]"]), best["alpha [-]"]],
+        method="Nelder-Mead",
+        options={"xatol": 1e-4, "fatol": 1e-9},
+    )
+    if local.fun < best["rmse [N]"] and 0.1 < local.x[1] < 10:
+        return table, {
+            "alpha": float(local.x[1]),
+            "v_r": float(np.exp(local.x[0])),
+            "rmse": float(local.fun),
+        }
+    return table, {
+        "alpha": float(best["alpha [-]"]),
+        "v_r": float(best["v_r [m/s]"]),
+        "rmse": float(best["rmse [N]"]),
+    }
+
+
+def thesis_tables(velocity, pressure, friction):
+    """Tables 4.2-4.4 layout: one row per (table, alpha, v_r) with the RMSE [N].
+
+    ``table`` is ``"4.2"`` (alpha varies, v_r = 7.43 mm/s), ``"4.3"`` (alpha varies,
+    v_r = 10 mm/s) or ``"4.4"`` (v_r varies, alpha = 1).
+    """
+    rows = []
+    for table, v_r in (("4.2", 0.00743), ("4.3", 0.010)):
+        for alpha in THESIS_ALPHAS:
+            rows.append(
+                {
+                    "table": table,
+                    "alpha [-]": alpha,
+                    "v_r [m/s]": v_r,
+                    "rmse [N]": rmse_at(velocity, pressure, friction, v_r, alpha),
+                }
+            )
+    for v_r in THESIS_V_R:
+        rows.append(
+            {
+                "table": "4.4",
+                "alpha [-]": 1.0,
+                "v_r [m/s]": v_r,
+                "rmse [N]": rmse_at(velocity, pressure, friction, v_r, 1.0),
+            }
+        )
+    return pd.DataFrame(rows)

@@ -1,0 +1,238 @@
+"""Fit of the steady-state Stribeck law (thesis eq. 2.7) to friction points at one pressure.
+
+``fit_stribeck(velocity, friction)`` returns a frozen :class:`StribeckFit` whose ``params``
+plug straight back into :func:`cylfric.friction.stribeck`. Bounded, robust (soft-L1) least
+squares from data-driven starting values; any subset of parameters can be held fixed.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import t as student_t
+
+from ..friction import NoStribeckMinimumWarning, stribeck, stribeck_velocity
+
+__all__ = [
+    "StribeckFit",
+    "fit_stribeck",
+    "PARAMETERS",
+    "BOUNDS",
+    "IdentificationWarning",
+    "design_columns",
+]
+
+PARAMETERS = ("F_c", "F_s", "sigma_2", "v_r", "alpha")
+"""Order of the Stribeck parameters in vectors and tables."""
+
+BOUNDS = {
+    "F_c": (0.0, np.inf),  # [N]
+    "F_s": (0.0, np.inf),  # [N]
+    "sigma_2": (0.0, np.inf),  # [N*s/m]
+    "v_r": (1e-5, 10.0),  # [m/s]
+    "alpha": (0.2, 5.0),  # [-]
+}
+"""Bounds of the fit (SI)."""
+
+MIN_POINTS = 6
+"""Fewest points for a Stribeck fit."""
+
+
+class IdentificationWarning(UserWarning):
+    """The data cannot support part of the model; the result says what was done instead."""
+
+
+def design_columns(speed, pressure, v_r, alpha):
+    """Columns of the model linear in the other coefficients at fixed ``v_r``, ``alpha``.
+
+    F = a_c (1 - e) + b_c p (1 - e) + a_s e + b_s p e + a_2 v + b_2 p v,
+    e = exp(-(v / v_r)^alpha): returns the (n, 6) matrix for (a_c, b_c, a_s, b_s, a_2, b_2).
+    """
+    e = np.exp(-((speed / v_r) ** alpha))
+    return np.column_stack([1 - e, pressure * (1 - e), e, pressure * e, speed, pressure * speed])
+
+
+@dataclass(frozen=True)
+class StribeckFit:
+    """Result of :func:`fit_stribeck` (SI units).
+
+    Attributes
+    ----------
+    params : dict
+        F_c [N], F_s [N], sigma_2 [N*s/m], v_r [m/s], alpha [-].
+    stderr : dict
+        Standard errors (0 for fixed parameters).
+    ci95 : dict
+        95 % confidence intervals (low, high).
+    covariance : ndarray
+        Covariance of the free parameters, in the order of ``free``.
+    free : tuple
+        Names of the fitted parameters.
+    residuals : ndarray
+        Data minus model [N].
+    rmse : float
+        Root-mean-square error, the thesis' "SME" (eq. 4.4) [N].
+    stribeck_velocity : float
+        Velocity of minimum friction [m/s] (NaN if none).
+    n_points : int
+    success : bool
+    message : str
+    """
+
+    params: dict
+    stderr: dict
+    ci95: dict
+    covariance: np.ndarray
+    free: tuple
+    residuals: np.ndarray
+    rmse: float
+    stribeck_velocity: float
+    n_points: int
+    success: bool
+    message: str
+    extra: dict = field(default_factory=dict)
+
+    def report(self) -> str:
+        """A plain-text table of the parameters with standard errors, in engineering units."""
+        units = {
+            "F_c": ("N", 1),
+            "F_s": ("N", 1),
+            "sigma_2": ("N*s/mm", 1e-3),
+            "v_r": ("mm/s", 1e3),
+            "alpha": ("-", 1),
+        }
+        lines = [f"Stribeck fit ({self.n_points} points, RMSE {self.rmse:.3f} N): {self.message}"]
+        for name in PARAMETERS:
+            unit, k = units[name]
+            fixed = "" if name in self.free else "  (fixed)"
+            lines.append(
+                f"  {name:8s} = {self.params[name] * k:10.4g} ± "
+                f"{self.stderr[name] * k:.2g} {unit}{fixed}"
+            )
+        lines.append(f"  v_Stribeck = {self.stribeck_velocity * 1e3:.3g} mm/s")
+        return "\n".join(lines)
+
+
+def _start_values(speed, friction, fixed):
+    order = np.argsort(speed)
+    v, f = speed[order], friction[order]
+    fast = v >= np.quantile(v, 0.7)
+    if fast.sum() >= 2 and np.ptp(v[fast]) > 0:
+        slope, intercept = np.polyfit(v[fast], f[fast], 1)
+    else:
+        slope, intercept = 0.0, float(np.median(f))
+    slope = max(slope, 0.0)
+    low = f[: max(2, len(f) // 10)]
+    start = {
+        "F_c": max(float(intercept), 1e-3),
+        "F_s": max(float(np.max(low)), 1e-3),
+        "sigma_2": float(slope),
+        "v_r": float(np.clip(np.quantile(v, 0.25), 1e-4, 1.0)),
+        "alpha": 1.0,
+    }
+    if start["F_s"] < start["F_c"]:
+        start["F_s"] = start["F_c"]
+    start.update(fixed)
+    return start
+
+
+def fit_stribeck(velocity, friction, *, fixed=None, loss="soft_l1", start=None):
+    """Fit eq. 2.7 to steady-state points.
+
+    Parameters
+    ----------
+    velocity : array_like
+        Velocities [m/s]; the symmetric model uses |v|.
+    friction : array_like
+        Friction magnitudes [N] (after the weight offset is removed).
+    fixed : dict, optional
+        Parameters held at given values (SI), e.g. ``{"alpha": 1.0, "v_r": 0.010}``.
+    loss : {"linear", "soft_l1", "huber"}
+        Loss of :func:`scipy.optimize.least_squares`; robust losses are scaled by the
+        residual spread of a first linear fit.
+    start : dict, optional
+        Starting values (default: from the data).
+
+    Returns
+    -------
+    StribeckFit
+
+    Raises
+    ------
+    ValueError
+        NaN input, fewer than 6 points, or unknown fixed names.
+    """
+    speed = np.abs(np.asarray(velocity, dtype=float))
+    force = np.asarray(friction, dtype=float)
+    if speed.shape != force.shape:
+        raise ValueError("velocity and friction must have the same length")
+    if np.isnan(speed).any() or np.isnan(force).any():
+        raise ValueError("velocity or friction contains NaN; drop flagged points first")
+    if speed.size < MIN_POINTS:
+        raise ValueError(
+            f"{speed.size} points are too few for a Stribeck fit; expected at least {MIN_POINTS}"
+        )
+    fixed = dict(fixed or {})
+    unknown = set(fixed) - set(PARAMETERS)
+    if unknown:
+        raise ValueError(f"unknown fixed parameters {sorted(unknown)}; valid: {list(PARAMETERS)}")
+    free = tuple(p for p in PARAMETERS if p not in fixed)
+    s = {**_start_values(speed, force, fixed), **(start or {})}
+    lower = np.array([BOUNDS[p][0] for p in free])
+    upper = np.array([BOUNDS[p][1] for p in free])
+    x0 = np.clip([s[p] for p in free], lower + 1e-12, upper - 1e-12)
+
+    def unpack(x):
+        return {**fixed, **dict(zip(free, x, strict=True))}
+
+    def residuals(x):
+        return stribeck(speed, **unpack(x)) - force
+
+    first = least_squares(residuals, x0, bounds=(lower, upper), x_scale="jac")
+    result = first
+    if loss != "linear":
+        scale = 1.4826 * float(np.median(np.abs(first.fun - np.median(first.fun))))
+        result = least_squares(
+            residuals,
+            first.x,
+            bounds=(lower, upper),
+            x_scale="jac",
+            loss=loss,
+            f_scale=max(scale, 1e-6),
+        )
+    params = unpack(result.x)
+    res = -result.fun  # data minus model
+    dof = max(speed.size - len(free), 1)
+    sigma2 = float(res @ res) / dof
+    jac = result.jac
+    try:
+        covariance = np.linalg.pinv(jac.T @ jac) * sigma2
+    except np.linalg.LinAlgError:  # pragma: no cover - pinv is robust
+        covariance = np.full((len(free), len(free)), np.nan)
+    se = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    tq = float(student_t.ppf(0.975, dof))
+    stderr = {p: 0.0 for p in PARAMETERS}
+    stderr.update(dict(zip(free, se, strict=True)))
+    ci95 = {p: (params[p] - tq * stderr[p], params[p] + tq * stderr[p]) for p in PARAMETERS}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NoStribeckMinimumWarning)
+        vs = stribeck_velocity(
+            params["F_c"], params["F_s"], params["v_r"], params["sigma_2"], alpha=params["alpha"]
+        )
+    return StribeckFit(
+        params={p: float(params[p]) for p in PARAMETERS},
+        stderr={p: float(v) for p, v in stderr.items()},
+        ci95=ci95,
+        covariance=covariance,
+        free=free,
+        residuals=res,
+        rmse=float(math.sqrt(np.mean(res**2))),
+        stribeck_velocity=float(vs),
+        n_points=int(speed.size),
+        success=bool(result.success),
+        message=str(result.message),
+    )
