@@ -29,14 +29,23 @@ def small_campaign(tmp_path_factory):
 
 @pytest.mark.parametrize(
     "variant",
-    [dict(), dict(decimal_comma=True), dict(force_unit="N", crlf=True),
-     dict(pressure_channel=True, decimal_comma=True)],
+    [
+        dict(),
+        dict(decimal_comma=True),
+        dict(force_unit="N", crlf=True),
+        dict(pressure_channel=True, decimal_comma=True),
+    ],
 )
 def test_virtual_bench_files_round_trip(tmp_path, variant):
     settings = replace(SMALL, speeds_mm_s=(10,), pressures_bar=(55.0,), **variant)
     info = generate_campaign(tmp_path, settings)
-    run = run_virtual_test(55.0, 10, settings, rng=np.random.default_rng(
-        np.random.SeedSequence(settings.seed).spawn(1)[0]), slow=True)
+    run = run_virtual_test(
+        55.0,
+        10,
+        settings,
+        rng=np.random.default_rng(np.random.SeedSequence(settings.seed).spawn(1)[0]),
+        slow=True,
+    )
     data, meta = read_bench_text(info["files"][0])
     assert_allclose(data["time [s]"], run.time, atol=5e-4)
     assert_allclose(data["position [m]"], run.position, atol=5.1e-8)  # 4 decimals of mm
@@ -74,8 +83,12 @@ def test_extraction_recovers_friction_and_offset(small_campaign):
     ok = ex.usable
     assert len(ok) == 16  # two strokes per run
     assert_allclose(ex.offset, 35.67 / 2, atol=0.1)  # thesis Fig. 4.3 offset, halved
-    truth = np.abs(stribeck(ok["velocity [m/s]"].to_numpy(), **params_at_pressure(
-        ok["pressure [Pa]"].to_numpy(), THESIS_2016.coefficients)))
+    truth = np.abs(
+        stribeck(
+            ok["velocity [m/s]"].to_numpy(),
+            **params_at_pressure(ok["pressure [Pa]"].to_numpy(), THESIS_2016.coefficients),
+        )
+    )
     assert_allclose(ok["friction [N]"], truth, atol=0.5)
     assert set(ok["direction [-]"]) == {-1, 1}
 
@@ -90,7 +103,7 @@ def test_window_excludes_acceleration_and_cushioning():
     accelerating = np.abs(np.abs(run.velocity) - 0.135) > 0.01 * 0.135
     for w in windows:
         inside = np.zeros(run.time.size, bool)
-        inside[w.start:w.stop] = True
+        inside[w.start : w.stop] = True
         assert not (inside & cushioned).any()
         assert not (inside & accelerating).any()
         assert inside.sum() >= 0.5 * (run.steady & (run.segment == (w.direction > 0))).sum()
@@ -100,8 +113,7 @@ def test_fixed_index_rule_drops_ten_samples_each_end():
     run = run_virtual_test(55.0, 10, SMALL, slow=False)
     velocity = smoothed_velocity(run.time, run.position)
     auto = find_windows(run.time, velocity, run.force, nominal_speed=0.01)
-    fixed = find_windows(run.time, velocity, run.force, nominal_speed=0.01,
-                         method="fixed-index")
+    fixed = find_windows(run.time, velocity, run.force, nominal_speed=0.01, method="fixed-index")
     assert [w.direction for w in fixed] == [-1, 1]
     assert all(f.stop - f.start > a.stop - a.start for f, a in zip(fixed, auto, strict=True))
 
@@ -129,8 +141,10 @@ def test_skip_bad_lists_the_file_and_default_stops(tmp_path, small_campaign):
 
 def test_missing_pressure_is_an_error(tmp_path):
     path = tmp_path / "run_v10mms.txt"
-    path.write_text("Time [s]\tPosition [mm]\tForce [N]\n" +
-                    "".join(f"{t / 100}\t{t / 10}\t100\n" for t in range(300)))
+    path.write_text(
+        "Time [s]\tPosition [mm]\tForce [N]\n"
+        + "".join(f"{t / 100}\t{t / 10}\t100\n" for t in range(300))
+    )
     with pytest.raises(BenchFileError, match="no pressure for this run"):
         extract_campaign(tmp_path)
 

@@ -30,8 +30,10 @@ def _rows(sep=" \t", dec=".", fmt="{:g}"):
 
 
 def test_mts_export_with_units_row_and_preamble(tmp_path):
-    text = ("MTS793|MPT|ENU|1|2|.|/|:|1|0|0|A\nStation Name: Mini Bionix\nPressure: 55 bar\n\n"
-            "Time\tAxial Displacement\tAxial Force\nSec\tmm\tkN\n" + _rows("\t"))
+    text = (
+        "MTS793|MPT|ENU|1|2|.|/|:|1|0|0|A\nStation Name: Mini Bionix\nPressure: 55 bar\n\n"
+        "Time\tAxial Displacement\tAxial Force\nSec\tmm\tkN\n" + _rows("\t")
+    )
     data, meta = read_bench_text(_write(tmp_path, text))
     _check(data)
     assert meta["header"]["Pressure"] == "55 bar"
@@ -55,14 +57,19 @@ def test_units_in_cells_any_separator_and_decimal(tmp_path, header, sep, dec):
 
 
 def test_newton_and_milliseconds_and_metres(tmp_path):
-    text = "Time\tPosition\tForce\nms\tm\tN\n" + "\n".join(
-        f"{r[0] * 1e3:g}\t{r[1] * 1e-3:g}\t{r[2] * 1e3:g}" for r in ROWS) + "\n"
+    text = (
+        "Time\tPosition\tForce\nms\tm\tN\n"
+        + "\n".join(f"{r[0] * 1e3:g}\t{r[1] * 1e-3:g}\t{r[2] * 1e3:g}" for r in ROWS)
+        + "\n"
+    )
     data, _ = read_bench_text(_write(tmp_path, text))
     _check(data)
 
 
 def test_pressure_units_mpa_psi(tmp_path):
-    text = "Time [s]\tForce [N]\tPressure A [MPa]\tPressure B [psi]\n0\t1\t5.5\t100\n1\t2\t5.5\t100\n"
+    text = (
+        "Time [s]\tForce [N]\tPressure A [MPa]\tPressure B [psi]\n0\t1\t5.5\t100\n1\t2\t5.5\t100\n"
+    )
     data, _ = read_bench_text(_write(tmp_path, text))
     assert_allclose(data["pressure_a [Pa]"], 5.5e6)
     assert_allclose(data["pressure_b [Pa]"], 689475.7293168)
@@ -70,9 +77,17 @@ def test_pressure_units_mpa_psi(tmp_path):
 
 def test_segments_status_lines_crlf_latin1(tmp_path):
     block = "Time\tDisplacement\tForce\ns\tmm\tkN\n"
-    text = ("MTS793|MPT\nOperator: Müller\nSegment 1 started\n" + block + _rows("\t") +
-            "*** Interlock 1 tripped ***\n\n" + _rows("\t").replace("0.0", "1.0", 1) +
-            "Segment 2 started\n" + block + _rows("\t") + "Test run ended\n")
+    text = (
+        "MTS793|MPT\nOperator: Müller\nSegment 1 started\n"
+        + block
+        + _rows("\t")
+        + "*** Interlock 1 tripped ***\n\n"
+        + _rows("\t").replace("0.0", "1.0", 1)
+        + "Segment 2 started\n"
+        + block
+        + _rows("\t")
+        + "Test run ended\n"
+    )
     path = _write(tmp_path, text.replace("\n", "\r\n"), encoding="latin-1")
     data, meta = read_bench_text(path)
     assert len(data) == 9 and meta["segments"] == 3
@@ -83,8 +98,9 @@ def test_segments_status_lines_crlf_latin1(tmp_path):
 
 def test_headerless_with_column_map(tmp_path):
     path = _write(tmp_path, "  0.000   10.0  0.1\n 10.000  9.9  0.1125\n20.000 9.8 -0.05\n")
-    data, meta = read_delimited(path, columns=["time", "position", "force"],
-                                units=["ms", "mm", "kN"])
+    data, meta = read_delimited(
+        path, columns=["time", "position", "force"], units=["ms", "mm", "kN"]
+    )
     _check(data, time_scale=1e-3 * 1e3)
     assert meta["delimiter"] == "whitespace"
 
@@ -98,6 +114,7 @@ def test_file_name_tokens():
 
 # ------------------------------------------------------------------------------ bad input
 
+
 @pytest.mark.parametrize(
     ("content", "message"),
     [
@@ -107,11 +124,20 @@ def test_file_name_tokens():
         (b"Just some notes\nno numbers here\n", r"no numeric data rows"),
         (b"0\t1\t2\n1\t2\t3\n", r"line 1: no header row with column names"),
         (b"Time [s]\tForce [N]\n0\t1\n1\t2\n2", r"run.txt, line 4: the last data row has no line"),
-        (b"Time [s]\tForce [N]\n0\t1\n1\n2\t2\n", r"run.txt, line 3: expected 2 numeric columns, found 1"),
-        (b"Time [s]\tForce [N]\n0\t1\n1\tabc\n", r"line 3: expected a number in column 2, found 'abc'"),
+        (
+            b"Time [s]\tForce [N]\n0\t1\n1\n2\t2\n",
+            r"run.txt, line 3: expected 2 numeric columns, found 1",
+        ),
+        (
+            b"Time [s]\tForce [N]\n0\t1\n1\tabc\n",
+            r"line 3: expected a number in column 2, found 'abc'",
+        ),
         (b"Time [s]\tForce [N]\n0\t1\n1\t\n", r"line 3: expected a number in column 2, found ''"),
         (b"Time [furlong]\tForce [N]\n0\t1\n", r"column 'Time': unknown unit 'furlong'"),
-        (b"Time [s]\tForce [mm]\n0\t1\n", r"column 'Force' has unit 'mm' \(length\); expected a force"),
+        (
+            b"Time [s]\tForce [mm]\n0\t1\n",
+            r"column 'Force' has unit 'mm' \(length\); expected a force",
+        ),
         (b"Time\tForce\n0\t1\n", r"column 'Time' has no unit"),
     ],
 )
@@ -138,11 +164,16 @@ def test_bench_file_error_is_a_value_error():
     assert issubclass(BenchFileError, ValueError)
 
 
-GOOD = ("MTS793|MPT\nPressure: 55 bar\nTime\tAxial Displacement\tAxial Force\ns\tmm\tkN\n"
-        + _rows("\t") + "Test run ended\n").encode()
+GOOD = (
+    "MTS793|MPT\nPressure: 55 bar\nTime\tAxial Displacement\tAxial Force\ns\tmm\tkN\n"
+    + _rows("\t")
+    + "Test run ended\n"
+).encode()
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(blob=st.binary(max_size=400))
 def test_fuzz_random_bytes_raise_only_bench_file_error(tmp_path, blob):
     path = tmp_path / "fuzz.txt"
@@ -153,9 +184,15 @@ def test_fuzz_random_bytes_raise_only_bench_file_error(tmp_path, blob):
         pass
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(cut=st.integers(0, len(GOOD)), position=st.integers(0, len(GOOD) - 1),
-       byte=st.integers(0, 255), mode=st.sampled_from(["truncate", "mutate", "insert", "delete"]))
+@settings(
+    max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    cut=st.integers(0, len(GOOD)),
+    position=st.integers(0, len(GOOD) - 1),
+    byte=st.integers(0, 255),
+    mode=st.sampled_from(["truncate", "mutate", "insert", "delete"]),
+)
 def test_fuzz_mutated_real_file_raises_only_bench_file_error(tmp_path, cut, position, byte, mode):
     data = bytearray(GOOD)
     if mode == "truncate":
@@ -176,8 +213,11 @@ def test_fuzz_mutated_real_file_raises_only_bench_file_error(tmp_path, cut, posi
 
 
 def test_read_mat_emps(shared_data):
-    data, meta = read_mat(shared_data / "emps-benchmark" / "DATA_EMPS.mat",
-                          variables=["t", "qm", "vir"], units={"t": "s", "qm": "m", "vir": "V"})
+    data, meta = read_mat(
+        shared_data / "emps-benchmark" / "DATA_EMPS.mat",
+        variables=["t", "qm", "vir"],
+        units={"t": "s", "qm": "m", "vir": "V"},
+    )
     assert len(data) == 24841 and list(data) == ["t [s]", "qm [m]", "vir [V]"]
     assert "gtau" in meta["scalars"]
 
