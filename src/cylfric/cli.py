@@ -1,30 +1,44 @@
-"""The ``cylfric`` command line (typer + rich). No physics here: calls into the library.
+"""The ``cylfric`` command line (typer + rich). No physics here: it calls the library.
 
-Exit codes: 0 success, 2 bad input (one line naming the file and the problem),
-1 unexpected error (rerun with ``--debug`` for the traceback).
+Exit codes: 0 success; 2 bad input (one line naming the file and the problem, no
+traceback); 1 unexpected error (rerun with ``--debug`` for the traceback).
+Unit-bearing options accept units (``10mm/s``, ``55bar``, ``5MPa``); bare numbers are read in
+bar, mm/s, s, kg, N/m as each option's help says.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 import sys
+import traceback
+from pathlib import Path
 
 import numpy as np
 import typer
 from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from . import __version__
-from .friction import params_at_pressure, stribeck
-from .friction.literature import THESIS_2016
+from .units import UnitError, parse_quantity
 
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
+    rich_markup_mode=None,
     help="cylfric: pressure-dependent friction of hydraulic cylinders.",
 )
 console = Console()
 err_console = Console(stderr=True)
 STATE = {"debug": False}
+
+BAD_INPUT_EXIT = 2
+UNEXPECTED_EXIT = 1
+
+
+class BadInput(ValueError):
+    """A command-line value is wrong (exit code 2)."""
 
 
 def _version(value: bool):
@@ -43,36 +57,391 @@ def _root(
     STATE["debug"] = debug
 
 
-def thesis_table() -> Table:
-    """The thesis model (eq. 4.1-4.3, alpha = 1, v_r = 10 mm/s) as friction [N] vs v and p."""
-    pressures_bar = [0.1, 20.7, 55, 83, 124, 159]
-    speeds_mm_s = [1, 2, 5, 10, 25, 50, 100, 135]
-    table = Table(title="Thesis model F_f [N] (eq. 2.7 with eq. 4.1-4.3)")
-    table.add_column("v [mm/s]", justify="right")
-    for p in pressures_bar:
-        table.add_column(f"{p:g} bar", justify="right")
-    params = params_at_pressure(np.array(pressures_bar) * 1e5, THESIS_2016.coefficients)
-    for v in speeds_mm_s:
-        forces = stribeck(v * 1e-3, **params)
-        table.add_row(f"{v:g}", *(f"{f:.1f}" for f in forces))
+def guarded(command):
+    """Map errors to the exit-code contract: bad input 2 (one line), unexpected 1."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except (typer.Exit, typer.Abort, SystemExit):
+            raise
+        except ValueError as exc:  # BenchFileError, DatasheetError, UnitError, BadInput, ...
+            if STATE["debug"]:
+                traceback.print_exc()
+            err_console.print(f"error: {exc}", markup=False, highlight=False, soft_wrap=True)
+            raise typer.Exit(BAD_INPUT_EXIT) from None
+        except OSError as exc:
+            err_console.print(
+                f"error: {exc.filename or ''}: {exc.strerror}", markup=False, soft_wrap=True
+            )
+            raise typer.Exit(BAD_INPUT_EXIT) from None
+        except Exception as exc:  # noqa: BLE001 - the contract: never a bare traceback
+            if STATE["debug"]:
+                traceback.print_exc()
+            err_console.print(
+                f"error: unexpected {type(exc).__name__}: {exc}", markup=False, soft_wrap=True
+            )
+            err_console.print("rerun with --debug for the traceback")
+            raise typer.Exit(UNEXPECTED_EXIT) from None
+
+    return wrapper
+
+
+def _numbers(text: str, dimension: str, unit: str) -> list[float]:
+    """``"10,55,159"`` or ``"1MPa,5MPa"`` -> SI floats (bare numbers in ``unit``)."""
+    try:
+        return [
+            parse_quantity(part, dimension, default_unit=unit)
+            for part in text.split(",")
+            if part.strip()
+        ]
+    except UnitError as exc:
+        raise BadInput(f"{text!r}: {exc}") from None
+
+
+def _fixed(options: list[str]) -> dict:
+    """``alpha=1``, ``v_r=10mm/s``, ``F_c=70N``, ``sigma_2=0.34N*s/mm`` -> SI dict."""
+    dims = {
+        "alpha": ("dimensionless", "-"),
+        "v_r": ("velocity", "mm/s"),
+        "F_c": ("force", "N"),
+        "F_s": ("force", "N"),
+        "sigma_2": ("damping", "N*s/mm"),
+    }
+    out = {}
+    for item in options:
+        name, _, value = item.partition("=")
+        name = name.strip()
+        if name not in dims or not value:
+            raise BadInput(
+                f"--fix {item!r}: expected NAME=VALUE with NAME one of "
+                f"{sorted(dims)} (e.g. --fix alpha=1 --fix v_r=10mm/s)"
+            )
+        dim, unit = dims[name]
+        try:
+            out[name] = parse_quantity(value, dim, default_unit=unit)
+        except UnitError as exc:
+            raise BadInput(f"--fix {item!r}: {exc}") from None
+    return out
+
+
+def _progress():
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=err_console,
+        transient=True,
+        disable=not err_console.is_terminal,
+    )
+
+
+def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
+    from .report import law_lines
+
+    table = Table(title=title, show_header=False)
+    table.add_column("", style="bold")
+    table.add_column("")
+    for line in law_lines(sheet):
+        name, _, rest = line.partition(" = ")
+        table.add_row(name, rest)
+    fit = sheet["fit"]
+    table.add_row("RMSE", f"{fit['rmse']:.3f} N over {fit.get('n_points', '?')} points")
+    offset = sheet.get("offset")
+    table.add_row("offset", "n/a" if offset is None else f"{offset:.2f} N")
+    val = sheet["validity"]
+    table.add_row(
+        "valid for",
+        f"{val['pressure_min'] / 1e5:.3g}-{val['pressure_max'] / 1e5:.3g} "
+        f"bar, {val['velocity_min'] * 1e3:.3g}-"
+        f"{val['velocity_max'] * 1e3:.3g} mm/s",
+    )
+    table.add_row("method", fit["method"])
     return table
 
 
+def run_fit(
+    campaign: Path,
+    out: Path,
+    *,
+    fix=(),
+    law="linear",
+    per_direction=False,
+    skip_bad=False,
+    report=True,
+    quiet=False,
+):
+    """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
+    from .io.campaign import discover_runs, load_config
+    from .pipeline import fit_campaign
+
+    fixed = _fixed(list(fix))
+    n_files = len(discover_runs(campaign, load_config(campaign)))
+    with _progress() as progress:
+        task = progress.add_task(f"reading {campaign.name}", total=n_files)
+        result = fit_campaign(
+            campaign,
+            out,
+            fixed=fixed,
+            law=law,
+            per_direction=per_direction,
+            skip_bad=skip_bad,
+            report=report,
+            progress=lambda _: progress.advance(task),
+        )
+    if not quiet:
+        console.print(_summary_table(result.datasheet))
+        skipped = result.extraction.skipped
+        if skipped:
+            console.print(f"[yellow]{len(skipped)} file(s) skipped[/yellow] (see skipped.csv):")
+            for item in skipped[:10]:
+                console.print(f"  {item['reason']}", markup=False)
+        for note in result.identification.notes:
+            console.print(f"[yellow]note:[/yellow] {note}")
+        console.print(f"outputs in {out}" + (f"; open {out / 'report.html'}" if report else ""))
+    return result
+
+
 @app.command()
-def demo():
-    """Show the thesis' pressure-dependent friction model."""
-    console.print(thesis_table())
+@guarded
+def fit(
+    campaign: Path = typer.Argument(..., help="Folder of raw bench files (never modified)."),
+    out: Path = typer.Option(Path("cylfric-out"), "--out", "-o", help="Output folder."),
+    fix: list[str] = typer.Option([], "--fix", help="Hold a parameter: alpha=1, v_r=10mm/s."),
+    law: str = typer.Option(
+        "linear", "--law", help="Pressure law: linear, quadratic, exponential."
+    ),
+    per_direction: bool = typer.Option(
+        False, "--per-direction", help="Also fit extension and retraction separately."
+    ),
+    skip_bad: bool = typer.Option(False, "--skip-bad", help="Skip unreadable files."),
+    no_report: bool = typer.Option(False, "--no-report", help="No figures or report.html."),
+):
+    """Raw bench files -> datasheet.json, tables, figures and report.html."""
+    if not campaign.is_dir():
+        raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
+    run_fit(
+        campaign,
+        out,
+        fix=fix,
+        law=law,
+        per_direction=per_direction,
+        skip_bad=skip_bad,
+        report=not no_report,
+    )
+
+
+THESIS_VALUES = {
+    "F_c": (70.2, 0.5, "N"),
+    "F_s": (112.9, 0.6, "N"),
+    "sigma_2": (0.34, 8e-4, "N*s/mm"),
+}
+
+
+@app.command()
+@guarded
+def demo(
+    out: Path = typer.Option(Path("cylfric-demo"), "--out", "-o", help="Output folder."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the virtual campaign."),
+):
+    """Generate the thesis' virtual campaign (10 pressures x 27 speeds) and fit it."""
+    from .simulate.bench import BenchSettings, generate_campaign
+
+    settings = BenchSettings(seed=seed)
+    campaign = out / "campaign"
+    n = len(settings.pressures_bar) * len(settings.speeds_mm_s)
+    with _progress() as progress:
+        task = progress.add_task("virtual bench", total=n)
+        generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
+    console.print(f"virtual campaign: {n} files in {campaign}")
+    result = run_fit(campaign, out, quiet=True)
+    sheet = result.datasheet
+    console.print(_summary_table(sheet, "Recovered from the virtual campaign"))
+    table = Table(title="Recovered against the thesis (eq. 4.1-4.3, alpha, v_r; p in bar)")
+    for col in ("parameter", "thesis", "recovered"):
+        table.add_column(col, justify="right")
+    params = sheet["parameters"]
+    for name, (a, b, unit) in THESIS_VALUES.items():
+        k = 1e-3 if name == "sigma_2" else 1.0
+        c = params[name]
+        table.add_row(
+            name,
+            f"{a:g} + {b:g} p {unit}",
+            f"{c['intercept'] * k:.4g} + {c['slope'] * k * 1e5:.3g} p {unit}",
+        )
+    table.add_row("alpha", "1", f"{params['alpha']:.3f}")
+    table.add_row("v_r", "10 mm/s", f"{params['v_r'] * 1e3:.2f} mm/s")
+    table.add_row("offset", f"{35.67 / 2:.2f} N (35.67 N up-down)", f"{sheet['offset']:.2f} N")
+    console.print(table)
+    console.print(f"report: {out / 'report.html'}")
+
+
+@app.command()
+@guarded
+def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
+    """Summarise a datasheet."""
+    from .datasheet import read_datasheet
+
+    sheet = read_datasheet(datasheet)
+    console.print(_summary_table(sheet, f"Friction datasheet {sheet.get('name', '')}"))
+    rows = sheet.get("per_pressure", [])
+    if rows:
+        table = Table(title="Per pressure (thesis Table 4.1 layout)")
+        for col in (
+            "p [bar]",
+            "F_s [N]",
+            "F_c [N]",
+            "sigma_2 [N*s/mm]",
+            "v_Stribeck [mm/s]",
+            "RMSE [N]",
+            "n",
+        ):
+            table.add_column(col, justify="right")
+        for r in rows:
+            vs = r.get("stribeck_velocity")
+            table.add_row(
+                f"{r['pressure'] / 1e5:.3g}",
+                f"{r['F_s']:.1f}",
+                f"{r['F_c']:.1f}",
+                f"{r['sigma_2'] / 1e3:.3f}",
+                "-" if vs is None else f"{vs * 1e3:.1f}",
+                f"{r['rmse']:.2f}",
+                str(r["n_points"]),
+            )
+        console.print(table)
+
+
+@app.command()
+@guarded
+def generate(
+    out_dir: Path = typer.Argument(..., help="Folder to write the campaign into."),
+    pressures: str = typer.Option(
+        None, "--pressures", help="Pressures, bar or with units (default: the thesis' 10 levels)."
+    ),
+    speeds: str = typer.Option(
+        None, "--speeds", help="Speeds, mm/s or with units (default: 27 speeds 1-135 mm/s)."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Random seed (deterministic output)."),
+    decimal_comma: bool = typer.Option(False, "--decimal-comma", help="Write 0,017 not 0.017."),
+    pressure_channel: bool = typer.Option(
+        False, "--pressure-channel", help="Add a measured pressure column."
+    ),
+):
+    """Virtual test bench: write a campaign of raw files and manifest.csv."""
+    from .simulate.bench import BenchSettings, generate_campaign
+
+    kwargs = {"seed": seed, "decimal_comma": decimal_comma, "pressure_channel": pressure_channel}
+    if pressures:
+        kwargs["pressures_bar"] = tuple(p / 1e5 for p in _numbers(pressures, "pressure", "bar"))
+    if speeds:
+        kwargs["speeds_mm_s"] = tuple(v * 1e3 for v in _numbers(speeds, "velocity", "mm/s"))
+    if any(v <= 0 for v in kwargs.get("speeds_mm_s", (1,))):
+        raise BadInput("--speeds must be > 0")
+    if any(p < 0 for p in kwargs.get("pressures_bar", (0,))):
+        raise BadInput("--pressures must be >= 0")
+    settings = BenchSettings(**kwargs)
+    n = len(settings.pressures_bar) * len(settings.speeds_mm_s)
+    with _progress() as progress:
+        task = progress.add_task("virtual bench", total=n)
+        info = generate_campaign(out_dir, settings, progress=lambda _: progress.advance(task))
+    console.print(
+        f"wrote {len(info['files'])} files and manifest.csv to {out_dir} "
+        f"({info['steps']:.3g} simulated steps)"
+    )
+
+
+DRIVES = ("spring", "sine", "ramp-force", "servo-step")
+
+
+@app.command()
+@guarded
+def simulate(
+    model: str = typer.Argument(
+        ..., help="A datasheet.json or a literature set name (thesis_2016, thesis_2016_revised)."
+    ),
+    out: Path = typer.Option(Path("cylfric-sim"), "--out", "-o", help="Output folder."),
+    drive: str = typer.Option("spring", "--drive", help=f"One of {', '.join(DRIVES)}."),
+    pressure: str = typer.Option("50bar", "--pressure", help="Chamber pressure (bar)."),
+    speed: str = typer.Option("5mm/s", "--speed", help="Spring speed or sine amplitude."),
+    duration: str = typer.Option("10s", "--duration", help="Simulated time."),
+    mass: str = typer.Option("10kg", "--mass", help="Moving mass."),
+    stiffness: str = typer.Option("2e4", "--stiffness", help="Spring or servo stiffness (N/m)."),
+    sigma_0: str = typer.Option("1e6", "--sigma-0", help="Bristle stiffness (N/m)."),
+):
+    """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure."""
+    from .datasheet import read_datasheet
+    from .friction.literature import LITERATURE
+    from .io.writers import atomic_write_text
+    from .report.figures import save_figure
+    from .simulate import (
+        AppliedForce,
+        Cylinder,
+        FrictionModel,
+        PositionServo,
+        PrescribedMotion,
+        SpringPull,
+    )
+    from .simulate import simulate as run_simulation
+
+    if Path(model).is_file():
+        sheet = read_datasheet(model)
+        coefficients, law = sheet["parameters"], sheet["model"]["pressure_law"]
+    elif model in LITERATURE and LITERATURE[model].coefficients:
+        coefficients, law = dict(LITERATURE[model].coefficients), "linear"
+    else:
+        sets = sorted(k for k, s in LITERATURE.items() if s.coefficients)
+        raise BadInput(f"{model!r}: not a datasheet file nor a literature set; valid sets: {sets}")
+    p = parse_quantity(pressure, "pressure", "bar")
+    v = parse_quantity(speed, "velocity", "mm/s")
+    t_end = parse_quantity(duration, "time", "s")
+    m = parse_quantity(mass, "mass", "kg")
+    k = parse_quantity(stiffness, "stiffness", "N/m")
+    s0 = parse_quantity(sigma_0, "stiffness", "N/m")
+    if drive not in DRIVES:
+        raise BadInput(f"--drive {drive!r}: expected one of {list(DRIVES)}")
+    if not (m > 0 and k > 0 and s0 > 0 and t_end > 0):
+        raise BadInput("--mass, --stiffness, --sigma-0 and --duration must be > 0")
+    friction = FrictionModel(
+        coefficients=coefficients, pressure_law=law, sigma_0=s0, sigma_1=math.sqrt(s0 * m)
+    )
+    params = friction.parameters(p)
+    drives = {
+        "spring": lambda: SpringPull(k, v),
+        "sine": lambda: PrescribedMotion(lambda t: v * np.sin(2 * np.pi * t)),
+        "ramp-force": lambda: AppliedForce(lambda t: 2 * params["F_s"] * t / t_end),
+        "servo-step": lambda: PositionServo(
+            lambda t: 0.01 * (t > 0.1), kp=k, kd=2 * math.sqrt(k * m), ki=k
+        ),
+    }
+    result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
+    frame = result.to_pandas()
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), constrained_layout=True)
+    result.plot(ax=axes)
+    fig.suptitle(f"{drive} at {p / 1e5:g} bar ({model})")
+    save_figure(fig, out, "simulation")
+    f = result.outputs["friction_force"]
+    console.print(
+        f"{drive}: {len(frame)} samples over {t_end:g} s; friction {f.min():.1f} to "
+        f"{f.max():.1f} N; wrote {out / 'simulation.csv'} and simulation.png/svg"
+    )
 
 
 def main() -> None:
-    """Console-script entry point with the project's exit-code contract."""
+    """Console-script entry point."""
     try:
-        app(standalone_mode=True)
+        app()
     except SystemExit:
         raise
-    except Exception as exc:  # pragma: no cover - exercised through subprocess tests
-        if STATE["debug"]:
-            raise
-        err_console.print(f"[red]error:[/red] unexpected {type(exc).__name__}: {exc}")
+    except Exception as exc:  # pragma: no cover - typer's own failures
+        err_console.print(f"error: unexpected {type(exc).__name__}: {exc}", markup=False)
         err_console.print("rerun with --debug for the traceback")
-        sys.exit(1)
+        sys.exit(UNEXPECTED_EXIT)
+
+
+__all__ = ["app", "main", "run_fit"]

@@ -1,0 +1,350 @@
+"""Figures of an identification (matplotlib, Agg). Engineering units on every axis.
+
+Each ``figure_*`` function returns a matplotlib Figure; :func:`save_figure` writes PNG and
+SVG atomically. Numbering follows the thesis (Figs. 4.1-4.12).
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..friction import params_at_pressure  # noqa: E402
+from ..identify.sensitivity import THESIS_ALPHAS  # noqa: E402
+from ..identify.stribeck_fit import design_columns  # noqa: E402
+from ..io.writers import atomic_write_bytes  # noqa: E402
+
+__all__ = [
+    "figure_fit",
+    "figure_parameters",
+    "figure_directions",
+    "figure_sensitivity",
+    "figure_sensitivity_curves",
+    "figure_residuals",
+    "save_figure",
+    "all_figures",
+    "render",
+    "render_all",
+    "save_rendered",
+]
+
+plt.rcParams.update(
+    {
+        "figure.dpi": 100,
+        "axes.grid": True,
+        "grid.alpha": 0.3,
+        "svg.fonttype": "none",
+        "font.size": 9,
+    }
+)
+
+
+def _levels(ident):
+    pts = ident.points
+    levels = sorted(pts["level"].unique())
+    colors = plt.cm.viridis(np.linspace(0, 0.9, max(len(levels), 1)))
+    return pts, levels, colors
+
+
+def figure_fit(ident):
+    """Fig. 4.1: friction against speed (log axis) per pressure, with the fitted surface."""
+    pts, levels, colors = _levels(ident)
+    fig, ax = plt.subplots(figsize=(7.5, 4.8), constrained_layout=True)
+    speed = pts["velocity [m/s]"].abs()
+    grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 200)
+    for level, color in zip(levels, colors, strict=True):
+        sel = pts[pts["level"] == level]
+        p = sel["pressure [Pa]"].mean()
+        ax.plot(
+            sel["velocity [m/s]"].abs() * 1e3,
+            sel["friction [N]"],
+            "o",
+            ms=3.5,
+            color=color,
+            alpha=0.8,
+            label=f"{p / 1e5:.3g} bar",
+        )
+        ax.plot(
+            grid * 1e3,
+            ident.surface.friction(grid, np.full_like(grid, p)),
+            "-",
+            color=color,
+            lw=1.2,
+        )
+    ax.set_xscale("log")
+    ax.set_xlabel("speed |v| [mm/s]")
+    ax.set_ylabel("friction force F_f [N]")
+    ax.set_title(
+        "Steady-state friction and the fitted pressure-dependent model (cf. thesis Fig. 4.1)"
+    )
+    ax.legend(title="pressure", fontsize=7, ncol=2, loc="upper left")
+    return fig
+
+
+def figure_parameters(ident):
+    """Fig. 4.2: per-pressure parameters with the fitted pressure laws and 95 % intervals."""
+    table = ident.per_pressure
+    fig, axes = plt.subplots(2, 3, figsize=(10, 5.6), constrained_layout=True)
+    specs = [
+        ("F_c", "N", 1, "F_c [N]"),
+        ("F_s", "N", 1, "F_s [N]"),
+        ("sigma_2", "N*s/m", 1e-3, "sigma_2 [N*s/mm]"),
+        ("v_r", "m/s", 1e3, "v_r [mm/s]"),
+        ("alpha", "-", 1, "alpha [-]"),
+        ("stribeck_velocity", "m/s", 1e3, "v_Stribeck [mm/s]"),
+    ]
+    p_bar = table["pressure [Pa]"] / 1e5 if len(table) else []
+    p_line = np.linspace(0, max(float(np.max(p_bar)) if len(table) else 1, 1), 100)
+    for ax, (name, unit, k, label) in zip(axes.flat, specs, strict=True):
+        col = f"{name} [{unit}]"
+        if col not in table or table[col].isna().all():
+            ax.text(0.5, 0.5, "not identified", ha="center", transform=ax.transAxes)
+            ax.set_ylabel(label)
+            continue
+        err = table.get(f"{name}_stderr [{unit}]")
+        yerr = 1.96 * err * k if err is not None else None
+        ax.errorbar(
+            p_bar,
+            table[col] * k,
+            yerr=yerr,
+            fmt="o",
+            ms=4,
+            capsize=2,
+            label="per-pressure fit (95 %)",
+        )
+        if name in ident.regressions and "linear" in ident.regressions[name]:
+            law = ident.regressions[name]["linear"]
+            ax.plot(p_line, law(p_line * 1e5) * k, "-", lw=1, label="weighted regression")
+        coef = ident.surface.coefficients.get(name)
+        if isinstance(coef, dict):
+            values = params_at_pressure(p_line * 1e5, {name: coef}, law=ident.surface.law)[name]
+            ax.plot(p_line, values * k, "--", lw=1, label="global surface fit")
+        elif coef is not None:
+            ax.axhline(coef * k, ls="--", lw=1, label="global surface fit")
+        ax.set_xlabel("pressure p [bar]")
+        ax.set_ylabel(label)
+    axes.flat[0].legend(fontsize=7)
+    fig.suptitle("Parameters against pressure (cf. thesis Fig. 4.2)")
+    return fig
+
+
+def figure_directions(ident, offset=None):
+    """Fig. 4.3: ascending against descending force-balance levels and the weight offset."""
+    pts, levels, colors = _levels(ident)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6), constrained_layout=True)
+    if "force [N]" in pts and "direction [-]" in pts:
+        for level, color in zip(levels, colors, strict=True):
+            sel = pts[pts["level"] == level]
+            for sign, marker in ((1, "^"), (-1, "v")):
+                part = sel[sel["direction [-]"] == sign]
+                ax.plot(
+                    part["velocity [m/s]"].abs() * 1e3,
+                    part["force [N]"] * sign,
+                    marker,
+                    ms=3.5,
+                    color=color,
+                    alpha=0.8,
+                )
+        if offset is not None and np.isfinite(offset):
+            ax.axhline(0, color="k", lw=0.5)
+            ax.set_title(
+                f"Ascending (^) and descending (v, sign flipped) levels: they differ by "
+                f"2 x offset = {2 * offset:.2f} N (cf. thesis Fig. 4.3)"
+            )
+    ax.set_xscale("log")
+    ax.set_xlabel("speed |v| [mm/s]")
+    ax.set_ylabel("force-balance level x direction [N]")
+    return fig
+
+
+def figure_sensitivity(ident):
+    """Tables 4.2-4.4 as curves: RMSE against alpha (two v_r) and against v_r (alpha = 1)."""
+    table = ident.sensitivity
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), constrained_layout=True)
+    for name, label in (
+        ("4.2", "v_r = 7.43 mm/s (Table 4.2)"),
+        ("4.3", "v_r = 10 mm/s (Table 4.3)"),
+    ):
+        part = table[table["table"] == name]
+        axes[0].plot(part["alpha [-]"], part["rmse [N]"], "o-", label=label)
+    axes[0].set_xlabel("alpha [-]")
+    axes[0].set_ylabel("RMSE ('SME', eq. 4.4) [N]")
+    axes[0].legend(fontsize=7)
+    part = table[table["table"] == "4.4"]
+    axes[1].plot(part["v_r [m/s]"] * 1e3, part["rmse [N]"], "o-", label="alpha = 1 (Table 4.4)")
+    if ident.recommended:
+        axes[1].axvline(
+            ident.recommended["v_r"] * 1e3,
+            ls="--",
+            color="gray",
+            label=f"grid minimum: alpha = {ident.recommended['alpha']:.2f}, "
+            f"v_r = {ident.recommended['v_r'] * 1e3:.2f} mm/s",
+        )
+    axes[1].set_xlabel("v_r [mm/s]")
+    axes[1].set_ylabel("RMSE [N]")
+    axes[1].legend(fontsize=7)
+    fig.suptitle("Sensitivity of the whole model to alpha and v_r (thesis 4.1.1-4.1.2)")
+    return fig
+
+
+def figure_sensitivity_curves(ident):
+    """Figs. 4.4-4.12: the refit model for each alpha (v_r = 10 mm/s) and v_r (alpha = 1)."""
+    pts, levels, colors = _levels(ident)
+    cases = [(a, 0.010) for a in THESIS_ALPHAS] + [(1.0, v) for v in (0.005, 0.00743, 0.015)]
+    fig, axes = plt.subplots(
+        3, 3, figsize=(10, 8), sharex=True, sharey=True, constrained_layout=True
+    )
+    speed = pts["velocity [m/s]"].abs().to_numpy()
+    p_bar = pts["pressure [Pa]"].to_numpy() / 1e5
+    force = pts["friction [N]"].to_numpy()
+    grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 120)
+    for ax in axes.flat:
+        ax.tick_params(labelsize=7)
+    for ax, (alpha, v_r) in zip(axes.flat, cases, strict=True):
+        coef, *_ = np.linalg.lstsq(design_columns(speed, p_bar, v_r, alpha), force, rcond=None)
+        rmse = float(
+            np.sqrt(np.mean((design_columns(speed, p_bar, v_r, alpha) @ coef - force) ** 2))
+        )
+        for level, color in zip(levels[::2], colors[::2], strict=True):
+            sel = pts["level"].to_numpy() == level
+            pb = p_bar[sel].mean()
+            ax.plot(speed[sel] * 1e3, force[sel], "o", ms=2, color=color, alpha=0.6)
+            model = design_columns(grid, np.full_like(grid, pb), v_r, alpha) @ coef
+            ax.plot(grid * 1e3, model, "-", color=color, lw=1)
+        ax.set_xscale("log")
+        ax.set_title(f"alpha = {alpha:g}, v_r = {v_r * 1e3:g} mm/s: RMSE {rmse:.2f} N", fontsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("speed [mm/s]")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("friction [N]")
+    fig.suptitle("Model refit at fixed alpha and v_r against the data (cf. thesis Figs. 4.4-4.12)")
+    return fig
+
+
+def figure_residuals(ident):
+    """Residuals of the surface fit against speed and pressure."""
+    pts = ident.points
+    res = ident.surface.residuals
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), sharey=True, constrained_layout=True)
+    axes[0].plot(pts["velocity [m/s]"].abs() * 1e3, res, ".", ms=3)
+    axes[0].set_xscale("log")
+    axes[0].set_xlabel("speed |v| [mm/s]")
+    axes[0].set_ylabel("residual (data - model) [N]")
+    axes[1].plot(pts["pressure [Pa]"] / 1e5, res, ".", ms=3)
+    axes[1].set_xlabel("pressure p [bar]")
+    for ax in axes:
+        ax.axhline(0, color="k", lw=0.6)
+    fig.suptitle(f"Residuals of the global fit (RMSE {ident.surface.rmse:.3f} N)")
+    return fig
+
+
+def render(fig) -> tuple[bytes, bytes]:
+    """PNG and SVG bytes of a figure; the layout solved for the PNG is reused for the SVG."""
+    png = io.BytesIO()
+    fig.savefig(png, format="png")
+    fig.set_layout_engine("none")  # keep the positions: no second layout pass
+    svg = io.BytesIO()
+    fig.savefig(svg, format="svg")
+    plt.close(fig)
+    return png.getvalue(), svg.getvalue()
+
+
+def save_figure(fig, folder, stem) -> dict:
+    """Write ``stem.png`` and ``stem.svg`` atomically; return their paths and the PNG bytes."""
+    png, svg = render(fig)
+    return save_rendered(folder, stem, png, svg)
+
+
+def save_rendered(folder, stem, png: bytes, svg: bytes) -> dict:
+    """Write already rendered PNG and SVG bytes atomically."""
+    folder = Path(folder)
+    return {
+        "png": atomic_write_bytes(folder / f"{stem}.png", png),
+        "svg": atomic_write_bytes(folder / f"{stem}.svg", svg),
+        "png_bytes": png,
+    }
+
+
+_JOB = {}
+
+
+def _render_job(index):
+    stem, _, build = _JOB["figures"][index]
+    return render(build())
+
+
+def render_all(ident, offset=None, *, workers=2):
+    """Render every report figure; returns [(stem, caption, png, svg)].
+
+    With ``workers`` > 1 and a single-threaded process on a platform with ``fork``, the
+    figures are drawn in forked worker processes (each draws its own figures, so matplotlib
+    is never shared); otherwise, for example inside a notebook kernel, one after another.
+    """
+    import multiprocessing
+    import threading
+    from concurrent.futures import ProcessPoolExecutor
+
+    figures = all_figures(ident, offset)
+    can_fork = "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+    if workers > 1 and can_fork and len(figures) > 1:
+        _JOB["figures"] = figures
+        try:
+            context = multiprocessing.get_context("fork")
+            with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+                # the heaviest figure first, so the two workers finish together
+                order = sorted(
+                    range(len(figures)), key=lambda i: figures[i][0] != "sensitivity_curves"
+                )
+                results = dict(zip(order, pool.map(_render_job, order), strict=True))
+        finally:
+            _JOB.clear()
+        rendered = [results[i] for i in range(len(figures))]
+    else:
+        rendered = [render(build()) for _, _, build in figures]
+    return [
+        (stem, caption, png, svg)
+        for (stem, caption, _), (png, svg) in zip(figures, rendered, strict=True)
+    ]
+
+
+def all_figures(ident, offset=None):
+    """(stem, caption, builder) for every figure of the report, in order."""
+    figures = [
+        (
+            "fit",
+            "Steady-state points and the fitted pressure-dependent model (cf. thesis Fig. 4.1).",
+            lambda: figure_fit(ident),
+        ),
+        (
+            "parameters",
+            "Per-pressure parameters with 95 % intervals, the weighted "
+            "regressions and the global fit (cf. Fig. 4.2).",
+            lambda: figure_parameters(ident),
+        ),
+        (
+            "directions",
+            "Ascending against descending levels and the weight offset (cf. Fig. 4.3).",
+            lambda: figure_directions(ident, offset),
+        ),
+        ("residuals", "Residuals against speed and pressure.", lambda: figure_residuals(ident)),
+    ]
+    if ident.sensitivity is not None:
+        figures += [
+            (
+                "sensitivity",
+                "RMSE against alpha and v_r (Tables 4.2-4.4).",
+                lambda: figure_sensitivity(ident),
+            ),
+            (
+                "sensitivity_curves",
+                "Model refit at fixed alpha and v_r against the data (cf. Figs. 4.4-4.12).",
+                lambda: figure_sensitivity_curves(ident),
+            ),
+        ]
+    return figures

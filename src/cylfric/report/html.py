@@ -1,0 +1,178 @@
+"""The self-contained HTML report: figures embedded as base64 PNG, works offline."""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+
+import pandas as pd
+
+from ..io.writers import atomic_write_text
+
+__all__ = ["render_report", "write_report"]
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;
+max-width:1100px;color:#222;line-height:1.45;padding:0 1rem}
+h1{font-size:1.6rem;margin-bottom:.2rem}h2{margin-top:2rem;border-bottom:1px solid #ddd}
+table{border-collapse:collapse;font-size:.85rem;margin:.6rem 0}
+td,th{border:1px solid #ccc;padding:.25rem .5rem;text-align:right}
+th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}
+figure{margin:1rem 0}figure img{max-width:100%;border:1px solid #eee}
+figcaption{font-size:.85rem;color:#555}.law{font-family:ui-monospace,monospace;font-size:1rem}
+.note{background:#fff7e0;border-left:4px solid #e0a800;padding:.4rem .8rem;margin:.4rem 0}
+.muted{color:#777;font-size:.85rem}
+"""
+
+
+def _table(frame: pd.DataFrame, digits=4) -> str:
+    def fmt(x):
+        if isinstance(x, float):
+            return "" if math.isnan(x) else f"{x:.{digits}g}"
+        return html.escape(str(x))
+
+    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in frame.columns)
+    rows = "".join(
+        "<tr>" + "".join(f"<td>{fmt(v)}</td>" for v in row) + "</tr>"
+        for row in frame.itertuples(index=False)
+    )
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+
+
+def law_lines(sheet: dict) -> list[str]:
+    """The pressure laws in engineering units, e.g. ``F_c(p) = 70.2 N + 0.50 N/bar * p``."""
+    params = sheet["parameters"]
+    out = []
+    for name, unit, k in (("F_c", "N", 1.0), ("F_s", "N", 1.0), ("sigma_2", "N*s/mm", 1e-3)):
+        c = params[name]
+        text = f"{name}(p) = {c['intercept'] * k:.4g} {unit}"
+        if "slope" in c:
+            text += f" + {c['slope'] * k * 1e5:.3g} {unit}/bar * p"
+        if "curvature" in c:
+            text += f" + {c['curvature'] * k * 1e10:.3g} {unit}/bar^2 * p^2"
+        if "amplitude" in c:
+            text += f" + {c['amplitude'] * k:.4g} {unit} * (exp({c['rate'] * 1e5:.3g}/bar * p) - 1)"
+        out.append(text)
+    out.append(f"v_r = {params['v_r'] * 1e3:.4g} mm/s, alpha = {params['alpha']:.4g}")
+    return out
+
+
+def render_report(sheet, ident, extraction, figures, *, title="cylfric friction report") -> str:
+    """HTML text of the report: datasheet summary, figures, tables, data quality."""
+    parts = [
+        f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+        f"<meta name='viewport' content='width=device-width,initial-scale=1'>"
+        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>"
+    ]
+    parts.append(f"<h1>{html.escape(title)}: {html.escape(sheet.get('name', ''))}</h1>")
+    parts.append(
+        f"<p class='muted'>cylfric {html.escape(sheet.get('cylfric_version', ''))}, "
+        f"{html.escape(sheet.get('created', ''))}; model: steady-state LuGre/Stribeck "
+        "law (thesis eq. 2.7) with pressure laws; units N, bar, mm/s.</p>"
+    )
+    parts.append("<h2>Datasheet summary</h2>")
+    parts += [f"<div class='law'>{html.escape(line)}</div>" for line in law_lines(sheet)]
+    offset = sheet.get("offset")
+    fit = sheet["fit"]
+    val = sheet["validity"]
+    parts.append(
+        "<p>RMSE of the global fit: <b>{:.3f} N</b> over {} points. Weight offset: {}. "
+        "Valid for {:.3g}-{:.3g} bar and {:.3g}-{:.3g} mm/s.</p>".format(
+            fit["rmse"],
+            fit.get("n_points", ""),
+            "n/a"
+            if offset is None
+            else f"<b>{offset:.2f} N</b>"
+            + (f" (spread {sheet['offset_std']:.2f} N)" if sheet.get("offset_std") else ""),
+            val["pressure_min"] / 1e5,
+            val["pressure_max"] / 1e5,
+            val["velocity_min"] * 1e3,
+            val["velocity_max"] * 1e3,
+        )
+    )
+    if not sheet["model"].get("stribeck_identifiable", True):
+        parts.append(
+            "<p class='note'>The data has too few speeds per pressure: only the "
+            "friction level versus pressure is identified.</p>"
+        )
+    for note in sheet.get("notes", []):
+        parts.append(f"<p class='note'>{html.escape(note)}</p>")
+    parts.append("<h2>Figures</h2>")
+    for stem, caption, png in figures:
+        data = base64.b64encode(png).decode("ascii")
+        parts.append(
+            f"<figure id='{stem}'><img alt='{html.escape(caption)}' "
+            f"src='data:image/png;base64,{data}'><figcaption>{html.escape(caption)}"
+            "</figcaption></figure>"
+        )
+    parts.append("<h2>Per-pressure parameters (thesis Table 4.1 layout)</h2>")
+    parts.append(_table(_engineering_per_pressure(ident.per_pressure)))
+    parts.append("<h2>Pressure laws compared</h2>")
+    parts.append(_table(ident.comparison))
+    if ident.sensitivity is not None:
+        sens = ident.sensitivity.assign(**{"v_r [mm/s]": ident.sensitivity["v_r [m/s]"] * 1e3})
+        parts.append("<h2>Sensitivity (thesis Tables 4.2-4.4)</h2>")
+        parts.append(_table(sens[["table", "alpha [-]", "v_r [mm/s]", "rmse [N]"]]))
+        rec = ident.recommended
+        parts.append(
+            f"<p>Recommended fixed values (grid minimum): alpha = {rec['alpha']:.3g}, "
+            f"v_r = {rec['v_r'] * 1e3:.3g} mm/s, RMSE {rec['rmse']:.3f} N.</p>"
+        )
+    parts.append("<h2>Data quality</h2>")
+    parts.append(_quality(extraction))
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def _engineering_per_pressure(table):
+    if table.empty:
+        return table
+    out = pd.DataFrame(
+        {
+            "p [bar]": table["pressure [Pa]"] / 1e5,
+            "F_s [N]": table["F_s [N]"],
+            "F_c [N]": table["F_c [N]"],
+            "sigma_2 [N*s/mm]": table["sigma_2 [N*s/m]"] / 1e3,
+            "v_r [mm/s]": table["v_r [m/s]"] * 1e3,
+            "alpha [-]": table["alpha [-]"],
+            "v_Stribeck [mm/s]": table["stribeck_velocity [m/s]"] * 1e3,
+            "RMSE [N]": table["rmse [N]"],
+            "n": table["n_points [-]"],
+        }
+    )
+    return out
+
+
+def _quality(extraction) -> str:
+    if extraction is None:
+        return "<p>No extraction details.</p>"
+    pts = extraction.points
+    flags = pts["flag"].value_counts().rename_axis("flag").reset_index(name="windows")
+    spikes = int(pts["spikes [-]"].sum()) if "spikes [-]" in pts else 0
+    events = sum(r.get("events", 0) for r in extraction.runs)
+    lines = [
+        f"<p>{len(extraction.runs)} files read ({extraction.bytes_read / 1e6:.1f} MB), "
+        f"{len(extraction.skipped)} skipped; {len(pts)} stroke windows; {spikes} spike "
+        f"samples rejected; {events} status/header lines between data blocks.</p>",
+        _table(flags),
+    ]
+    rejected = pts[~pts["flag"].eq("ok")]
+    if len(rejected):
+        lines.append("<p>Rejected windows:</p>")
+        lines.append(
+            _table(
+                rejected[["file", "stroke", "direction [-]", "n [-]", "flag"]].assign(
+                    file=lambda d: d["file"].map(lambda f: f.split("/")[-1])
+                )
+            )
+        )
+    if extraction.skipped:
+        lines.append("<p>Skipped files:</p>")
+        lines.append(_table(pd.DataFrame(extraction.skipped)))
+    return "\n".join(lines)
+
+
+def write_report(path, text: str):
+    """Write the report atomically."""
+    return atomic_write_text(path, text)
