@@ -35,11 +35,24 @@ def fitted(campaign, tmp_path_factory):
 
 def test_fit_writes_every_output(fitted):
     out, result = fitted
-    for name in ("datasheet.json", "points.csv", "per_pressure.csv", "sensitivity.csv",
-                 "law_comparison.csv", "per_direction.csv", "report.html"):
+    for name in (
+        "datasheet.json",
+        "points.csv",
+        "per_pressure.csv",
+        "sensitivity.csv",
+        "law_comparison.csv",
+        "per_direction.csv",
+        "report.html",
+    ):
         assert (out / name).is_file(), name
-    for stem in ("fit", "parameters", "directions", "sensitivity", "sensitivity_curves",
-                 "residuals"):
+    for stem in (
+        "fit",
+        "parameters",
+        "directions",
+        "sensitivity",
+        "sensitivity_curves",
+        "residuals",
+    ):
         assert (out / "figures" / f"{stem}.png").stat().st_size > 1000
         assert (out / "figures" / f"{stem}.svg").read_text().lstrip().startswith("<?xml")
     assert "F_c(p)" in result.output and "N/bar" in result.output
@@ -49,8 +62,20 @@ def test_fit_writes_every_output(fitted):
 
 
 def test_fit_fix_and_no_report(campaign, tmp_path):
-    result = runner.invoke(app, ["fit", str(campaign), "-o", str(tmp_path), "--fix", "alpha=1",
-                                 "--fix", "v_r=10mm/s", "--no-report"])
+    result = runner.invoke(
+        app,
+        [
+            "fit",
+            str(campaign),
+            "-o",
+            str(tmp_path),
+            "--fix",
+            "alpha=1",
+            "--fix",
+            "v_r=10mm/s",
+            "--no-report",
+        ],
+    )
     assert result.exit_code == 0, result.output
     sheet = json.loads((tmp_path / "datasheet.json").read_text())
     assert sheet["parameters"]["alpha"] == 1.0 and sheet["parameters"]["v_r"] == 0.01
@@ -66,8 +91,9 @@ def test_fit_skip_bad_writes_skipped_csv(campaign, tmp_path):
     assert result.exit_code == 2
     assert f"{bad.name}: binary content" in result.output
     assert "Traceback" not in result.output
-    result = runner.invoke(app, ["fit", str(copy), "-o", str(tmp_path / "o"), "--skip-bad",
-                                 "--no-report"])
+    result = runner.invoke(
+        app, ["fit", str(copy), "-o", str(tmp_path / "o"), "--skip-bad", "--no-report"]
+    )
     assert result.exit_code == 0, result.output
     assert "1 file(s) skipped" in result.output
     assert bad.name in (tmp_path / "o" / "skipped.csv").read_text()
@@ -119,8 +145,20 @@ def test_show_and_version(fitted):
 
 
 def test_generate_with_units(tmp_path):
-    result = runner.invoke(app, ["generate", str(tmp_path), "--pressures", "10,5MPa",
-                                 "--speeds", "5,0.1m/s", "--seed", "3", "--decimal-comma"])
+    result = runner.invoke(
+        app,
+        [
+            "generate",
+            str(tmp_path),
+            "--pressures",
+            "10,5MPa",
+            "--speeds",
+            "5,0.1m/s",
+            "--seed",
+            "3",
+            "--decimal-comma",
+        ],
+    )
     assert result.exit_code == 0, result.output
     manifest = (tmp_path / "manifest.csv").read_text().splitlines()
     assert manifest[0] == "file,pressure_bar,velocity_mm_s"
@@ -130,8 +168,19 @@ def test_generate_with_units(tmp_path):
 
 def test_simulate_from_a_datasheet(fitted, tmp_path):
     out, _ = fitted
-    result = runner.invoke(app, ["simulate", str(out / "datasheet.json"), "--drive", "sine",
-                                 "--duration", "2s", "-o", str(tmp_path)])
+    result = runner.invoke(
+        app,
+        [
+            "simulate",
+            str(out / "datasheet.json"),
+            "--drive",
+            "sine",
+            "--duration",
+            "2s",
+            "-o",
+            str(tmp_path),
+        ],
+    )
     assert result.exit_code == 0, result.output
     lines = (tmp_path / "simulation.csv").read_text().splitlines()
     assert lines[0].startswith("time [s],position [m]") and len(lines) == 2002
@@ -153,10 +202,23 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
 def _chromium(page: Path, shot: Path, profile: Path) -> str:
-    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-           "--no-first-run", "--disable-background-networking", "--disable-component-update",
-           "--disable-sync", f"--user-data-dir={profile}", "--enable-logging=stderr", "--v=0",
-           f"--screenshot={shot}", "--window-size=1200,2400", page.as_uri()]
+    cmd = [
+        CHROMIUM,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        f"--user-data-dir={profile}",
+        "--enable-logging=stderr",
+        "--v=0",
+        f"--screenshot={shot}",
+        "--window-size=1200,2400",
+        page.as_uri(),
+    ]
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     return done.stderr
 

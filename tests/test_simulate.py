@@ -78,11 +78,25 @@ def test_default_settings_match_radau_on_sinusoidal_velocity(sine_reference):
 
 
 def test_fixed_step_converges_with_second_order():
-    ref = simulate(Cylinder(MASS), _model(), SpringPull(2e4, 5e-3), 3.0, pressure_a=50e5, step=1e-5)
+    ref = simulate(
+        Cylinder(MASS),
+        _model(),
+        SpringPull(2e4, 5e-3),
+        3.0,
+        pressure_a=50e5,
+        method="fixed",
+        step=1e-5,
+    )
     errs = []
     for step in (4e-4, 2e-4):
         r = simulate(
-            Cylinder(MASS), _model(), SpringPull(2e4, 5e-3), 3.0, pressure_a=50e5, step=step
+            Cylinder(MASS),
+            _model(),
+            SpringPull(2e4, 5e-3),
+            3.0,
+            pressure_a=50e5,
+            method="fixed",
+            step=step,
         )
         errs.append(_rms_rel(r.outputs["friction_force"], ref.outputs["friction_force"], 100))
     assert errs[0] / errs[1] > 2.5  # second order: about 4 when the step halves
@@ -155,7 +169,9 @@ def test_plot_delegates_and_labels_units():
 
 
 def test_simulation_errors_name_the_problem():
-    with pytest.raises(ValueError, match=r"unknown method 'rk4'; valid: \['fixed', 'dopri'"):
+    with pytest.raises(
+        ValueError, match=r"unknown method 'rk4'; valid: \['dopri', 'fixed', 'scipy'\]"
+    ):
         simulate(Cylinder(MASS), _model(), SpringPull(2e4, 5e-3), 1.0, method="rk4")
     with pytest.raises(ValueError, match="need 0 < dt <= duration"):
         simulate(Cylinder(MASS), _model(), SpringPull(2e4, 5e-3), 1.0, dt=2.0)

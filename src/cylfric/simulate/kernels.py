@@ -248,7 +248,8 @@ def fixed_step_batch(
     """Many parameter sets at once (``prange`` over sets, both cores).
 
     Per-set parameters are 1-D arrays of length ``n_sets`` (F_c, F_s, sigma_2, sigma_0,
-    sigma_1, v_r, alpha); inputs are shared. Records position [m] and mean friction [N]
+    sigma_1, v_r, alpha); inputs are shared. Records position [m] and the instantaneous
+    friction force [N] (eq. 2.5)
     every ``record_every`` grid points; returns them as (n_sets, n_records) arrays.
     """
     n_sets = F_c.shape[0]
@@ -262,13 +263,12 @@ def fixed_step_batch(
         positions[s, 0] = x
         frictions[s, 0] = 0.0
         for i in range(n - 1):
-            acc = 0.0
             for j in range(substeps):
                 w = (j + 0.5) / substeps
                 xr = x_ref[i] * (1 - w) + x_ref[i + 1] * w
                 vr = v_ref[i] * (1 - w) + v_ref[i + 1] * w
                 fe = f_ext[i] * (1 - w) + f_ext[i + 1] * w
-                x, v, z, e, fmean, _ = _implicit_step(
+                x, v, z, e, _, _ = _implicit_step(
                     x,
                     v,
                     z,
@@ -290,11 +290,12 @@ def fixed_step_batch(
                     alpha[s],
                     tol,
                 )
-                acc += fmean
             if (i + 1) % record_every == 0:
                 r = (i + 1) // record_every
                 positions[s, r] = x
-                frictions[s, r] = acc / substeps
+                frictions[s, r] = lugre_instant(
+                    v, z, sigma_0[s], sigma_1[s], sigma_2[s], F_c[s], F_s[s], v_r[s], alpha[s]
+                )
     return positions, frictions
 
 
@@ -329,13 +330,21 @@ _P = np.array(
 
 @njit(cache=True, inline="always")
 def _rhs(t, y, out, dt, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1, v_r, alpha):
+    n = x_ref.shape[0]
     pos = t / dt
-    xr = _interp(x_ref, pos)
-    vr = _interp(v_ref, pos)
-    fe = _interp(f_ext, pos)
-    fc = _interp(F_c, pos)
-    fs = _interp(F_s, pos)
-    s2 = _interp(sigma_2, pos)
+    if pos <= 0.0:
+        i, w = 0, 0.0
+    elif pos >= n - 1:
+        i, w = n - 2, 1.0
+    else:
+        i = int(pos)
+        w = pos - i
+    xr = x_ref[i] + w * (x_ref[i + 1] - x_ref[i])  # one index and weight for all inputs
+    vr = v_ref[i] + w * (v_ref[i + 1] - v_ref[i])
+    fe = f_ext[i] + w * (f_ext[i + 1] - f_ext[i])
+    fc = F_c[i] + w * (F_c[i + 1] - F_c[i])
+    fs = F_s[i] + w * (F_s[i + 1] - F_s[i])
+    s2 = sigma_2[i] + w * (sigma_2[i + 1] - sigma_2[i])
     x, v, z, e = y[0], y[1], y[2], y[3]
     g = g_function(abs(v), fc, fs, v_r, alpha)
     dz = v - s0 * abs(v) * z / g
@@ -387,6 +396,7 @@ def dopri(
     y = np.array([x0, v0, z0, 0.0])
     atol = np.array([atol_x, atol_v, atol_z, atol_x * max(t_end, 1.0)])
     K = np.empty((7, 4))
+    Q = np.empty((4, 4))
     tmp = np.empty(4)
     y_new = np.empty(4)
     f0 = np.empty(4)
@@ -416,6 +426,8 @@ def dopri(
     next_out = 1
     accepted = 0
     rejected = 0
+    err_old = 1e-4
+    last_rejected = False
     while next_out < n and accepted + rejected < max_steps:
         if t + h > t_end:
             h = t_end - t
@@ -481,27 +493,35 @@ def dopri(
         err = math.sqrt(err / 4)
         if err <= 1.0:
             t_new = t + h
-            while next_out < n and next_out * dt <= t_new + 1e-12 * dt:
-                theta = (next_out * dt - t) / h
-                for q in range(4):
-                    acc = 0.0
-                    power = theta
+            if next_out < n and next_out * dt <= t_new + 1e-12 * dt:
+                for q in range(4):  # dense-output coefficients once per step
                     for j in range(4):
                         coef = 0.0
                         for r in range(7):
                             coef += K[r, q] * _P[r, j]
-                        acc += coef * power
-                        power *= theta
-                    out_y[next_out, q] = y[q] + h * acc
+                        Q[q, j] = coef
+            while next_out < n and next_out * dt <= t_new + 1e-12 * dt:
+                theta = (next_out * dt - t) / h
+                for q in range(4):
+                    out_y[next_out, q] = y[q] + h * theta * (
+                        Q[q, 0] + theta * (Q[q, 1] + theta * (Q[q, 2] + theta * Q[q, 3]))
+                    )
                 next_out += 1
             t = t_new
             y[:] = y_new
             f0[:] = K[6]
             accepted += 1
-            factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err**-0.2)
+            # PI step control (Gustafsson; Hairer & Wanner's DOPRI5: 0.17 and 0.04)
+            err = max(err, 1e-10)
+            factor = min(10.0, 0.9 * err**-0.17 * err_old**0.04)
+            if last_rejected:
+                factor = min(factor, 1.0)
+            err_old = max(err, 1e-4)
+            last_rejected = False
         else:
             rejected += 1
             factor = max(0.2, 0.9 * err**-0.2)
+            last_rejected = True
         h *= factor
     for i in range(next_out, n):
         out_y[i] = np.nan
