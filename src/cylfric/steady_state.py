@@ -15,7 +15,6 @@ unit, and :func:`find_windows` can return its intermediate components.
 from __future__ import annotations
 
 import math
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -61,24 +60,25 @@ POINT_COLUMNS = [
 ``"short_window"``, ``"unsettled"`` or ``"no_offset"``."""
 
 
-def friction_signal(data: pd.DataFrame, config: CampaignConfig, velocity=None) -> np.ndarray:
+def friction_signal(data, config: CampaignConfig, velocity=None) -> np.ndarray:
     """``F_f sign(v)`` plus the weight offset, from eq. 3.1 [N].
 
-    Uses ``force [N]``, the pressure columns (``pressure_a``/``pressure_b``, or ``pressure``
-    for both chambers) with the areas of ``config``, and the inertia term when
+    ``data`` is a DataFrame or a dict of arrays. Uses ``force [N]``, the pressure columns
+    (``pressure_a``/``pressure_b``, or ``pressure`` for both chambers) with the areas of
+    ``config``, and the inertia term when
     ``config.moving_mass`` > 0 (``velocity`` [m/s] then needed).
     """
     if "force [N]" not in data:
-        raise ValueError(f"no force column; found {list(data.columns)}")
-    signal = config.load_cell_sign * data["force [N]"].to_numpy()
+        raise ValueError(f"no force column; found {list(data)}")
+    signal = config.load_cell_sign * np.asarray(data["force [N]"])
     pa = data.get("pressure_a [Pa]", data.get("pressure [Pa]"))
     pb = data.get("pressure_b [Pa]", data.get("pressure [Pa]"))
     if config.area_a and pa is not None:
-        signal = signal + config.area_a * pa.to_numpy()
+        signal = signal + config.area_a * np.asarray(pa)
     if config.area_b and pb is not None:
-        signal = signal - config.area_b * pb.to_numpy()
+        signal = signal - config.area_b * np.asarray(pb)
     if config.moving_mass:
-        acceleration = np.gradient(velocity, data["time [s]"].to_numpy())
+        acceleration = np.gradient(velocity, np.asarray(data["time [s]"]))
         signal = signal - config.moving_mass * acceleration
     return signal
 
@@ -217,14 +217,12 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     level = np.median(centre)
     spread = 1.4826 * np.median(np.abs(force - np.median(force))) / math.sqrt(w)
     limit = max(trim_sigma * spread, trim_floor)
-    inside = np.abs(rolling - level) <= limit
+    outside = np.flatnonzero(np.abs(rolling - level) > limit)
     mid = n // 2
-    lo = mid
-    while lo > 0 and inside[lo - 1]:
-        lo -= 1
-    hi = mid
-    while hi < n and inside[hi]:
-        hi += 1
+    before = outside[outside < mid]
+    after = outside[outside >= mid]
+    lo = int(before[-1]) + 1 if before.size else 0
+    hi = int(after[0]) if after.size else n
     return offset + lo, offset + hi
 
 
@@ -232,6 +230,8 @@ def extract_points(
     data: pd.DataFrame, metadata: dict, config: CampaignConfig | None = None, *, run=0, **options
 ) -> pd.DataFrame:
     """Friction points of one run: one row per stroke window (columns :data:`POINT_COLUMNS`).
+
+    ``data`` is a DataFrame (:func:`cylfric.io.read_bench_text`) or a dict of arrays.
 
     Spikes (|F - median| > ``spike_sigma`` robust sigmas, default 5) are dropped from each
     window and counted. The run offset ``(F_up + F_down)/2`` uses the ok windows of both
@@ -253,12 +253,15 @@ def _point_rows(data, metadata, config, run, options):
     spike_sigma = options.pop("spike_sigma", 5.0)
     velocity_window = options.pop("velocity_window", 0.2)
     file = metadata.get("file", "")
-    time = data["time [s]"].to_numpy()
+    time = np.asarray(data["time [s]"])
     if "velocity [m/s]" in data:
-        velocity = config.position_sign * data["velocity [m/s]"].to_numpy()
+        velocity = config.position_sign * np.asarray(data["velocity [m/s]"])
     elif "position [m]" in data:
         velocity = smoothed_velocity(
-            time, data["position [m]"].to_numpy(), window=velocity_window, sign=config.position_sign
+            time,
+            np.asarray(data["position [m]"]),
+            window=velocity_window,
+            sign=config.position_sign,
         )
     else:
         raise BenchFileError(
@@ -275,7 +278,7 @@ def _point_rows(data, metadata, config, run, options):
             "'Pressure: 55 bar' header line, a file-name token such as "
             "55bar, or a pressure column",
         )
-    pressure = None if pressure_col is None else pressure_col.to_numpy()
+    pressure = None if pressure_col is None else np.asarray(pressure_col)
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
     extra = metadata.get("extra", {})
@@ -385,8 +388,9 @@ def extract_campaign(
     Files are read one at a time (memory does not grow with the number of files).
     By default the first bad file raises :class:`~cylfric.io.BenchFileError`; with
     ``skip_bad`` it is listed in ``Extraction.skipped`` with the reason and the rest goes on.
-    ``progress`` is called with each file name; ``workers`` threads read files (default:
-    up to 2). Input files are never modified.
+    ``progress`` is called with each file name; ``workers`` threads read files (default 1:
+    the per-file Python work holds the GIL, so more threads do not help on small files).
+    Input files are never modified.
     """
     config = config or load_config(folder)
     infos = discover_runs(folder, config)
@@ -411,7 +415,7 @@ def extract_campaign(
 
     # Two files in flight (pyarrow and numpy release the GIL); each task returns only its
     # points, so memory does not grow with the number of files.
-    with ThreadPoolExecutor(max_workers=workers or min(2, os.cpu_count() or 1)) as pool:
+    with ThreadPoolExecutor(max_workers=workers or 1) as pool:
         for info, rows, summary, error in pool.map(one, enumerate(infos)):
             if error is not None:
                 if not skip_bad:

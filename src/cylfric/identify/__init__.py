@@ -203,6 +203,7 @@ def _core(points, *, law, fixed, sensitivity, notes):
                 points["friction [N]"],
                 law=name,
                 fixed=surface_fixed,
+                start=surfaces.get("linear"),  # LAWS_COMPARED starts with linear
             )
         except (ValueError, np.linalg.LinAlgError) as exc:
             notes.append(f"surface fit with the {name} law failed: {exc}")

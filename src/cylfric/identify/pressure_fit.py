@@ -19,7 +19,7 @@ from scipy.optimize import curve_fit, least_squares
 
 from ..friction import params_at_pressure, stribeck
 from ..friction.pressure import PRESSURE_LAWS
-from .stribeck_fit import design_columns
+from .stribeck_fit import design_columns, solve_linear
 
 __all__ = [
     "LawFit",
@@ -194,14 +194,16 @@ def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
     for v_r in v_r_grid:
         for alpha in alpha_grid:
             a = design_columns(speed, p_bar, v_r, alpha)
-            coef, *_ = np.linalg.lstsq(a, force, rcond=None)
+            coef = solve_linear(a, force)
             rss = float(np.sum((a @ coef - force) ** 2))
             if rss < best[0]:
                 best = (rss, (coef, v_r, alpha))
     return best[1]
 
 
-def fit_surface(velocity, pressure, friction, *, law="linear", fixed=None, loss="soft_l1"):
+def fit_surface(
+    velocity, pressure, friction, *, law="linear", fixed=None, loss="soft_l1", start=None
+):
     """One fit of the whole surface F(v, p) with pressure laws for F_c, F_s and sigma_2.
 
     Parameters
@@ -214,6 +216,9 @@ def fit_surface(velocity, pressure, friction, *, law="linear", fixed=None, loss=
         ``v_r`` [m/s] and/or ``alpha`` [-] held fixed.
     loss : str
         Loss of :func:`scipy.optimize.least_squares` (robust by default).
+    start : SurfaceFit, optional
+        A fit of the same points whose linear coefficients, v_r and alpha start this one
+        (skips the grid search; used to compare laws).
 
     Returns
     -------
@@ -234,7 +239,16 @@ def fit_surface(velocity, pressure, friction, *, law="linear", fixed=None, loss=
         else np.geomspace(max(speed.min(), 1e-4) * 0.5, max(speed.max(), 1e-3), 25)
     )
     alpha_grid = [fixed["alpha"]] if "alpha" in fixed else np.linspace(0.4, 3.0, 14)
-    coef, v_r0, alpha0 = _grid_start(speed, p_bar, force, v_r_grid, alpha_grid)
+    if start is not None and start.law == "linear":
+        c = start.coefficients
+        coef = [
+            c[par][key] * (_BAR if key == "slope" else 1.0)
+            for par in PRESSURE_DEPENDENT
+            for key in ("intercept", "slope")
+        ]
+        v_r0, alpha0 = c["v_r"], c["alpha"]
+    else:
+        coef, v_r0, alpha0 = _grid_start(speed, p_bar, force, v_r_grid, alpha_grid)
     names = LAW_COEFFICIENTS[law]
     k = len(names)
     # start: linear coefficients (pressure in bar) then zeros for higher-order terms

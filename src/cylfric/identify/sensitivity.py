@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import minimize
 
-from .stribeck_fit import design_columns
+from .stribeck_fit import design_columns, solve_linear
 
 __all__ = ["rmse_at", "sensitivity_grid", "thesis_tables", "THESIS_ALPHAS", "THESIS_V_R"]
 
@@ -27,7 +27,7 @@ def rmse_at(velocity, pressure, friction, v_r, alpha):
     p_bar = np.asarray(pressure, dtype=float) / 1e5
     force = np.asarray(friction, dtype=float)
     a = design_columns(speed, p_bar, v_r, alpha)
-    coef, *_ = np.linalg.lstsq(a, force, rcond=None)
+    coef = solve_linear(a, force)
     return float(np.sqrt(np.mean((a @ coef - force) ** 2)))
 
 

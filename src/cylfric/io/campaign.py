@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..units import UnitError, parse_quantity
 from .matfile import read_mat
-from .text import BenchFileError, read_bench_text
+from .text import BenchFileError, read_bench_arrays
 
 __all__ = [
     "CampaignConfig",
@@ -260,14 +260,17 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
 def read_run(info: RunInfo, config: CampaignConfig):
     """Read one run and complete its nominal metadata from header lines and the file name.
 
-    Returns ``(data, metadata)`` as :func:`cylfric.io.read_bench_text`, with ``pressure``
-    [Pa], ``velocity`` [m/s], ``extra`` and ``source`` (where each value came from) added.
+    Returns ``(data, metadata)``: ``data`` a dict of SI arrays named with their units (the
+    columns of :func:`cylfric.io.read_bench_text`), ``metadata`` with ``pressure`` [Pa],
+    ``velocity`` [m/s], ``extra`` and ``source`` (where each value came from) added.
     """
     if info.path.suffix.lower() == ".mat":
-        data, metadata = read_mat(info.path)
+        frame, metadata = read_mat(info.path)
+        data = {name: frame[name].to_numpy() for name in frame.columns}
         metadata["header"] = {}
+        metadata["rows"] = len(frame)
     else:
-        data, metadata = read_bench_text(
+        data, metadata = read_bench_arrays(
             info.path,
             columns=config.columns,
             units=config.units,

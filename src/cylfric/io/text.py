@@ -29,6 +29,7 @@ __all__ = [
     "COLUMN_KEYWORDS",
     "QUANTITY_DIMENSIONS",
     "read_bench_text",
+    "read_bench_arrays",
     "read_mts_text",
     "read_delimited",
     "canonical_name",
@@ -134,6 +135,26 @@ def _decode(raw: bytes, path) -> str:
 def read_bench_text(
     path, *, columns=None, units=None, delimiter="auto", decimal="auto", encoding=None
 ):
+    """Read a bench text file into a DataFrame in SI; see :func:`read_bench_arrays`.
+
+    Returns ``(data, metadata)`` with ``data`` a pandas DataFrame whose column names carry
+    their units (``"time [s]"``, ``"position [m]"``, ``"force [N]"``, ``"pressure_a [Pa]"``,
+    ``"segment [-]"``).
+    """
+    arrays, metadata = read_bench_arrays(
+        path,
+        columns=columns,
+        units=units,
+        delimiter=delimiter,
+        decimal=decimal,
+        encoding=encoding,
+    )
+    return pd.DataFrame(arrays, copy=False), metadata
+
+
+def read_bench_arrays(
+    path, *, columns=None, units=None, delimiter="auto", decimal="auto", encoding=None
+):
     """Read a bench text file into SI arrays.
 
     Parameters
@@ -153,7 +174,7 @@ def read_bench_text(
 
     Returns
     -------
-    data : pandas.DataFrame
+    data : dict of ndarray
         One column per recognised quantity, in SI with the unit in the name
         (``"time [s]"``, ``"position [m]"``, ``"force [N]"``, ``"pressure_a [Pa]"`` ...),
         other columns as read (``"name [unit]"``), and ``"segment [-]"`` (0, 1, ...: the
@@ -298,7 +319,7 @@ def read_bench_text(
         "delimiter": {None: "whitespace"}.get(delim, delim),
         "decimal": decimal,
         "events": events,
-        "rows": int(len(data)),
+        "rows": int(len(data["segment [-]"])),
         "segments": len(frames),
     }
     return data, metadata
@@ -395,8 +416,9 @@ def _assemble(frames, path):
                 "the columns change between segments; expected the same "
                 f"columns in every block ({keys} vs {list(cols)})",
             )
-    data = pd.DataFrame({k: np.concatenate([p[k] for p in parts]) for k in keys}, copy=False)
-    return data, col_units
+    if len(parts) == 1:
+        return parts[0], col_units
+    return {k: np.concatenate([p[k] for p in parts]) for k in keys}, col_units
 
 
 def read_mts_text(path, **kwargs):

@@ -45,6 +45,20 @@ plt.rcParams.update(
 )
 
 
+def _log_speed_axis(ax):
+    """Log speed axis with 1-2-5 ticks labelled in plain numbers and no minor ticks.
+
+    Engineers read 1, 2, 5, 10, 20, 50 mm/s at a glance; it also draws several times faster
+    than the default scientific-notation labels with minor ticks and their gridlines.
+    """
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
+
+    ax.set_xscale("log")
+    ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    ax.xaxis.set_minor_locator(NullLocator())
+
+
 def _levels(ident):
     pts = ident.points
     levels = sorted(pts["level"].unique())
@@ -77,7 +91,7 @@ def figure_fit(ident):
             color=color,
             lw=1.2,
         )
-    ax.set_xscale("log")
+    _log_speed_axis(ax)
     ax.set_xlabel("speed |v| [mm/s]")
     ax.set_ylabel("friction force F_f [N]")
     ax.set_title(
@@ -157,7 +171,7 @@ def figure_directions(ident, offset=None):
                 f"Ascending (^) and descending (v, sign flipped) levels: they differ by "
                 f"2 x offset = {2 * offset:.2f} N (cf. thesis Fig. 4.3)"
             )
-    ax.set_xscale("log")
+    _log_speed_axis(ax)
     ax.set_xlabel("speed |v| [mm/s]")
     ax.set_ylabel("force-balance level x direction [N]")
     return fig
@@ -217,7 +231,7 @@ def figure_sensitivity_curves(ident):
             ax.plot(speed[sel] * 1e3, force[sel], "o", ms=2, color=color, alpha=0.6)
             model = design_columns(grid, np.full_like(grid, pb), v_r, alpha) @ coef
             ax.plot(grid * 1e3, model, "-", color=color, lw=1)
-        ax.set_xscale("log")
+        _log_speed_axis(ax)
         ax.set_title(f"alpha = {alpha:g}, v_r = {v_r * 1e3:g} mm/s: RMSE {rmse:.2f} N", fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("speed [mm/s]")
@@ -233,7 +247,7 @@ def figure_residuals(ident):
     res = ident.surface.residuals
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), sharey=True, constrained_layout=True)
     axes[0].plot(pts["velocity [m/s]"].abs() * 1e3, res, ".", ms=3)
-    axes[0].set_xscale("log")
+    _log_speed_axis(axes[0])
     axes[0].set_xlabel("speed |v| [mm/s]")
     axes[0].set_ylabel("residual (data - model) [N]")
     axes[1].plot(pts["pressure [Pa]"] / 1e5, res, ".", ms=3)

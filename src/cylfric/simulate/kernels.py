@@ -547,3 +547,75 @@ def dopri(
         rejected,
         next_out,
     )
+
+
+@njit(cache=True, parallel=True)
+def dopri_batch(
+    dt,
+    record_every,
+    x0,
+    v0,
+    mass,
+    k,
+    c,
+    ki,
+    x_ref,
+    v_ref,
+    f_ext,
+    F_c,
+    F_s,
+    sigma_2,
+    sigma_0,
+    sigma_1,
+    v_r,
+    alpha,
+    rtol,
+    max_steps,
+):
+    """Many parameter sets with the adaptive Dormand-Prince kernel (``prange``, both cores).
+
+    Per-set parameters are 1-D arrays of length ``n_sets``; inputs are shared. Returns
+    position [m] and friction force [N] every ``record_every`` grid points, as
+    (n_sets, n_records) arrays, and the number of grid points each set reached (all of them
+    unless ``max_steps`` ran out).
+    """
+    n_sets = F_c.shape[0]
+    n = x_ref.shape[0]
+    n_rec = (n - 1) // record_every + 1
+    positions = np.empty((n_sets, n_rec))
+    frictions = np.empty((n_sets, n_rec))
+    reached = np.empty(n_sets, dtype=np.int64)
+    for s in prange(n_sets):
+        fc = np.full(n, F_c[s])
+        fs = np.full(n, F_s[s])
+        s2 = np.full(n, sigma_2[s])
+        pos, _, _, force, _, _, got = dopri(
+            dt,
+            x0,
+            v0,
+            0.0,
+            mass,
+            k,
+            c,
+            ki,
+            x_ref,
+            v_ref,
+            f_ext,
+            fc,
+            fs,
+            s2,
+            sigma_0[s],
+            sigma_1[s],
+            v_r[s],
+            alpha[s],
+            rtol,
+            1e-12,
+            1e-9,
+            1e-13,
+            max_steps,
+        )
+        for r in range(n_rec):
+            positions[s, r] = pos[r * record_every]
+            frictions[s, r] = force[r * record_every]
+        reached[s] = got
+    return positions, frictions, reached
