@@ -243,3 +243,16 @@ def test_datasheet_validation_names_the_key(tmp_path):
     (tmp_path / "broken.json").write_text("{not json")
     with pytest.raises(DatasheetError, match="broken.json: not valid JSON"):
         read_datasheet(tmp_path / "broken.json")
+
+
+def test_non_monotonic_pressure_level_is_warned_not_hidden():
+    # the thesis saw an odd 20.7 bar curve (ch. 6): a level that falls gets a warning
+    rng = np.random.default_rng(3)
+    v = np.tile(np.geomspace(1e-3, 0.13, 14), 4)
+    p = np.repeat([1e5, 20e5, 55e5, 100e5], 14)
+    f = stribeck(v, **params_at_pressure(p, THESIS_2016.coefficients)) + rng.normal(0, 0.2, 56)
+    f[14:28] -= 25.0  # the 20 bar level far below the 1 bar one
+    points = pd.DataFrame({"velocity [m/s]": v, "pressure [Pa]": p, "friction [N]": f})
+    with pytest.warns(IdentificationWarning, match="F_c is not monotonic in pressure: it falls"):
+        ident = identify(points, sensitivity=False)
+    assert any("not monotonic" in note for note in ident.notes)

@@ -171,10 +171,38 @@ def _per_pressure(points, levels, fixed):
     return pd.DataFrame(rows), fits
 
 
+def _check_per_pressure(per_pressure, fits):
+    """Warn about failed fits and parameters that fall significantly as pressure rises."""
+    for fit, (_, row) in zip(fits, per_pressure.iterrows(), strict=True):
+        if not fit.success:
+            warnings.warn(
+                f"the Stribeck fit at {row['pressure [Pa]'] / 1e5:.3g} bar did not "
+                f"converge ({fit.message}); its row of the table is unreliable",
+                IdentificationWarning,
+                stacklevel=3,
+            )
+    table = per_pressure.sort_values("pressure [Pa]")
+    for par in ("F_c", "F_s"):
+        values = table[f"{par} [N]"].to_numpy()
+        errors = table[f"{par}_stderr [N]"].to_numpy()
+        drops = np.diff(values) < -2 * np.hypot(errors[1:], errors[:-1])
+        for i in np.flatnonzero(drops):
+            p0, p1 = table["pressure [Pa]"].to_numpy()[[i, i + 1]] / 1e5
+            warnings.warn(
+                f"{par} is not monotonic in pressure: it falls from "
+                f"{values[i]:.1f} N at {p0:.3g} bar to {values[i + 1]:.1f} N at "
+                f"{p1:.3g} bar; the pressure law may not describe this level "
+                "(temperature, seal run-in?)",
+                IdentificationWarning,
+                stacklevel=3,
+            )
+
+
 def _core(points, *, law, fixed, sensitivity, notes):
     labels, levels = pressure_levels(points["pressure [Pa]"])
     points = points.assign(level=labels)
     per_pressure, fits = _per_pressure(points, levels, fixed)
+    _check_per_pressure(per_pressure, fits)
     regressions = {}
     if len(per_pressure) >= 2:
         for par, unit in (("F_c", "N"), ("F_s", "N"), ("sigma_2", "N*s/m")):
@@ -298,6 +326,8 @@ def identify(
         warnings.simplefilter("always")
         core = _core(used, law=law, fixed=fixed, sensitivity=sensitivity, notes=notes)
     notes += [str(w.message) for w in caught]
+    for w in caught:  # recorded for the report, and still shown to the caller
+        warnings.warn(w.message, w.category, stacklevel=2)
     pts, per_pressure, fits, regressions, surfaces, comparison, table, grid, rec = core
     surface = surfaces[law]
     for par in PRESSURE_DEPENDENT:

@@ -281,7 +281,15 @@ def simulate(
     time = np.arange(n) * dt
     pa = _on_grid(pressure_a, time, "pressure_a")
     pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
-    params = friction.parameters(pa, pb)
+    if (
+        np.ndim(pressure_a) == 0
+        and (pressure_b is None or np.ndim(pressure_b) == 0)
+        and not callable(pressure_a)
+        and not callable(pressure_b)
+    ):
+        params = friction.parameters(float(pa[0]), float(pb[0]))  # constant pressures
+    else:
+        params = friction.parameters(pa, pb)
     f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
     info = {"method": method, "dt": dt}
 
@@ -412,10 +420,9 @@ def simulate(
         states = {"position": pos, "velocity": vel, "z": z}
         info.update(accepted=int(accepted), rejected=int(rejected))
     error = x_ref - states["position"]
-    error_integral = np.concatenate(([0.0], np.cumsum(0.5 * (error[1:] + error[:-1]) * dt)))
-    drive_force = (
-        k * error + c * (v_ref - states["velocity"]) + ki * error_integral + f_ext - f_pressure
-    )
+    drive_force = k * error + c * (v_ref - states["velocity"]) + f_ext - f_pressure
+    if ki:
+        drive_force += ki * np.concatenate(([0.0], np.cumsum(0.5 * (error[1:] + error[:-1]) * dt)))
     return SimulationResult(
         time,
         states,
