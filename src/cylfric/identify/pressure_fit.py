@@ -15,11 +15,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import curve_fit, least_squares
+from scipy.optimize import curve_fit
 
 from ..friction import params_at_pressure, stribeck
 from ..friction.pressure import PRESSURE_LAWS
-from .stribeck_fit import design_columns, solve_linear
+from .stribeck_fit import design_columns, robust_least_squares, solve_linear
 
 __all__ = [
     "LawFit",
@@ -42,6 +42,14 @@ LAW_COEFFICIENTS = {
 """Coefficient names of each scalar pressure law (SI: unit, unit/Pa, unit/Pa^2, 1/Pa)."""
 
 _BAR = 1e5
+_TO_SI = {
+    "intercept": 1.0,
+    "slope": 1 / _BAR,
+    "curvature": 1 / _BAR**2,
+    "amplitude": 1.0,
+    "rate": 1 / _BAR,
+}
+"""Factor from the fitted coefficient (pressure in bar) to SI (pressure in Pa)."""
 _MIN_RATE = 1e-9  # [1/bar]: below it the exponential law is the linear law
 
 
@@ -139,19 +147,12 @@ def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("li
             a, s, c = coef
             coef = np.array(_exp_to_law(a, s, c))
             cov = _exp_covariance(cov, s, coef[2])
-        scale = {
-            "intercept": 1.0,
-            "slope": 1 / _BAR,
-            "curvature": 1 / _BAR**2,
-            "amplitude": 1.0,
-            "rate": 1 / _BAR,
-        }
         errs = np.sqrt(np.clip(np.diag(cov), 0, None))
         out[law] = LawFit(
             parameter,
             law,
-            {n: float(c * scale[n]) for n, c in zip(names, coef, strict=True)},
-            {n: float(e * scale[n]) for n, e in zip(names, errs, strict=True)},
+            {n: float(c * _TO_SI[n]) for n, c in zip(names, coef, strict=True)},
+            {n: float(e * _TO_SI[n]) for n, e in zip(names, errs, strict=True)},
             aic,
             bic,
             len(y),
@@ -274,30 +275,12 @@ def fit_surface(
         return model(x) - force
 
     x0 = np.clip(start, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
-    first = least_squares(residuals, x0, bounds=(lower, upper), x_scale="jac")
-    result = first
-    if loss != "linear":
-        scale = 1.4826 * float(np.median(np.abs(first.fun - np.median(first.fun))))
-        result = least_squares(
-            residuals,
-            first.x,
-            bounds=(lower, upper),
-            x_scale="jac",
-            loss=loss,
-            f_scale=max(scale, 1e-6),
-        )
+    result = robust_least_squares(residuals, x0, (lower, upper), loss)
     res = -result.fun
     n_free = len(result.x)
     dof = max(force.size - n_free, 1)
     cov = np.linalg.pinv(result.jac.T @ result.jac) * float(res @ res) / dof
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
-    scale = {
-        "intercept": 1.0,
-        "slope": 1 / _BAR,
-        "curvature": 1 / _BAR**2,
-        "amplitude": 1.0,
-        "rate": 1 / _BAR,
-    }
     coefficients, stderr = {}, {}
     for j, par in enumerate(PRESSURE_DEPENDENT):
         block = result.x[j * k : (j + 1) * k]
@@ -308,8 +291,8 @@ def fit_surface(
             eblock = np.sqrt(
                 np.clip(np.diag(_exp_covariance(sub, result.x[j * k + 1], block[2])), 0, None)
             )
-        coefficients[par] = {n: float(c * scale[n]) for n, c in zip(names, block, strict=True)}
-        stderr[par] = {n: float(e * scale[n]) for n, e in zip(names, eblock, strict=True)}
+        coefficients[par] = {n: float(c * _TO_SI[n]) for n, c in zip(names, block, strict=True)}
+        stderr[par] = {n: float(e * _TO_SI[n]) for n, e in zip(names, eblock, strict=True)}
     for i, n in enumerate(shared):
         coefficients[n] = float(result.x[3 * k + i])
         stderr[n] = float(se[3 * k + i])

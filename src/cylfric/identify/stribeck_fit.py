@@ -56,6 +56,22 @@ def design_columns(speed, pressure, v_r, alpha):
     return np.column_stack([1 - e, pressure * (1 - e), e, pressure * e, speed, pressure * speed])
 
 
+def robust_least_squares(residuals, x0, bounds, loss="soft_l1"):
+    """Bounded least squares; a robust ``loss`` refit scaled by the first fit's residual spread.
+
+    A plain fit finds the residual spread (1.4826 MAD); the robust refit from there uses it
+    as ``f_scale``, so outliers beyond a few sigma lose their pull. Returns the
+    :func:`scipy.optimize.least_squares` result.
+    """
+    first = least_squares(residuals, x0, bounds=bounds, x_scale="jac")
+    if loss == "linear":
+        return first
+    scale = 1.4826 * float(np.median(np.abs(first.fun - np.median(first.fun))))
+    return least_squares(
+        residuals, first.x, bounds=bounds, x_scale="jac", loss=loss, f_scale=max(scale, 1e-6)
+    )
+
+
 def solve_linear(a, y):
     """Least-squares coefficients of ``a @ c ~ y`` by column-scaled normal equations.
 
@@ -208,18 +224,7 @@ def fit_stribeck(velocity, friction, *, fixed=None, loss="soft_l1", start=None):
     def residuals(x):
         return stribeck(speed, **unpack(x)) - force
 
-    first = least_squares(residuals, x0, bounds=(lower, upper), x_scale="jac")
-    result = first
-    if loss != "linear":
-        scale = 1.4826 * float(np.median(np.abs(first.fun - np.median(first.fun))))
-        result = least_squares(
-            residuals,
-            first.x,
-            bounds=(lower, upper),
-            x_scale="jac",
-            loss=loss,
-            f_scale=max(scale, 1e-6),
-        )
+    result = robust_least_squares(residuals, x0, (lower, upper), loss)
     params = unpack(result.x)
     res = -result.fun  # data minus model
     dof = max(speed.size - len(free), 1)

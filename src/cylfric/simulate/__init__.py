@@ -4,12 +4,14 @@ from .plant import (
     DEFAULT_FIXED_STEP,
     THESIS_CYLINDER,
     AppliedForce,
+    BatchResult,
     Cylinder,
     FrictionModel,
     PositionServo,
     PrescribedMotion,
     SpringPull,
     simulate,
+    simulate_batch,
 )
 from .result import SimulationResult
 
@@ -22,6 +24,8 @@ __all__ = [
     "PositionServo",
     "SimulationResult",
     "simulate",
+    "simulate_batch",
+    "BatchResult",
     "THESIS_CYLINDER",
     "DEFAULT_FIXED_STEP",
 ]

@@ -222,83 +222,6 @@ def fixed_step(
     return pos, vel, zz, force, mean_force, iterations
 
 
-@njit(cache=True, parallel=True)
-def fixed_step_batch(
-    dt,
-    substeps,
-    record_every,
-    x0,
-    v0,
-    mass,
-    k,
-    c,
-    ki,
-    x_ref,
-    v_ref,
-    f_ext,
-    F_c,
-    F_s,
-    sigma_2,
-    sigma_0,
-    sigma_1,
-    v_r,
-    alpha,
-    tol,
-):
-    """Many parameter sets at once (``prange`` over sets, both cores).
-
-    Per-set parameters are 1-D arrays of length ``n_sets`` (F_c, F_s, sigma_2, sigma_0,
-    sigma_1, v_r, alpha); inputs are shared. Records position [m] and the instantaneous
-    friction force [N] (eq. 2.5)
-    every ``record_every`` grid points; returns them as (n_sets, n_records) arrays.
-    """
-    n_sets = F_c.shape[0]
-    n = x_ref.shape[0]
-    n_rec = (n - 1) // record_every + 1
-    positions = np.empty((n_sets, n_rec))
-    frictions = np.empty((n_sets, n_rec))
-    h = dt / substeps
-    for s in prange(n_sets):
-        x, v, z, e = x0, v0, 0.0, 0.0
-        positions[s, 0] = x
-        frictions[s, 0] = 0.0
-        for i in range(n - 1):
-            for j in range(substeps):
-                w = (j + 0.5) / substeps
-                xr = x_ref[i] * (1 - w) + x_ref[i + 1] * w
-                vr = v_ref[i] * (1 - w) + v_ref[i + 1] * w
-                fe = f_ext[i] * (1 - w) + f_ext[i + 1] * w
-                x, v, z, e, _, _ = _implicit_step(
-                    x,
-                    v,
-                    z,
-                    e,
-                    h,
-                    mass,
-                    k,
-                    c,
-                    ki,
-                    xr,
-                    vr,
-                    fe,
-                    F_c[s],
-                    F_s[s],
-                    sigma_2[s],
-                    sigma_0[s],
-                    sigma_1[s],
-                    v_r[s],
-                    alpha[s],
-                    tol,
-                )
-            if (i + 1) % record_every == 0:
-                r = (i + 1) // record_every
-                positions[s, r] = x
-                frictions[s, r] = lugre_instant(
-                    v, z, sigma_0[s], sigma_1[s], sigma_2[s], F_c[s], F_s[s], v_r[s], alpha[s]
-                )
-    return positions, frictions
-
-
 # ------------------------------------------------------------ adaptive Dormand-Prince 5(4)
 
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
@@ -562,6 +485,7 @@ def dopri_batch(
     x_ref,
     v_ref,
     f_ext,
+    f_offset,
     F_c,
     F_s,
     sigma_2,
@@ -574,7 +498,8 @@ def dopri_batch(
 ):
     """Many parameter sets with the adaptive Dormand-Prince kernel (``prange``, both cores).
 
-    Per-set parameters are 1-D arrays of length ``n_sets``; inputs are shared. Returns
+    Per-set parameters are 1-D arrays of length ``n_sets``, ``f_offset`` a constant force
+    added to the shared ``f_ext`` per set [N] (e.g. the net pressure force). Returns
     position [m] and friction force [N] every ``record_every`` grid points, as
     (n_sets, n_records) arrays, and the number of grid points each set reached (all of them
     unless ``max_steps`` ran out).
@@ -589,6 +514,7 @@ def dopri_batch(
         fc = np.full(n, F_c[s])
         fs = np.full(n, F_s[s])
         s2 = np.full(n, sigma_2[s])
+        fe = f_ext + f_offset[s]
         pos, _, _, force, _, _, got = dopri(
             dt,
             x0,
@@ -600,7 +526,7 @@ def dopri_batch(
             ki,
             x_ref,
             v_ref,
-            f_ext,
+            fe,
             fc,
             fs,
             s2,
