@@ -58,19 +58,6 @@ def lugre_instant(v, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha):
     return sigma_0 * z + sigma_1 * dz + sigma_2 * v
 
 
-@njit(cache=True, inline="always")
-def _interp(signal, position):
-    """Linear interpolation of a uniformly sampled signal at fractional index ``position``."""
-    n = signal.shape[0]
-    if position <= 0.0:
-        return signal[0]
-    if position >= n - 1:
-        return signal[n - 1]
-    i = int(position)
-    w = position - i
-    return signal[i] * (1.0 - w) + signal[i + 1] * w
-
-
 # -------------------------------------------------------------- prescribed-velocity kernel
 
 
@@ -448,18 +435,9 @@ def dopri(
         h *= factor
     for i in range(next_out, n):
         out_y[i] = np.nan
-    for i in range(n):
-        pos = i
+    for i in range(n):  # outputs lie on the input grid: no interpolation needed
         friction[i] = lugre_instant(
-            out_y[i, 1],
-            out_y[i, 2],
-            sigma_0,
-            sigma_1,
-            _interp(sigma_2, pos),
-            _interp(F_c, pos),
-            _interp(F_s, pos),
-            v_r,
-            alpha,
+            out_y[i, 1], out_y[i, 2], sigma_0, sigma_1, sigma_2[i], F_c[i], F_s[i], v_r, alpha
         )
     return (
         out_y[:, 0].copy(),
