@@ -140,8 +140,9 @@ def test_fixed_alpha_and_v_r_are_held(chain):
     assert ident.surface.coefficients["alpha"] == truth["alpha"]
     assert all(f.params["v_r"] == truth["v_r"] for f in ident.fits)
     for par in ("F_c", "F_s"):
-        assert_allclose(ident.surface.coefficients[par]["intercept"], truth[par]["intercept"],
-                        rtol=0.01)
+        assert_allclose(
+            ident.surface.coefficients[par]["intercept"], truth[par]["intercept"], rtol=0.01
+        )
 
 
 def test_per_direction_fits(chain):

@@ -246,16 +246,17 @@ def test_batch_matches_single_runs():
 
     models = [_model(s0) for s0 in (1e5, 1e6, 1e7)]
     pressures = [0.1e5, 80e5, 200e5]
-    batch = simulate_batch(Cylinder(MASS), models, SpringPull(2e4, 5e-3), 3.0,
-                           pressures=pressures, record_every=10)
+    batch = simulate_batch(
+        Cylinder(MASS), models, SpringPull(2e4, 5e-3), 3.0, pressures=pressures, record_every=10
+    )
     assert batch.friction_force.shape == (3, 301) and batch.time[-1] == pytest.approx(3.0)
     for i, (model, p) in enumerate(zip(models, pressures, strict=True)):
         single = simulate(Cylinder(MASS), model, SpringPull(2e4, 5e-3), 3.0, pressure_a=p)
-        assert_allclose(batch.friction_force[i], single.outputs["friction_force"][::10],
-                        rtol=0, atol=1e-9)
+        assert_allclose(
+            batch.friction_force[i], single.outputs["friction_force"][::10], rtol=0, atol=1e-9
+        )
     with pytest.raises(ValueError, match="2 models for 3 pressures"):
-        simulate_batch(Cylinder(MASS), models[:2], SpringPull(2e4, 5e-3), 1.0,
-                       pressures=pressures)
+        simulate_batch(Cylinder(MASS), models[:2], SpringPull(2e4, 5e-3), 1.0, pressures=pressures)
     with pytest.raises(ValueError, match="takes AppliedForce, SpringPull or PositionServo"):
         simulate_batch(Cylinder(MASS), models, PrescribedMotion(0.01), 1.0, pressures=pressures)
 
@@ -264,8 +265,9 @@ def test_batch_includes_the_net_pressure_force_of_an_asymmetric_cylinder():
     from cylfric.simulate import simulate_batch
 
     cylinder = Cylinder.from_diameters(0.040, 0.028, 2.5)  # single rod: A_a > A_b
-    batch = simulate_batch(cylinder, _model(mass=2.5), AppliedForce(0.0), 0.5,
-                           pressures=[0.0, 20e5])
+    batch = simulate_batch(
+        cylinder, _model(mass=2.5), AppliedForce(0.0), 0.5, pressures=[0.0, 20e5]
+    )
     single = simulate(cylinder, _model(mass=2.5), AppliedForce(0.0), 0.5, pressure_a=20e5)
     assert batch.position[0, -1] == 0.0 and batch.position[1, -1] > 1e-3  # pushed out
     assert_allclose(batch.position[1], single.states["position"][::10], atol=1e-9)
