@@ -178,3 +178,18 @@ def test_zillen_real_data_friction_rises_with_pressure(shared_data, tmp_path):
         half_range = (extend - retract) / 2  # retract minus extend of F - pA, halved
         p = run["p_bar"].mean()
         assert abs(half_range - (3.40 + 0.654 * p)) < 2.0, (p, half_range)
+
+
+def test_unknown_extraction_option_is_named(tmp_path, small_campaign):
+    folder, _ = small_campaign
+    copy = tmp_path / "c"
+    shutil.copytree(folder, copy)
+    (copy / "campaign.toml").write_text("[extraction]\nmin_sample = 10\n")
+    with pytest.raises(BenchFileError, match=r"unknown extraction option\(s\) \['min_sample'\]"):
+        extract_campaign(copy)
+
+
+def test_unknown_window_method_lists_valid():
+    t = np.arange(0, 1, 0.01)
+    with pytest.raises(ValueError, match=r"unknown window method 'thesis'; valid: \['auto'"):
+        find_windows(t, np.ones_like(t), np.zeros_like(t), method="thesis")

@@ -226,3 +226,23 @@ def test_read_mat_errors(tmp_path):
     path = _write(tmp_path, "not a mat file", "x.mat")
     with pytest.raises(BenchFileError, match="not a readable MATLAB .mat file"):
         read_mat(path)
+
+
+def test_encoding_is_used_and_checked(tmp_path):
+    text = "Bediener: Müller\nZeit [s]\tKraft [N]\n0\t1\n1\t2\n"
+    path = _write(tmp_path, text, encoding="latin-1")
+    _, meta = read_bench_text(path, encoding="latin-1")
+    assert meta["header"]["Bediener"] == "Müller"
+    with pytest.raises(BenchFileError, match=r"run.txt, line 1: not valid utf-8 text"):
+        read_bench_text(path, encoding="utf-8")
+    with pytest.raises(ValueError, match="unknown encoding 'klingon'"):
+        read_bench_text(path, encoding="klingon")
+
+
+def test_events_are_status_lines_not_headers(tmp_path):
+    block = "Time\tDisplacement\tForce\ns\tmm\tkN\n"
+    text = "MTS793|MPT\nSegment 1 started\n" + block + _rows("\t") + "Segment 2 started\n" + \
+        block + _rows("\t") + "Test run ended\n"
+    _, meta = read_bench_text(_write(tmp_path, text))
+    assert [e[1] for e in meta["events"]] == ["Segment 1 started", "Segment 2 started",
+                                              "Test run ended"]

@@ -95,6 +95,10 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     return sign * savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest")
 
 
+WINDOW_METHODS = ("auto", "fixed-index")
+"""Window methods of :func:`find_windows`."""
+
+
 @dataclass
 class _Window:
     stroke: int
@@ -156,6 +160,8 @@ def find_windows(
     -------
     list of _Window (and dict of components)
     """
+    if method not in WINDOW_METHODS:
+        raise ValueError(f"unknown window method {method!r}; valid: {list(WINDOW_METHODS)}")
     speed_ref = nominal_speed if nominal_speed > 0 else float(np.percentile(np.abs(velocity), 90))
     if not speed_ref > 0:
         windows = []
@@ -239,7 +245,10 @@ def extract_points(
     until :func:`extract_campaign` applies the campaign offset. Other keywords go to
     :func:`find_windows` (``velocity_window`` [s] to the velocity smoothing).
     """
-    rows = _offset_rows(_point_rows(data, metadata, config or CampaignConfig(), run, options))
+    config = config or CampaignConfig()
+    rows = _offset_rows(
+        _point_rows(data, metadata, config, run, extraction_options(config, options))
+    )
     return pd.DataFrame(rows, columns=_columns(rows))
 
 
@@ -248,8 +257,29 @@ def _columns(rows):
     return POINT_COLUMNS + extra
 
 
+def extraction_options(config: CampaignConfig, options: dict) -> dict:
+    """Merge ``campaign.toml [extraction]`` with keyword options; unknown names raise.
+
+    Valid names: the keywords of :func:`find_windows` (thresholds with their units),
+    ``spike_sigma`` [-] and ``velocity_window`` [s].
+    """
+    import inspect
+
+    merged = {**config.extraction, **options}
+    fixed = {"time", "velocity", "force", "nominal_speed", "return_components"}
+    valid = {p for p in inspect.signature(find_windows).parameters if p not in fixed}
+    valid |= {"spike_sigma", "velocity_window"}
+    unknown = sorted(set(merged) - valid)
+    if unknown:
+        where = config.source or "extraction options"
+        raise BenchFileError(
+            where, f"unknown extraction option(s) {unknown}; valid: {sorted(valid)}"
+        )
+    return merged
+
+
 def _point_rows(data, metadata, config, run, options):
-    options = {**config.extraction, **options}
+    options = dict(options)
     spike_sigma = options.pop("spike_sigma", 5.0)
     velocity_window = options.pop("velocity_window", 0.2)
     file = metadata.get("file", "")
@@ -393,6 +423,7 @@ def extract_campaign(
     Input files are never modified.
     """
     config = config or load_config(folder)
+    options = extraction_options(config, options)
     infos = discover_runs(folder, config)
     per_run, skipped, runs = [], [], []
     total = 0

@@ -14,6 +14,7 @@ Python.
 
 from __future__ import annotations
 
+import codecs
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -104,6 +105,7 @@ class _Header:
     names: list
     units: list
     line: int
+    rows: tuple = ()  # 1-based numbers of the names (and units) rows in the file
 
 
 def _split(line: str, delimiter: str | None) -> list[str]:
@@ -125,7 +127,18 @@ def _detect_delimiter(sample: str) -> str | None:
     return None
 
 
-def _decode(raw: bytes, path) -> str:
+def _decode(raw: bytes, path, encoding=None, line=None) -> str:
+    """Text of a preamble/header line: ``encoding`` if given, else UTF-8, else latin-1."""
+    if encoding is not None:
+        try:
+            return raw.decode(encoding)
+        except UnicodeDecodeError as exc:
+            raise BenchFileError(
+                path,
+                f"not valid {encoding} text ({exc.reason}); expected "
+                "the encoding given, or none for UTF-8/latin-1",
+                line=line,
+            ) from None
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -191,6 +204,14 @@ def read_bench_arrays(
         message names the file, the line when known, and what was expected.
     """
     path = Path(path)
+    if encoding is not None:
+        try:
+            codecs.lookup(encoding)
+        except LookupError:
+            raise ValueError(
+                f"unknown encoding {encoding!r}; expected a Python codec name "
+                "such as 'utf-8' or 'latin-1'"
+            ) from None
     try:
         raw = path.read_bytes()
     except OSError as exc:
@@ -228,7 +249,7 @@ def read_bench_arrays(
         )
 
     def line_text(i):
-        return _decode(raw[starts[i] : ends[i]], path).rstrip("\r")
+        return _decode(raw[starts[i] : ends[i]], path, encoding, int(i) + 1).rstrip("\r")
 
     # Data runs: consecutive data lines, blank lines allowed inside, broken by text lines.
     breaks = np.searchsorted(data_idx, text_idx)
@@ -286,6 +307,8 @@ def read_bench_arrays(
                 line=int(run[0]) + 1,
             )
         blocks.append((seg, run, header))
+    header_rows = {row for _, _, hdr in blocks for row in hdr.rows}
+    events = [(number, text) for number, text in events if number not in header_rows]
 
     frames = []
     sep = 0 if delim is None else ord(delim)
@@ -358,14 +381,14 @@ def _header_before(previous, text_lines, delim, ncols):
         names_line = previous[-2]
         names = _split_header(text_lines[names_line], delim, ncols)
         if len(names) == len(cells):
-            return _Header(names, cells, names_line + 1)
+            return _Header(names, cells, names_line + 1, (names_line + 1, previous[-1] + 1))
     if len(cells) >= 2 and not _KEY_VALUE.match(last):
         names, units = [], []
         for cell in cells:
             match = _CELL_UNIT.match(cell)
             names.append(match.group(1) if match else cell)
             units.append(match.group(2) if match else "")
-        return _Header(names, units, previous[-1] + 1)
+        return _Header(names, units, previous[-1] + 1, (previous[-1] + 1,))
     return None
 
 
