@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 
 from ..friction import params_at_pressure  # noqa: E402
 from ..identify.sensitivity import THESIS_ALPHAS  # noqa: E402
-from ..identify.stribeck_fit import design_columns  # noqa: E402
+from ..identify.stribeck_fit import design_columns, solve_linear  # noqa: E402
 from ..io.writers import atomic_write_bytes  # noqa: E402
 
 __all__ = [
@@ -69,7 +69,8 @@ def _levels(ident):
 def figure_fit(ident):
     """Fig. 4.1: friction against speed (log axis) per pressure, with the fitted surface."""
     pts, levels, colors = _levels(ident)
-    fig, ax = plt.subplots(figsize=(7.5, 4.8), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.11, top=0.93)
     speed = pts["velocity [m/s]"].abs()
     grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 200)
     for level, color in zip(levels, colors, strict=True):
@@ -104,7 +105,8 @@ def figure_fit(ident):
 def figure_parameters(ident):
     """Fig. 4.2: per-pressure parameters with the fitted pressure laws and 95 % intervals."""
     table = ident.per_pressure
-    fig, axes = plt.subplots(2, 3, figsize=(10, 5.6), constrained_layout=True)
+    fig, axes = plt.subplots(2, 3, figsize=(10, 5.6))
+    fig.subplots_adjust(left=0.07, right=0.99, bottom=0.09, top=0.92, wspace=0.32, hspace=0.3)
     specs = [
         ("F_c", "N", 1, "F_c [N]"),
         ("F_s", "N", 1, "F_s [N]"),
@@ -151,7 +153,8 @@ def figure_parameters(ident):
 def figure_directions(ident, offset=None):
     """Fig. 4.3: ascending against descending force-balance levels and the weight offset."""
     pts, levels, colors = _levels(ident)
-    fig, ax = plt.subplots(figsize=(7.5, 4.6), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    fig.subplots_adjust(left=0.1, right=0.98, bottom=0.11, top=0.9)
     if "force [N]" in pts and "direction [-]" in pts:
         for level, color in zip(levels, colors, strict=True):
             sel = pts[pts["level"] == level]
@@ -166,10 +169,10 @@ def figure_directions(ident, offset=None):
                     alpha=0.8,
                 )
         if offset is not None and np.isfinite(offset):
-            ax.axhline(0, color="k", lw=0.5)
             ax.set_title(
-                f"Ascending (^) and descending (v, sign flipped) levels: they differ by "
-                f"2 x offset = {2 * offset:.2f} N (cf. thesis Fig. 4.3)"
+                "Ascending (^) and descending (v, sign flipped) levels (cf. thesis Fig. 4.3):\n"
+                f"they differ by 2 x the weight offset = {2 * offset:.2f} N",
+                fontsize=9,
             )
     _log_speed_axis(ax)
     ax.set_xlabel("speed |v| [mm/s]")
@@ -180,7 +183,8 @@ def figure_directions(ident, offset=None):
 def figure_sensitivity(ident):
     """Tables 4.2-4.4 as curves: RMSE against alpha (two v_r) and against v_r (alpha = 1)."""
     table = ident.sensitivity
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
+    fig.subplots_adjust(left=0.08, right=0.99, bottom=0.14, top=0.88, wspace=0.25)
     for name, label in (
         ("4.2", "v_r = 7.43 mm/s (Table 4.2)"),
         ("4.3", "v_r = 10 mm/s (Table 4.3)"),
@@ -208,36 +212,52 @@ def figure_sensitivity(ident):
 
 
 def figure_sensitivity_curves(ident):
-    """Figs. 4.4-4.12: the refit model for each alpha (v_r = 10 mm/s) and v_r (alpha = 1)."""
-    pts, levels, colors = _levels(ident)
-    cases = [(a, 0.010) for a in THESIS_ALPHAS] + [(1.0, v) for v in (0.005, 0.00743, 0.015)]
-    fig, axes = plt.subplots(
-        3, 3, figsize=(10, 8), sharex=True, sharey=True, constrained_layout=True
-    )
+    """Figs. 4.4-4.12 in two panels: the model refit at each fixed alpha and v_r, with data.
+
+    Left: alpha = 0.5 ... 2 at v_r = 10 mm/s (thesis Figs. 4.4-4.9); right: v_r = 5 ... 15
+    mm/s at alpha = 1 (Figs. 4.10-4.12 and 4.7). Each refit is the whole pressure-dependent
+    model with alpha and v_r held; drawn at the lowest and highest pressure, RMSE in the legend.
+    """
+    pts, levels, _ = _levels(ident)
     speed = pts["velocity [m/s]"].abs().to_numpy()
     p_bar = pts["pressure [Pa]"].to_numpy() / 1e5
     force = pts["friction [N]"].to_numpy()
     grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 120)
-    for ax in axes.flat:
-        ax.tick_params(labelsize=7)
-    for ax, (alpha, v_r) in zip(axes.flat, cases, strict=True):
-        coef, *_ = np.linalg.lstsq(design_columns(speed, p_bar, v_r, alpha), force, rcond=None)
-        rmse = float(
-            np.sqrt(np.mean((design_columns(speed, p_bar, v_r, alpha) @ coef - force) ** 2))
-        )
-        for level, color in zip(levels[::2], colors[::2], strict=True):
+    shown = [levels[0], levels[-1]] if len(levels) > 1 else levels
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), sharey=True)
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.12, top=0.86, wspace=0.05)
+    panels = (
+        (axes[0], [(a, 0.010) for a in THESIS_ALPHAS], "v_r = 10 mm/s"),
+        (axes[1], [(1.0, v) for v in (0.005, 0.00743, 0.010, 0.015)], "alpha = 1"),
+    )
+    for ax, cases, title in panels:
+        colors = plt.cm.plasma(np.linspace(0, 0.85, len(cases)))
+        for level in shown:
             sel = pts["level"].to_numpy() == level
-            pb = p_bar[sel].mean()
-            ax.plot(speed[sel] * 1e3, force[sel], "o", ms=2, color=color, alpha=0.6)
-            model = design_columns(grid, np.full_like(grid, pb), v_r, alpha) @ coef
-            ax.plot(grid * 1e3, model, "-", color=color, lw=1)
+            ax.plot(speed[sel] * 1e3, force[sel], "o", ms=3, color="0.35", zorder=3)
+        for (alpha, v_r), color in zip(cases, colors, strict=True):
+            design = design_columns(speed, p_bar, v_r, alpha)
+            coef = solve_linear(design, force)
+            rmse = float(np.sqrt(np.mean((design @ coef - force) ** 2)))
+            label = (
+                f"alpha = {alpha:g}" if title.startswith("v_r") else f"v_r = {v_r * 1e3:g} mm/s"
+            ) + f": RMSE {rmse:.2f} N"
+            for j, level in enumerate(shown):
+                pb = p_bar[pts["level"].to_numpy() == level].mean()
+                model = design_columns(grid, np.full_like(grid, pb), v_r, alpha) @ coef
+                ax.plot(
+                    grid * 1e3, model, "-", color=color, lw=1.2, label=label if j == 0 else None
+                )
         _log_speed_axis(ax)
-        ax.set_title(f"alpha = {alpha:g}, v_r = {v_r * 1e3:g} mm/s: RMSE {rmse:.2f} N", fontsize=8)
-    for ax in axes[-1]:
-        ax.set_xlabel("speed [mm/s]")
-    for ax in axes[:, 0]:
-        ax.set_ylabel("friction [N]")
-    fig.suptitle("Model refit at fixed alpha and v_r against the data (cf. thesis Figs. 4.4-4.12)")
+        ax.set_xlabel("speed |v| [mm/s]")
+        ax.set_title(f"refit at fixed values, {title}", fontsize=9)
+        ax.legend(fontsize=7, loc="upper center", ncol=2)
+    axes[0].set_ylabel("friction [N]")
+    p_low, p_high = (p_bar[pts["level"].to_numpy() == lv].mean() for lv in (shown[0], shown[-1]))
+    fig.suptitle(
+        f"Model refit at fixed alpha and v_r against the data at {p_low:.3g} and "
+        f"{p_high:.3g} bar (cf. thesis Figs. 4.4-4.12)"
+    )
     return fig
 
 
@@ -245,7 +265,8 @@ def figure_residuals(ident):
     """Residuals of the surface fit against speed and pressure."""
     pts = ident.points
     res = ident.surface.residuals
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), sharey=True, constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), sharey=True)
+    fig.subplots_adjust(left=0.08, right=0.99, bottom=0.15, top=0.88, wspace=0.05)
     axes[0].plot(pts["velocity [m/s]"].abs() * 1e3, res, ".", ms=3)
     _log_speed_axis(axes[0])
     axes[0].set_xlabel("speed |v| [mm/s]")
@@ -259,10 +280,9 @@ def figure_residuals(ident):
 
 
 def render(fig) -> tuple[bytes, bytes]:
-    """PNG and SVG bytes of a figure; the layout solved for the PNG is reused for the SVG."""
+    """PNG and SVG bytes of a figure (fixed layouts: no layout pass at save time)."""
     png = io.BytesIO()
     fig.savefig(png, format="png")
-    fig.set_layout_engine("none")  # keep the positions: no second layout pass
     svg = io.BytesIO()
     fig.savefig(svg, format="svg")
     plt.close(fig)
@@ -357,7 +377,8 @@ def all_figures(ident, offset=None):
             ),
             (
                 "sensitivity_curves",
-                "Model refit at fixed alpha and v_r against the data (cf. Figs. 4.4-4.12).",
+                "Model refit at each fixed alpha (v_r = 10 mm/s) and v_r (alpha = 1) against the "
+                "data, with the RMSE of each (cf. Figs. 4.4-4.12).",
                 lambda: figure_sensitivity_curves(ident),
             ),
         ]
