@@ -179,7 +179,10 @@ def run_fit(
 
     fixed = _fixed(list(fix))
     n_files = len(discover_runs(campaign, load_config(campaign)))
-    with _progress() as progress:
+    from .report import FigureRenderer
+
+    # figure workers fork before the progress bar starts its refresh thread
+    with FigureRenderer(2 if report else 1) as renderer, _progress() as progress:
         task = progress.add_task(f"reading {campaign.name}", total=n_files)
         result = fit_campaign(
             campaign,
@@ -190,6 +193,7 @@ def run_fit(
             skip_bad=skip_bad,
             report=report,
             progress=lambda _: progress.advance(task),
+            renderer=renderer,
         )
     if not quiet:
         console.print(_summary_table(result.datasheet))

@@ -49,6 +49,7 @@ def fit_campaign(
     report=True,
     progress=None,
     name=None,
+    renderer=None,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -74,9 +75,28 @@ def fit_campaign(
         Called with each file name as it is read.
     name : str, optional
         Name recorded in the datasheet.
+    renderer : cylfric.report.FigureRenderer, optional
+        Figure workers created by the caller (before it starts threads of its own, such as a
+        progress bar); by default one is created here, before the campaign is read, so its
+        workers warm up on the idle second core during the core pipeline.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    own_renderer = report and renderer is None
+    if own_renderer:
+        from .report import FigureRenderer
+
+        renderer = FigureRenderer()
+    try:
+        return _fit(
+            folder, out, fixed, law, per_direction, skip_bad, report, progress, name, renderer
+        )
+    finally:
+        if own_renderer:
+            renderer.close()
+
+
+def _fit(folder, out, fixed, law, per_direction, skip_bad, report, progress, name, renderer):
     timings = {}
     t0 = time.perf_counter()
     extraction = extract_campaign(folder, skip_bad=skip_bad, progress=progress)
@@ -99,12 +119,12 @@ def fit_campaign(
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
     timings["datasheet"] = time.perf_counter() - t0
     if report:
-        from .report import render_all, render_report, save_rendered, write_report
+        from .report import render_report, save_rendered, write_report
 
         t0 = time.perf_counter()
         figures_dir = out / "figures"
         rendered = []
-        for stem, caption, png, svg in render_all(ident, extraction.offset):
+        for stem, caption, png, svg in renderer.render(ident, extraction.offset):
             files[f"figure_{stem}"] = save_rendered(figures_dir, stem, png, svg)["png"]
             rendered.append((stem, caption, png))
         files["report"] = write_report(

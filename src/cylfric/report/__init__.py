@@ -1,9 +1,10 @@
 """Figures and the HTML report of an identification (a leaf: nothing of cylfric imports it)."""
 
-from .figures import all_figures, render_all, save_figure, save_rendered
+from .figures import FigureRenderer, all_figures, render_all, save_figure, save_rendered
 from .html import law_lines, render_report, write_report
 
 __all__ = [
+    "FigureRenderer",
     "all_figures",
     "render_all",
     "save_rendered",

@@ -32,6 +32,7 @@ __all__ = [
     "render",
     "render_all",
     "save_rendered",
+    "FigureRenderer",
 ]
 
 plt.rcParams.update(
@@ -305,46 +306,85 @@ def save_rendered(folder, stem, png: bytes, svg: bytes) -> dict:
     }
 
 
-_JOB = {}
+def _warm_up():
+    """Load fonts and the Agg/SVG machinery in a worker (the first draw is the slowest)."""
+    fig, ax = plt.subplots(figsize=(2, 1.5))
+    ax.plot([1, 10], [1, 2], "o-")
+    _log_speed_axis(ax)
+    ax.set_title("warm-up")
+    render(fig)
+    return True
 
 
-def _render_job(index):
-    stem, _, build = _JOB["figures"][index]
+def _render_job(ident, offset, index):
+    _, _, build = all_figures(ident, offset)[index]
     return render(build())
 
 
-def render_all(ident, offset=None, *, workers=2):
-    """Render every report figure; returns [(stem, caption, png, svg)].
+# the heaviest figures first, so the two workers finish together
+_ORDER = ("parameters", "sensitivity_curves", "fit", "sensitivity", "residuals", "directions")
 
-    With ``workers`` > 1 and a single-threaded process on a platform with ``fork``, the
-    figures are drawn in forked worker processes (each draws its own figures, so matplotlib
-    is never shared); otherwise, for example inside a notebook kernel, one after another.
+
+class FigureRenderer:
+    """Draw the report figures, in worker processes when that is safe.
+
+    Create it early (e.g. before reading a campaign): the workers fork and warm up on the
+    otherwise idle second core while the single-threaded core pipeline runs, so that the
+    report later costs only the drawing. Workers are used when the platform has ``fork``
+    and this process has a single thread (not inside a notebook kernel, whose helper
+    threads make forking unsafe); otherwise figures are drawn one after another.
+    Use as a context manager, or call :meth:`close`.
     """
-    import multiprocessing
-    import threading
-    from concurrent.futures import ProcessPoolExecutor
 
-    figures = all_figures(ident, offset)
-    can_fork = "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
-    if workers > 1 and can_fork and len(figures) > 1:
-        _JOB["figures"] = figures
-        try:
-            context = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-                # the heaviest figure first, so the two workers finish together
-                order = sorted(
-                    range(len(figures)), key=lambda i: figures[i][0] != "sensitivity_curves"
-                )
-                results = dict(zip(order, pool.map(_render_job, order), strict=True))
-        finally:
-            _JOB.clear()
-        rendered = [results[i] for i in range(len(figures))]
-    else:
-        rendered = [render(build()) for _, _, build in figures]
-    return [
-        (stem, caption, png, svg)
-        for (stem, caption, _), (png, svg) in zip(figures, rendered, strict=True)
-    ]
+    def __init__(self, workers: int = 2):
+        import multiprocessing
+        import threading
+        from concurrent.futures import ProcessPoolExecutor
+
+        self.pool = None
+        can_fork = (
+            "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+        )
+        if workers > 1 and can_fork:
+            self.pool = ProcessPoolExecutor(
+                max_workers=workers, mp_context=multiprocessing.get_context("fork")
+            )
+            self._warm = [self.pool.submit(_warm_up) for _ in range(workers)]
+
+    def render(self, ident, offset=None):
+        """[(stem, caption, png, svg)] for every report figure."""
+        figures = all_figures(ident, offset)
+        if self.pool is None:
+            rendered = [render(build()) for _, _, build in figures]
+        else:
+            stems = [stem for stem, _, _ in figures]
+            order = sorted(
+                range(len(figures)),
+                key=lambda i: _ORDER.index(stems[i]) if stems[i] in _ORDER else len(_ORDER),
+            )
+            futures = {i: self.pool.submit(_render_job, ident, offset, i) for i in order}
+            rendered = [futures[i].result() for i in range(len(figures))]
+        return [
+            (stem, caption, png, svg)
+            for (stem, caption, _), (png, svg) in zip(figures, rendered, strict=True)
+        ]
+
+    def close(self):
+        if self.pool is not None:
+            self.pool.shutdown(wait=True)
+            self.pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def render_all(ident, offset=None, *, workers=2):
+    """Render every report figure; returns [(stem, caption, png, svg)] (see FigureRenderer)."""
+    with FigureRenderer(workers) as renderer:
+        return renderer.render(ident, offset)
 
 
 def all_figures(ident, offset=None):
