@@ -188,34 +188,19 @@ def bench_simulate():
         1e-10,
     )
     t_kernel, out = _best(lambda: kernels.fixed_step(*args), 9)
+
     # cylfric default integrator (dopri): the loosest rtol that meets the accuracy
-    for rtol_dopri in (1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 1e-7):
-        r = simulate(
-            Cylinder(M),
-            model,
-            drive,
-            DURATION,
-            dt=DT,
-            pressure_a=P_A,
-            method="dopri",
-            rtol=rtol_dopri,
+    def run_dopri(rtol):
+        return simulate(
+            Cylinder(M), model, drive, DURATION, dt=DT, pressure_a=P_A, method="dopri", rtol=rtol
         )
+
+    for rtol_dopri in (1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 1e-7):
+        r = run_dopri(rtol_dopri)
         err_dopri = float(np.sqrt(np.mean((r.outputs["friction_force"] - reference) ** 2)) / fc)
         if err_dopri <= TOL:
             break
-    t_dopri, _ = _best(
-        lambda: simulate(
-            Cylinder(M),
-            model,
-            drive,
-            DURATION,
-            dt=DT,
-            pressure_a=P_A,
-            method="dopri",
-            rtol=rtol_dopri,
-        ),
-        9,
-    )
+    t_dopri, _ = _best(lambda: run_dopri(rtol_dopri), 9)
     rhs, force = _case_a_rhs(1e6, params)
     lsoda = _scipy_matched(rhs, force, [0.0, 0.0, 0.0], time_grid, reference, fc, "LSODA")
     rk45 = _scipy_matched(rhs, force, [0.0, 0.0, 0.0], time_grid, reference, fc, "RK45")

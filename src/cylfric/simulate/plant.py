@@ -367,23 +367,7 @@ def simulate(
         pos, vel, z, force, mean_force, iterations = kernels.fixed_step(
             dt,
             substeps,
-            x0,
-            v0,
-            z0,
-            cylinder.mass,
-            k,
-            c,
-            ki,
-            x_ref,
-            v_ref,
-            f_ext,
-            _arr(params["F_c"], n),
-            _arr(params["F_s"], n),
-            _arr(params["sigma_2"], n),
-            friction.sigma_0,
-            friction.sigma_1,
-            _const(params, "v_r"),
-            _const(params, "alpha"),
+            *_plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext),
             1e-10,
         )
         states = {"position": pos, "velocity": vel, "z": z}
@@ -391,23 +375,7 @@ def simulate(
     else:
         pos, vel, z, force, accepted, rejected, reached = kernels.dopri(
             dt,
-            x0,
-            v0,
-            z0,
-            cylinder.mass,
-            k,
-            c,
-            ki,
-            x_ref,
-            v_ref,
-            f_ext,
-            _arr(params["F_c"], n),
-            _arr(params["F_s"], n),
-            _arr(params["sigma_2"], n),
-            friction.sigma_0,
-            friction.sigma_1,
-            _const(params, "v_r"),
-            _const(params, "alpha"),
+            *_plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext),
             rtol,
             1e-12,
             1e-9,
@@ -430,6 +398,29 @@ def simulate(
         states,
         {"friction_force": force, "drive_force": drive_force, "pressure_a": pa, "pressure_b": pb},
         info,
+    )
+
+
+def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext):
+    """The plant and friction arguments shared by the compiled integrators (kernels order)."""
+    return (
+        x0,
+        v0,
+        z0,
+        cylinder.mass,
+        k,
+        c,
+        ki,
+        x_ref,
+        v_ref,
+        f_ext,
+        _arr(params["F_c"], n),
+        _arr(params["F_s"], n),
+        _arr(params["sigma_2"], n),
+        friction.sigma_0,
+        friction.sigma_1,
+        _const(params, "v_r"),
+        _const(params, "alpha"),
     )
 
 
