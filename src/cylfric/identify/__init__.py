@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -36,6 +36,7 @@ from .stribeck_fit import (
 
 __all__ = [
     "identify",
+    "add_sensitivity",
     "Identification",
     "fit_stribeck",
     "StribeckFit",
@@ -198,7 +199,7 @@ def _check_per_pressure(per_pressure, fits):
             )
 
 
-def _core(points, *, law, fixed, sensitivity, notes):
+def _core(points, *, law, fixed, notes):
     labels, levels = pressure_levels(points["pressure [Pa]"])
     points = points.assign(level=labels)
     per_pressure, fits = _per_pressure(points, levels, fixed)
@@ -252,13 +253,7 @@ def _core(points, *, law, fixed, sensitivity, notes):
             for n, s in surfaces.items()
         ]
     )
-    table = grid = None
-    recommended = {}
-    if sensitivity:
-        args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
-        table = thesis_tables(*args)
-        grid, recommended = sensitivity_grid(*args)
-    return points, per_pressure, fits, regressions, surfaces, comparison, table, grid, recommended
+    return points, per_pressure, fits, regressions, surfaces, comparison
 
 
 def identify(
@@ -279,7 +274,7 @@ def identify(
     per_direction : bool
         Also identify extension and retraction separately.
     sensitivity : bool
-        Run the alpha / v_r sensitivity study.
+        Run the alpha / v_r sensitivity study (see :func:`add_sensitivity`).
 
     Returns
     -------
@@ -324,11 +319,11 @@ def identify(
         return _level_only(used, labels, levels, law, fixed, notes + [message])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        core = _core(used, law=law, fixed=fixed, sensitivity=sensitivity, notes=notes)
+        core = _core(used, law=law, fixed=fixed, notes=notes)
     notes += [str(w.message) for w in caught]
     for w in caught:  # recorded for the report, and still shown to the caller
         warnings.warn(w.message, w.category, stacklevel=2)
-    pts, per_pressure, fits, regressions, surfaces, comparison, table, grid, rec = core
+    pts, per_pressure, fits, regressions, surfaces, comparison = core
     surface = surfaces[law]
     for par in PRESSURE_DEPENDENT:
         slope = surface.coefficients[par].get("slope")
@@ -344,9 +339,9 @@ def identify(
         surface,
         surfaces,
         comparison,
-        table,
-        grid,
-        rec,
+        None,
+        None,
+        {},
         law,
         fixed,
         pts,
@@ -354,12 +349,41 @@ def identify(
         {},
         notes,
     )
+    if sensitivity:
+        result = add_sensitivity(result)
     if per_direction and "direction [-]" in used:
         for name, sign in (("extension", 1), ("retraction", -1)):
             subset = used[used["direction [-]"] == sign]
             if len(subset) >= MIN_POINTS:
                 result.directions[name] = identify(subset, fixed=fixed, law=law, sensitivity=False)
     return result
+
+
+def add_sensitivity(ident: Identification) -> Identification:
+    """A copy of ``ident`` with the alpha / v_r sensitivity study (thesis 4.1.1-4.1.2).
+
+    Fills ``sensitivity`` (Tables 4.2-4.4), ``grid`` and ``recommended``; warnings raised on
+    the way are added to ``notes``. :func:`identify` calls it unless ``sensitivity=False``;
+    calling it separately lets a caller use the model (e.g. start drawing figures) while the
+    study runs. An identification without a Stribeck shape is returned unchanged.
+    """
+    if not ident.stribeck_identifiable:
+        return ident
+    points = ident.points
+    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = thesis_tables(*args)
+        grid, recommended = sensitivity_grid(*args)
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
+    return replace(
+        ident,
+        sensitivity=table,
+        grid=grid,
+        recommended=recommended,
+        notes=ident.notes + [str(w.message) for w in caught],
+    )
 
 
 def _level_only(points, labels, levels, law, fixed, notes):
