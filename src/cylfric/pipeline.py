@@ -13,7 +13,7 @@ from pathlib import Path
 import pandas as pd
 
 from .datasheet import build_datasheet, write_datasheet
-from .identify import identify
+from .identify import add_sensitivity, identify
 from .io.writers import atomic_write_text
 from .steady_state import extract_campaign
 
@@ -101,9 +101,21 @@ def _fit(folder, out, fixed, law, per_direction, skip_bad, report, progress, nam
     t0 = time.perf_counter()
     extraction = extract_campaign(folder, skip_bad=skip_bad, progress=progress)
     timings["extract"] = time.perf_counter() - t0
+    # Figures start as soon as their inputs exist, on the second core: the directions
+    # figure during the identification, the model figures during the sensitivity study.
+    figure_inputs = {"offset": extraction.offset, "points": extraction.points}
+    if report:
+        renderer.submit(**figure_inputs)
     t0 = time.perf_counter()
-    ident = identify(extraction.points, fixed=fixed, law=law, per_direction=per_direction)
+    ident = identify(
+        extraction.points, fixed=fixed, law=law, per_direction=per_direction, sensitivity=False
+    )
+    if report:
+        renderer.submit(ident, **figure_inputs)
+    ident = add_sensitivity(ident)
     timings["identify"] = time.perf_counter() - t0
+    if report:
+        renderer.submit(ident, **figure_inputs)
     t0 = time.perf_counter()
     sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
     files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
@@ -124,7 +136,7 @@ def _fit(folder, out, fixed, law, per_direction, skip_bad, report, progress, nam
         t0 = time.perf_counter()
         figures_dir = out / "figures"
         rendered = []
-        for stem, caption, png, svg in renderer.render(ident, extraction.offset):
+        for stem, caption, png, svg in renderer.results():
             files[f"figure_{stem}"] = save_rendered(figures_dir, stem, png, svg)["png"]
             rendered.append((stem, caption, png))
         files["report"] = write_report(
