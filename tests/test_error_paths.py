@@ -22,21 +22,42 @@ def test_cylinder_and_model_checks():
 
 
 def test_compiled_integrators_need_constant_v_r():
-    coefficients = {"F_c": 70.0, "F_s": 110.0, "sigma_2": 300.0, "alpha": 1.0,
-                    "v_r": {"intercept": 0.01, "slope": 1e-9}}
+    coefficients = {
+        "F_c": 70.0,
+        "F_s": 110.0,
+        "sigma_2": 300.0,
+        "alpha": 1.0,
+        "v_r": {"intercept": 0.01, "slope": 1e-9},
+    }
     pressure = np.linspace(0, 100e5, 101)
     with pytest.raises(ValueError, match="v_r must not vary with pressure"):
-        simulate(Cylinder(10.0), FrictionModel(coefficients=coefficients),
-                 SpringPull(2e4, 5e-3), 0.1, pressure_a=pressure)
+        simulate(
+            Cylinder(10.0),
+            FrictionModel(coefficients=coefficients),
+            SpringPull(2e4, 5e-3),
+            0.1,
+            pressure_a=pressure,
+        )
 
 
 def test_batch_argument_checks():
     with pytest.raises(ValueError, match="need 0 < dt <= duration and record_every >= 1"):
-        simulate_batch(Cylinder(10.0), FrictionModel(), SpringPull(2e4, 5e-3), 1.0,
-                       pressures=[0.0], record_every=0)
+        simulate_batch(
+            Cylinder(10.0),
+            FrictionModel(),
+            SpringPull(2e4, 5e-3),
+            1.0,
+            pressures=[0.0],
+            record_every=0,
+        )
     with pytest.raises(ValueError, match="needs LuGre models"):
-        simulate_batch(Cylinder(10.0), FrictionModel(law="stribeck"), SpringPull(2e4, 5e-3),
-                       1.0, pressures=[0.0])
+        simulate_batch(
+            Cylinder(10.0),
+            FrictionModel(law="stribeck"),
+            SpringPull(2e4, 5e-3),
+            1.0,
+            pressures=[0.0],
+        )
 
 
 def test_virtual_bench_checks():
@@ -49,10 +70,14 @@ def test_virtual_bench_checks():
 @pytest.mark.parametrize(
     ("manifest", "message"),
     [
-        ("file,pressure_bar,velocity_mm_s\nmissing.txt,55,10\n",
-         r"lists files that do not exist: \['missing.txt'\]"),
-        ("file,pressure_bar,velocity_mm_s\nrun.txt,high,10\n",
-         r"manifest.csv, line 2: pressure_bar and velocity_mm_s must be numbers"),
+        (
+            "file,pressure_bar,velocity_mm_s\nmissing.txt,55,10\n",
+            r"lists files that do not exist: \['missing.txt'\]",
+        ),
+        (
+            "file,pressure_bar,velocity_mm_s\nrun.txt,high,10\n",
+            r"manifest.csv, line 2: pressure_bar and velocity_mm_s must be numbers",
+        ),
         ("name,pressure\nrun.txt,55\n", r"manifest.csv, line 1: expected a header row"),
     ],
 )
@@ -67,8 +92,10 @@ def test_manifest_errors(tmp_path, manifest, message):
     ("toml", "message"),
     [
         ("[files\nglob = '*'", r"campaign.toml: invalid TOML"),
-        ("[columns]\nnames = ['time', 'force']\nunits = ['s']\n",
-         r"\[columns\] needs `names` and `units` of the same length"),
+        (
+            "[columns]\nnames = ['time', 'force']\nunits = ['s']\n",
+            r"\[columns\] needs `names` and `units` of the same length",
+        ),
         ("[cylinder]\nbore = '25 bar'\n", r"unit 'bar' is a pressure unit, expected a length"),
     ],
 )

@@ -241,8 +241,18 @@ def test_encoding_is_used_and_checked(tmp_path):
 
 def test_events_are_status_lines_not_headers(tmp_path):
     block = "Time\tDisplacement\tForce\ns\tmm\tkN\n"
-    text = "MTS793|MPT\nSegment 1 started\n" + block + _rows("\t") + "Segment 2 started\n" + \
-        block + _rows("\t") + "Test run ended\n"
+    text = (
+        "MTS793|MPT\nSegment 1 started\n"
+        + block
+        + _rows("\t")
+        + "Segment 2 started\n"
+        + block
+        + _rows("\t")
+        + "Test run ended\n"
+    )
     _, meta = read_bench_text(_write(tmp_path, text))
-    assert [e[1] for e in meta["events"]] == ["Segment 1 started", "Segment 2 started",
-                                              "Test run ended"]
+    assert [e[1] for e in meta["events"]] == [
+        "Segment 1 started",
+        "Segment 2 started",
+        "Test run ended",
+    ]

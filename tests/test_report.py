@@ -55,10 +55,10 @@ def test_staged_workers_draw_what_the_serial_path_draws(results):
     extraction, model, full = results
     inputs = {"offset": extraction.offset, "points": extraction.points}
     with FigureRenderer(workers=1) as serial:
-        assert not serial.pools
+        assert serial.pool is None
         expected = serial.render(full, extraction.offset)
     with FigureRenderer(workers=2) as parallel:
-        if not parallel.pools:
+        if parallel.pool is None:
             pytest.skip("this platform or process cannot fork figure workers")
         parallel.submit(**inputs)  # the directions figure, before any identification
         parallel.submit(model, **inputs)
@@ -79,7 +79,7 @@ def test_figures_are_drawn_here_when_the_workers_die(results, monkeypatch):
     extraction, model, full = results
     monkeypatch.setattr(F, "_warm_up", _die)  # each worker exits at start-up
     with FigureRenderer(workers=2) as renderer:
-        if not renderer.pools:
+        if renderer.pool is None:
             pytest.skip("this platform or process cannot fork figure workers")
         rendered = renderer.render(full, extraction.offset)
     assert [stem for stem, *_ in rendered] == STEMS

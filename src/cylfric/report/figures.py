@@ -421,8 +421,8 @@ def save_rendered(folder, stem, png: bytes, svg: bytes) -> dict:
 
 
 @_styled
-def _warm_up(lock=None, stems=()):
-    """Get a figure worker ready: fonts loaded, Agg/SVG used, the canvases of ``stems`` made.
+def _warm_up(lock=None):
+    """Get a figure worker ready: fonts loaded, Agg/SVG used, a canvas of each figure made.
 
     Runs as each worker's initializer. ``lock`` makes the workers take turns, so that only
     one of them competes with the caller's core pipeline for the CPU at a time. The
@@ -441,7 +441,7 @@ def _warm_up(lock=None, stems=()):
         ax.set_title("warm-up")
         ax.legend(["warm-up"], fontsize=7)
         render(fig)
-        prepare_canvases(stems)
+        prepare_canvases()
         gc.freeze()
     finally:
         if lock is not None:
@@ -479,7 +479,8 @@ class _Job:
 
 
 # Drawing time of each figure (PNG and SVG) on the 270-file demo campaign [ms], measured on
-# a 2-core machine with matplotlib 3.11; it balances the figures over the workers.
+# a 2-core machine with matplotlib 3.11: the heaviest of a batch is submitted first, so the
+# workers finish together.
 _COST_MS = {
     "parameters": 250,
     "sensitivity_curves": 160,
@@ -489,44 +490,21 @@ _COST_MS = {
     "directions": 95,
 }
 
-# Two workers: the directions figure is drawn during the identification (it needs only the
-# points), so it goes with the heaviest figure; the lanes then draw 355 and 390 ms after it.
-_TWO_LANES = (
-    ("directions", "parameters", "sensitivity"),
-    ("fit", "residuals", "sensitivity_curves"),
-)
-
-
-def _lanes(workers):
-    """Figures per worker; fixed lanes let each worker prepare its own canvases only.
-
-    Two workers use :data:`_TWO_LANES`; other counts the heaviest figure first onto the
-    least loaded worker (LPT scheduling).
-    """
-    if workers == 2:
-        return [list(lane) for lane in _TWO_LANES]
-    lanes = [[] for _ in range(workers)]
-    load = [0] * workers
-    for stem in sorted(_CANVASES, key=lambda s: -_COST_MS.get(s, 100)):
-        k = load.index(min(load))
-        lanes[k].append(stem)
-        load[k] += _COST_MS.get(stem, 100)
-    return lanes
-
 
 class FigureRenderer:
     """Draw the report figures, in worker processes when that is safe.
 
-    Create it early (e.g. before reading a campaign): each worker forks, warms up and
-    prepares the canvases of its own share of the figures on the otherwise idle second
-    core while the single-threaded core pipeline runs, so that the report later costs
-    only the drawing. :meth:`submit` starts the figures the results so far allow: the
-    directions figure needs only the points, the model figures no sensitivity study, so
-    they are drawn while the identification goes on; :meth:`results` collects them.
+    Create it early (e.g. before reading a campaign): the workers fork, warm up and prepare
+    an empty canvas of every figure, taking turns on the otherwise idle second core while
+    the single-threaded core pipeline runs, so that the report later costs only the
+    drawing. :meth:`submit` starts the figures the results so far allow: the directions
+    figure needs only the points, the model figures no sensitivity study, so they are
+    drawn while the identification goes on; :meth:`results` collects them.
 
     Workers are used when the platform has ``fork`` and this process has a single thread
-    (not inside a notebook kernel, whose helper threads make forking unsafe); otherwise,
-    or if a worker dies, the figures are drawn in this process by :meth:`results`.
+    (not inside a notebook kernel, whose helper threads make forking unsafe); all of them
+    fork at once, before the pool starts threads of its own. Otherwise, or if a worker
+    dies, the figures are drawn in this process by :meth:`results`.
     Use as a context manager, or call :meth:`close`.
     """
 
@@ -536,8 +514,7 @@ class FigureRenderer:
         import threading
         from concurrent.futures import ProcessPoolExecutor
 
-        self.pools = []
-        self._lane = {}
+        self.pool = None
         self._jobs = {}
         self._figures = []
         can_fork = (
@@ -546,24 +523,18 @@ class FigureRenderer:
         if workers < 2 or not can_fork:
             return
         context = multiprocessing.get_context("fork")
-        lock = context.Lock()
-        for k, stems in enumerate(_lanes(workers)):
-            self._lane.update(dict.fromkeys(stems, k))
-            self.pools.append(
-                ProcessPoolExecutor(
-                    max_workers=1,
-                    mp_context=context,
-                    initializer=_warm_up,
-                    initargs=(lock, tuple(stems)),
-                )
-            )
-        # A pool forks its worker at its first submission. Objects are frozen across the
-        # fork so that the workers' garbage collector never walks (and so copies the memory
-        # pages of) everything inherited from this process.
+        self.pool = ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=context,
+            initializer=_warm_up,
+            initargs=(context.Lock(),),
+        )
+        # A fork-context pool forks every worker at its first submission, before it starts
+        # its threads. Objects are frozen across the fork so that the workers' garbage
+        # collector never walks (and so copies the memory pages of) all they inherit.
         gc.freeze()
         try:
-            for pool in self.pools:
-                pool.submit(int)
+            self.pool.submit(int)
         finally:
             gc.unfreeze()
 
@@ -578,10 +549,7 @@ class FigureRenderer:
         new = [stem for stem, _, _ in self._figures if stem not in self._jobs]
         new.sort(key=lambda stem: -_COST_MS.get(stem, 100))
         for stem in new:
-            pool = None
-            if self.pools:
-                pool = self.pools[self._lane.get(stem, len(self._jobs) % len(self.pools))]
-            self._jobs[stem] = _Job(pool, ident, offset, points, stem)
+            self._jobs[stem] = _Job(self.pool, ident, offset, points, stem)
 
     def results(self):
         """[(stem, caption, png, svg)] for every figure of the last :meth:`submit`, in order.
@@ -598,9 +566,9 @@ class FigureRenderer:
         return self.results()
 
     def close(self):
-        for pool in self.pools:
-            pool.shutdown(wait=True, cancel_futures=True)
-        self.pools = []
+        if self.pool is not None:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+            self.pool = None
 
     def __enter__(self):
         return self
