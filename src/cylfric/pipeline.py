@@ -22,7 +22,13 @@ __all__ = ["fit_campaign", "FitOutputs"]
 
 @dataclass
 class FitOutputs:
-    """What :func:`fit_campaign` wrote and found."""
+    """What :func:`fit_campaign` wrote and found.
+
+    ``files`` maps each output to its path; ``timings`` holds the wall time of each stage
+    [s]: ``extract``, ``identify`` (with the sensitivity study), ``datasheet`` (with the
+    CSV tables) and, with the report, ``report``: only what is left after the datasheet,
+    since the figures are drawn on the second core from the end of the extraction on.
+    """
 
     out: Path
     datasheet: dict
