@@ -339,15 +339,15 @@ def identify(
         surface,
         surfaces,
         comparison,
-        None,
-        None,
-        {},
-        law,
-        fixed,
-        pts,
-        True,
-        {},
-        notes,
+        sensitivity=None,  # filled by add_sensitivity
+        grid=None,
+        recommended={},
+        law=law,
+        fixed=fixed,
+        points=pts,
+        stribeck_identifiable=True,
+        directions={},
+        notes=notes,
     )
     if sensitivity:
         result = add_sensitivity(result)

@@ -151,13 +151,13 @@ def _canvas(stem):
 
 
 @_styled
-def prepare_canvases(stems=None, ticks=10):
-    """Make an empty canvas of each report figure (default: all) ready, ``ticks`` per axis.
+def prepare_canvases(ticks=10):
+    """Make an empty canvas of each report figure ready, with ``ticks`` ticks per axis.
 
     Creating figures, axes and their ticks is about a sixth of drawing a report figure; a
     figure worker does it in advance, during the core pipeline.
     """
-    for stem in _CANVASES if stems is None else stems:
+    for stem in _CANVASES:
         if stem not in _prepared:
             _prepared[stem] = _make_canvas(stem, ticks)
 
