@@ -78,15 +78,15 @@ def _die(*args):
 def test_figures_are_drawn_here_when_the_workers_die(results, monkeypatch):
     extraction, model, full = results
     monkeypatch.setattr(F, "_warm_up", _die)  # each worker exits at start-up
-    drawn_here = []
-    draw = F._render_job
-    monkeypatch.setattr(F, "_render_job", lambda *args: drawn_here.append(args[-1]) or draw(*args))
+    drawn_here = []  # figures rendered in this process (the workers are dead)
+    draw = F.render
+    monkeypatch.setattr(F, "render", lambda fig: drawn_here.append(fig) or draw(fig))
     with FigureRenderer(workers=2) as renderer:
         if renderer.pool is None:
             pytest.skip("this platform or process cannot fork figure workers")
         rendered = renderer.render(full, extraction.offset)
     assert [stem for stem, *_ in rendered] == STEMS
-    assert sorted(drawn_here) == sorted(STEMS)  # every figure fell back to this process
+    assert len(drawn_here) == len(STEMS)  # every figure fell back to this process
     assert all(png.startswith(b"\x89PNG") for _, _, png, _ in rendered)
 
 
