@@ -501,16 +501,18 @@ class FigureRenderer:
     figure needs only the points, the model figures no sensitivity study, so they are
     drawn while the identification goes on; :meth:`results` collects them.
 
-    Workers are used when the platform has ``fork`` and this process has a single thread
-    (not inside a notebook kernel, whose helper threads make forking unsafe); all of them
-    fork at once, before the pool starts threads of its own. Otherwise, or if a worker
-    dies, the figures are drawn in this process by :meth:`results`.
+    Workers are used on Linux when this process has a single thread (not inside a
+    notebook kernel, whose helper threads make forking unsafe; macOS system libraries make
+    it unsafe too); all of them fork at once, before the pool starts threads of its own.
+    Otherwise, or if a worker dies, the figures are drawn in this process by
+    :meth:`results`.
     Use as a context manager, or call :meth:`close`.
     """
 
     def __init__(self, workers: int = 2):
         import gc
         import multiprocessing
+        import sys
         import threading
         from concurrent.futures import ProcessPoolExecutor
 
@@ -518,7 +520,9 @@ class FigureRenderer:
         self._jobs = {}
         self._figures = []
         can_fork = (
-            "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+            sys.platform.startswith("linux")
+            and "fork" in multiprocessing.get_all_start_methods()
+            and threading.active_count() == 1
         )
         if workers < 2 or not can_fork:
             return
