@@ -15,10 +15,10 @@ from cylfric.steady_state import extract_points
 def test_cylinder_and_model_checks():
     with pytest.raises(ValueError, match="rod diameter 0.03 m must be >= 0 and smaller than"):
         Cylinder.from_diameters(0.02, 0.03, 1.0)
-    with pytest.raises(ValueError, match="LuGre needs sigma_0 > 0 N/m"):
+    with pytest.raises(ValueError, match=r"parameter sigma_0 = 0.0 is out of range; expected > 0 N/m"):
         FrictionModel(sigma_0=0.0)
     with pytest.raises(ValueError, match="unknown friction law 'nope'"):
-        FrictionModel(law="nope")
+        FrictionModel(simulation_law="nope")
 
 
 def test_compiled_integrators_need_constant_v_r():
@@ -53,7 +53,7 @@ def test_batch_argument_checks():
     with pytest.raises(ValueError, match="needs LuGre models"):
         simulate_batch(
             Cylinder(10.0),
-            FrictionModel(law="stribeck"),
+            FrictionModel(simulation_law="stribeck"),
             SpringPull(2e4, 5e-3),
             1.0,
             pressures=[0.0],

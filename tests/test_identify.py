@@ -23,7 +23,7 @@ from cylfric.datasheet import (
 from cylfric.friction import params_at_pressure, stribeck
 from cylfric.friction.literature import THESIS_2016
 from cylfric.identify import IdentificationWarning, fit_stribeck, identify, pressure_levels
-from cylfric.simulate import FrictionModel
+from cylfric.model import FrictionModel
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.steady_state import extract_campaign
 
@@ -120,9 +120,12 @@ def test_datasheet_round_trip_evaluates_the_same_forces(chain, tmp_path):
     *_, sheet, _ = chain
     path = write_datasheet(tmp_path / "datasheet.json", sheet)
     again = read_datasheet(path)
-    v = np.linspace(-0.15, 0.15, 31)
+    v = np.concatenate([-np.geomspace(0.135, 0.0011, 15), np.geomspace(0.0011, 0.135, 16)])
     p = np.full_like(v, 80e5)
     assert_allclose(evaluate(again, v, p), evaluate(sheet, v, p), rtol=1e-15)
+    model = FrictionModel.from_datasheet(path)
+    assert np.array_equal(model.friction(v, p), evaluate(sheet, v, p))
+    assert json.dumps(model.to_datasheet(), sort_keys=True) == json.dumps(sheet, sort_keys=True)
     assert len(again["fit"]["source"]["files"]) == len(PRESSURES) * len(SPEEDS)
 
 
@@ -137,11 +140,11 @@ def test_fixed_alpha_and_v_r_are_held(chain):
     _, truth, _, extraction, *_ = chain
     fixed = {"alpha": truth["alpha"], "v_r": truth["v_r"]}
     ident = identify(extraction.points, fixed=fixed, sensitivity=False)
-    assert ident.surface.coefficients["alpha"] == truth["alpha"]
-    assert all(f.params["v_r"] == truth["v_r"] for f in ident.fits)
+    assert ident.model.coefficients()["alpha"] == truth["alpha"]
+    assert all(f.params["v_r"] == truth["v_r"] for f in ident.per_pressure_fits)
     for par in ("F_c", "F_s"):
         assert_allclose(
-            ident.surface.coefficients[par]["intercept"], truth[par]["intercept"], rtol=0.01
+            ident.model.coefficients()[par]["intercept"], truth[par]["intercept"], rtol=0.01
         )
 
 
@@ -151,7 +154,7 @@ def test_per_direction_fits(chain):
     assert set(ident.directions) == {"extension", "retraction"}
     for result in ident.directions.values():
         assert_allclose(
-            result.surface.coefficients["F_c"]["intercept"], truth["F_c"]["intercept"], rtol=0.03
+            result.model.coefficients()["F_c"]["intercept"], truth["F_c"]["intercept"], rtol=0.03
         )
 
 
@@ -193,7 +196,7 @@ def test_identify_errors():
     with pytest.raises(ValueError, match="3 usable points are too few"):
         identify(points)
     with pytest.raises(ValueError, match=r"unknown pressure law 'cubic'"):
-        identify(points, law="cubic")
+        identify(points, pressure_law="cubic")
     with pytest.raises(ValueError, match=r"lacks columns \['friction \[N\]'\]"):
         identify(points.drop(columns="friction [N]"))
     with pytest.raises(ValueError, match="contain NaN"):
@@ -215,10 +218,17 @@ def test_one_speed_per_pressure_gives_level_with_warning(shared_data, tmp_path):
     with pytest.warns(IdentificationWarning, match="Stribeck shape .* cannot be identified"):
         ident = identify(oring)
     assert not ident.stribeck_identifiable
-    slope = ident.surface.coefficients["F_c"]["slope"] * 1e5  # N/bar
+    slope = ident.model.coefficients()["F_c"]["slope"] * 1e5  # N/bar
     assert 0.3 < slope < 1.0  # the O-ring half-range rises about 0.65 N/bar
     sheet = build_datasheet(ident)
     assert sheet["model"]["stribeck_identifiable"] is False
+    assert sheet["model"]["friction_law"] == "coulomb"
+    # not identified: null with a reason, never a copied or zero value
+    for name in ("F_s", "sigma_2", "v_r", "alpha"):
+        assert sheet["parameters"][name] is None
+        assert "one speed per direction" in sheet["not_identified"][name]
+    assert all(row["F_s"] is None and row["sigma_2"] is None for row in sheet["per_pressure"])
+    assert sheet["fit"]["covariance"]["names"] == ["F_c.intercept", "F_c.slope"]
     validate(sheet)
 
 

@@ -1,16 +1,19 @@
-"""Report figures: the staged, parallel renderer draws exactly what the serial path draws."""
+"""Report figures: they draw the identification (no fitting), in parallel or not, the same."""
 
 from __future__ import annotations
 
-import os
+import ast
+import pickle
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
 
+import cylfric.report
 from cylfric.identify import add_sensitivity, identify
-from cylfric.report import FigureRenderer, all_figures
+from cylfric.report import all_figures, render_all
 from cylfric.report import figures as F
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.steady_state import extract_campaign
@@ -35,11 +38,20 @@ def _png(rendered):
 def test_add_sensitivity_matches_identify_and_leaves_its_input(results):
     extraction, model, full = results
     assert model.sensitivity is None and model.grid is None and model.recommended == {}
+    assert model.sensitivity_refits is None
     direct = identify(extraction.points)
     pd.testing.assert_frame_equal(full.sensitivity, direct.sensitivity)
     assert full.recommended == pytest.approx(direct.recommended)
     assert 0.5 < full.recommended["alpha"] < 2 and 0.003 < full.recommended["v_r"] < 0.03
-    assert full.surface is model.surface  # the model itself is shared, not refitted
+    assert full.model is model.model  # the model itself is shared, not refitted
+    # the refits of Figs. 4.4-4.12 are models; their RMSE is Table 4.3/4.4's
+    refits = {(r["panel"], r["alpha [-]"], r["v_r [m/s]"]): r for r in full.sensitivity_refits}
+    table = full.sensitivity.set_index(["table", "alpha [-]", "v_r [m/s]"])["rmse [N]"]
+    for (_, alpha, v_r), row in refits.items():
+        key = ("4.3" if v_r == 0.010 else "4.4", alpha, v_r)
+        if key in table.index:
+            assert row["rmse [N]"] == pytest.approx(table[key], rel=1e-9)
+        assert row["model"].statistics["rmse"] == row["rmse [N]"]
 
 
 def test_figures_follow_the_results_available(results):
@@ -51,43 +63,45 @@ def test_figures_follow_the_results_available(results):
     assert [stem for stem, _, _ in all_figures(full)] == STEMS
 
 
-def test_staged_workers_draw_what_the_serial_path_draws(results):
-    extraction, model, full = results
-    inputs = {"offset": extraction.offset, "points": extraction.points}
-    with FigureRenderer(workers=1) as serial:
-        assert serial.pool is None
-        expected = serial.render(full, extraction.offset)
-    with FigureRenderer(workers=2) as parallel:
-        if parallel.pool is None:
-            pytest.skip("this platform or process cannot fork figure workers")
-        parallel.submit(**inputs)  # the directions figure, before any identification
-        parallel.submit(model, **inputs)
-        parallel.submit(full, **inputs)
-        got = parallel.results()
-        assert parallel.results() == []  # a round ends with its results
-    assert [r[:2] for r in got] == [r[:2] for r in expected]  # stems and captions, in order
-    # prepared canvases in the workers, fresh ones here: the same pixels
-    assert _png(got) == _png(expected)
-    assert all(svg.lstrip().startswith(b"<?xml") for _, _, _, svg in got)
+def test_two_processes_draw_what_one_draws(results):
+    extraction, _, full = results
+    if not F._can_fork():
+        pytest.skip("this platform or process cannot fork a figure worker")
+    serial = render_all(full, extraction.offset, workers=1)
+    parallel = render_all(full, extraction.offset, workers=2)
+    assert [r[:2] for r in parallel] == [r[:2] for r in serial]  # stems, captions, in order
+    assert [r[0] for r in serial] == STEMS
+    assert _png(parallel) == _png(serial)
+    assert all(svg.lstrip().startswith(b"<?xml") for _, _, _, svg in parallel)
 
 
-def _die(*args):
-    os._exit(3)
+def test_figures_are_drawn_here_when_the_worker_dies(results, monkeypatch):
+    extraction, _, full = results
+    if not F._can_fork():
+        pytest.skip("this platform or process cannot fork a figure worker")
 
+    def broken_dump(*args, **kwargs):
+        raise RuntimeError("the worker cannot send its figures")
 
-def test_figures_are_drawn_here_when_the_workers_die(results, monkeypatch):
-    extraction, model, full = results
-    monkeypatch.setattr(F, "_warm_up", _die)  # each worker exits at start-up
-    drawn_here = []  # figures rendered in this process (the workers are dead)
+    monkeypatch.setattr(pickle, "dump", broken_dump)  # only the forked worker sends
+    drawn_here = []
     draw = F.render
     monkeypatch.setattr(F, "render", lambda fig: drawn_here.append(fig) or draw(fig))
-    with FigureRenderer(workers=2) as renderer:
-        if renderer.pool is None:
-            pytest.skip("this platform or process cannot fork figure workers")
-        rendered = renderer.render(full, extraction.offset)
+    rendered = render_all(full, extraction.offset, workers=2)
     assert [stem for stem, *_ in rendered] == STEMS
-    assert len(drawn_here) == len(STEMS)  # every figure fell back to this process
+    assert len(drawn_here) == len(STEMS)  # the worker's share was drawn again here
     assert all(png.startswith(b"\x89PNG") for _, _, png, _ in rendered)
+
+
+def test_report_imports_nothing_from_identify():
+    folder = Path(cylfric.report.__file__).parent
+    for path in folder.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                assert "identify" not in (node.module or ""), f"{path.name} imports identify"
+            if isinstance(node, ast.Import):
+                assert all("identify" not in a.name for a in node.names), path.name
 
 
 def test_importing_the_report_leaves_the_backend_and_rcparams_alone():

@@ -59,7 +59,7 @@ def test_stick_slip_case_really_sticks_and_slips(stick_slip_reference):
 
 @pytest.mark.parametrize("method", ["fixed", "dopri"])
 def test_default_settings_match_radau_on_stick_slip(stick_slip_reference, method):
-    F_c = _model().parameters(50e5)["F_c"]
+    F_c = _model().params_at(50e5)["F_c"]
     result = simulate(
         Cylinder(MASS), _model(), SpringPull(2e4, 5e-3), 10.0, pressure_a=50e5, method=method
     )
@@ -70,7 +70,7 @@ def test_default_settings_match_radau_on_stick_slip(stick_slip_reference, method
 
 
 def test_default_settings_match_radau_on_sinusoidal_velocity(sine_reference):
-    F_c = _model(1e7).parameters(50e5)["F_c"]
+    F_c = _model(1e7).params_at(50e5)["F_c"]
     drive = PrescribedMotion(lambda t: 0.05 * np.sin(2 * np.pi * t))
     result = simulate(Cylinder(MASS), _model(1e7), drive, 10.0, pressure_a=50e5)
     err = _rms_rel(result.outputs["friction_force"], sine_reference.outputs["friction_force"], F_c)
@@ -182,7 +182,7 @@ def test_simulation_errors_name_the_problem():
     with pytest.raises(ValueError, match="SpringPull stiffness = -1 is out of range"):
         SpringPull(-1, 0.01)
     with pytest.raises(ValueError, match="law 'stribeck' runs only with method='scipy'"):
-        simulate(Cylinder(MASS), FrictionModel(law="stribeck"), SpringPull(2e4, 5e-3), 0.1)
+        simulate(Cylinder(MASS), FrictionModel(simulation_law="stribeck"), SpringPull(2e4, 5e-3), 0.1)
     with pytest.raises(TypeError, match="unknown drive str"):
         simulate(Cylinder(MASS), _model(), "spring", 0.1)
 
@@ -190,7 +190,7 @@ def test_simulation_errors_name_the_problem():
 def test_static_law_runs_in_scipy_backend():
     result = simulate(
         Cylinder(MASS),
-        FrictionModel(law="stribeck"),
+        FrictionModel(simulation_law="stribeck"),
         AppliedForce(200.0),
         0.5,
         method="scipy",
@@ -207,7 +207,7 @@ def test_pressure_time_series_changes_friction():
     result = simulate(
         Cylinder(2.5), _model(mass=2.5), PrescribedMotion(0.02), 1.0, pressure_a=150e5 * time
     )
-    p = _model().parameters(150e5 * time)
+    p = _model().params_at(150e5 * time)
     steady = p["F_c"] + (p["F_s"] - p["F_c"]) * np.exp(-2.0) + p["sigma_2"] * 0.02
     lag = steady[200:] - result.outputs["friction_force"][200:]
     assert np.all((lag > 0) & (lag < 0.5))
@@ -236,7 +236,7 @@ def test_presliding_is_spring_like_below_breakaway():
 def test_breakaway_force_falls_with_force_rate():
     forces = [phenomena.breakaway_force(50e5, rate) for rate in (30.0, 100.0, 300.0, 1000.0)]
     assert np.all(np.diff(forces) < 0)
-    assert forces[0] < _model().parameters(50e5)["F_s"] * 1.05
+    assert forces[0] < _model().params_at(50e5)["F_s"] * 1.05
     with pytest.raises(RuntimeError, match="without a distinct breakaway"):
         phenomena.breakaway_force(50e5, 1e4)
 

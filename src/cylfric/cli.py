@@ -139,25 +139,42 @@ def _progress():
 
 
 def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
-    from .report import law_lines
+    from .model import FrictionModel
 
+    model = FrictionModel.from_datasheet(sheet)
     table = Table(title=title, show_header=False)
     table.add_column("", style="bold")
     table.add_column("")
-    for line in law_lines(sheet):
-        name, _, rest = line.partition(" = ")
+    for line in model.law_lines():
+        name, sep, rest = line.partition(" = ")
+        if not sep:
+            name, _, rest = line.partition(": ")
         table.add_row(name, rest)
     fit = sheet["fit"]
-    table.add_row("RMSE", f"{fit['rmse']:.3f} N over {fit.get('n_points', '?')} points")
+    if fit.get("rmse") is not None:
+        table.add_row("RMSE", f"{fit['rmse']:.3f} N over {fit.get('n_points', '?')} points")
     offset = sheet.get("offset")
-    table.add_row("offset", "n/a" if offset is None else f"{offset:.2f} N")
+    table.add_row("load-cell offset", "n/a" if offset is None else f"{offset:.2f} N")
     val = sheet["validity"]
-    table.add_row(
-        "valid for",
-        f"{val['pressure_min'] / 1e5:.3g}-{val['pressure_max'] / 1e5:.3g} "
-        f"bar, {val['velocity_min'] * 1e3:.3g}-"
-        f"{val['velocity_max'] * 1e3:.3g} mm/s",
-    )
+    if val is not None:
+        table.add_row(
+            "valid for",
+            f"{val['pressure_min'] / 1e5:.3g}-{val['pressure_max'] / 1e5:.3g} "
+            f"bar, {val['velocity_min'] * 1e3:.3g}-"
+            f"{val['velocity_max'] * 1e3:.3g} mm/s",
+        )
+    for name, (status, reason) in model.dynamic_status.items():
+        value, _, unit = (
+            model.parameters[name].engineering()
+            if name in model.parameters
+            else (
+                None,
+                None,
+                "",
+            )
+        )
+        text = f"{value:.4g} {unit}" if value is not None else "pressure dependent"
+        table.add_row(name, f"{text} ({status}: {reason})")
     table.add_row("method", fit["method"])
     return table
 
@@ -167,7 +184,7 @@ def run_fit(
     out: Path,
     *,
     fix=(),
-    law="linear",
+    pressure_law="linear",
     per_direction=False,
     skip_bad=False,
     report=True,
@@ -179,21 +196,23 @@ def run_fit(
 
     fixed = _fixed(list(fix))
     n_files = len(discover_runs(campaign, load_config(campaign)))
-    from .report import FigureRenderer
-
-    # figure workers fork before the progress bar starts its refresh thread
-    with FigureRenderer(2 if report else 1) as renderer, _progress() as progress:
+    with _progress() as progress:
         task = progress.add_task(f"reading {campaign.name}", total=n_files)
         result = fit_campaign(
             campaign,
             out,
             fixed=fixed,
-            law=law,
+            pressure_law=pressure_law,
             per_direction=per_direction,
             skip_bad=skip_bad,
-            report=report,
+            report=False,
             progress=lambda _: progress.advance(task),
-            renderer=renderer,
+        )
+    if report:  # after the progress bar's thread has stopped: figures may use both cores
+        from .report import write_report_folder
+
+        result.files.update(
+            write_report_folder(out, result.datasheet, result.identification, result.extraction)
         )
     if not quiet:
         console.print(_summary_table(result.datasheet))
@@ -214,8 +233,11 @@ def fit(
     campaign: Path = typer.Argument(..., help="Folder of raw bench files (never modified)."),
     out: Path = typer.Option(Path("cylfric-out"), "--out", "-o", help="Output folder."),
     fix: list[str] = typer.Option([], "--fix", help="Hold a parameter: alpha=1, v_r=10mm/s."),
-    law: str = typer.Option(
-        "linear", "--law", help="Pressure law: linear, quadratic, exponential."
+    pressure_law: str = typer.Option(
+        "linear",
+        "--pressure-law",
+        "--law",
+        help="Pressure law of F_c, F_s, sigma_2: linear, quadratic, exponential.",
     ),
     per_direction: bool = typer.Option(
         False, "--per-direction", help="Also fit extension and retraction separately."
@@ -230,7 +252,7 @@ def fit(
         campaign,
         out,
         fix=fix,
-        law=law,
+        pressure_law=pressure_law,
         per_direction=per_direction,
         skip_bad=skip_bad,
         report=not no_report,
@@ -287,9 +309,11 @@ def demo(
 def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
     """Summarise a datasheet."""
     from .datasheet import read_datasheet
+    from .model import FrictionModel
 
     sheet = read_datasheet(datasheet)
     console.print(_summary_table(sheet, f"Friction datasheet {sheet.get('name', '')}"))
+    console.print(FrictionModel.from_datasheet(sheet).fit_report(), markup=False, highlight=False)
     rows = sheet.get("per_pressure", [])
     if rows:
         table = Table(title="Per pressure (thesis Table 4.1 layout)")
@@ -307,9 +331,9 @@ def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
             vs = r.get("stribeck_velocity")
             table.add_row(
                 f"{r['pressure'] / 1e5:.3g}",
-                f"{r['F_s']:.1f}",
+                "-" if r["F_s"] is None else f"{r['F_s']:.1f}",
                 f"{r['F_c']:.1f}",
-                f"{r['sigma_2'] / 1e3:.3f}",
+                "-" if r["sigma_2"] is None else f"{r['sigma_2'] / 1e3:.3f}",
                 "-" if vs is None else f"{vs * 1e3:.1f}",
                 f"{r['rmse']:.2f}",
                 str(r["n_points"]),
@@ -372,17 +396,20 @@ def simulate(
     duration: str = typer.Option("10s", "--duration", help="Simulated time."),
     mass: str = typer.Option("10kg", "--mass", help="Moving mass."),
     stiffness: str = typer.Option("2e4", "--stiffness", help="Spring or servo stiffness (N/m)."),
-    sigma_0: str = typer.Option("1e6", "--sigma-0", help="Bristle stiffness (N/m)."),
+    sigma_0: str = typer.Option(
+        None,
+        "--sigma-0",
+        help="Bristle stiffness (N/m); default: the model's (sigma_1 = sqrt(sigma_0 m) then).",
+    ),
 ):
     """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure."""
-    from .datasheet import read_datasheet
     from .friction.literature import LITERATURE
     from .io.writers import atomic_write_text
+    from .model import FrictionModel
     from .report.figures import save_figure
     from .simulate import (
         AppliedForce,
         Cylinder,
-        FrictionModel,
         PositionServo,
         PrescribedMotion,
         SpringPull,
@@ -390,10 +417,9 @@ def simulate(
     from .simulate import simulate as run_simulation
 
     if Path(model).is_file():
-        sheet = read_datasheet(model)
-        coefficients, law = sheet["parameters"], sheet["model"]["pressure_law"]
+        friction = FrictionModel.from_datasheet(model)
     elif model in LITERATURE and LITERATURE[model].coefficients:
-        coefficients, law = dict(LITERATURE[model].coefficients), "linear"
+        friction = FrictionModel(dict(LITERATURE[model].coefficients))
     else:
         sets = sorted(k for k, s in LITERATURE.items() if s.coefficients)
         raise BadInput(f"{model!r}: not a datasheet file nor a literature set; valid sets: {sets}")
@@ -402,15 +428,16 @@ def simulate(
     t_end = parse_quantity(duration, "time", "s")
     m = parse_quantity(mass, "mass", "kg")
     k = parse_quantity(stiffness, "stiffness", "N/m")
-    s0 = parse_quantity(sigma_0, "stiffness", "N/m")
     if drive not in DRIVES:
         raise BadInput(f"--drive {drive!r}: expected one of {list(DRIVES)}")
-    if not (m > 0 and k > 0 and s0 > 0 and t_end > 0):
-        raise BadInput("--mass, --stiffness, --sigma-0 and --duration must be > 0")
-    friction = FrictionModel(
-        coefficients=coefficients, pressure_law=law, sigma_0=s0, sigma_1=math.sqrt(s0 * m)
-    )
-    params = friction.parameters(p)
+    if sigma_0 is not None:
+        s0 = parse_quantity(sigma_0, "stiffness", "N/m")
+        if not s0 > 0:
+            raise BadInput("--sigma-0 must be > 0")
+        friction = friction.replace(sigma_0=s0, sigma_1=math.sqrt(s0 * m))
+    if not (m > 0 and k > 0 and t_end > 0):
+        raise BadInput("--mass, --stiffness and --duration must be > 0")
+    params = friction.params_at(friction.operating_pressure(p))
     drives = {
         "spring": lambda: SpringPull(k, v),
         "sine": lambda: PrescribedMotion(lambda t: v * np.sin(2 * np.pi * t)),

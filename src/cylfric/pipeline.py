@@ -13,7 +13,7 @@ from pathlib import Path
 import pandas as pd
 
 from .datasheet import build_datasheet, write_datasheet
-from .identify import add_sensitivity, identify
+from .identify import identify
 from .io.writers import atomic_write_text
 from .steady_state import extract_campaign
 
@@ -26,8 +26,7 @@ class FitOutputs:
 
     ``files`` maps each output to its path; ``timings`` holds the wall time of each stage
     [s]: ``extract``, ``identify`` (with the sensitivity study), ``datasheet`` (with the
-    CSV tables) and, with the report, ``report``: only what is left after the datasheet,
-    since the figures are drawn on the second core from the end of the extraction on.
+    CSV tables) and, with the report, ``report`` (figures and report.html).
     """
 
     out: Path
@@ -49,13 +48,12 @@ def fit_campaign(
     out,
     *,
     fixed=None,
-    law="linear",
+    pressure_law="linear",
     per_direction=False,
     skip_bad=False,
     report=True,
     progress=None,
     name=None,
-    renderer=None,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -69,8 +67,8 @@ def fit_campaign(
         skipped), and with ``report`` the figures (PNG, SVG) and ``report.html``.
     fixed : dict, optional
         Parameters held fixed (SI), e.g. ``{"alpha": 1.0, "v_r": 0.010}``.
-    law : str
-        Pressure law of the datasheet.
+    pressure_law : str
+        Pressure law of the datasheet (linear, quadratic, exponential).
     per_direction : bool
         Also identify extension and retraction separately (``per_direction.csv``).
     skip_bad : bool
@@ -81,47 +79,18 @@ def fit_campaign(
         Called with each file name as it is read.
     name : str, optional
         Name recorded in the datasheet.
-    renderer : cylfric.report.FigureRenderer, optional
-        Figure workers created by the caller (before it starts threads of its own, such as a
-        progress bar); by default one is created here, before the campaign is read, so its
-        workers warm up on the idle second core during the core pipeline.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    own_renderer = report and renderer is None
-    if own_renderer:
-        from .report import FigureRenderer
-
-        renderer = FigureRenderer()
-    try:
-        return _fit(
-            folder, out, fixed, law, per_direction, skip_bad, report, progress, name, renderer
-        )
-    finally:
-        if own_renderer:
-            renderer.close()
-
-
-def _fit(folder, out, fixed, law, per_direction, skip_bad, report, progress, name, renderer):
     timings = {}
     t0 = time.perf_counter()
     extraction = extract_campaign(folder, skip_bad=skip_bad, progress=progress)
     timings["extract"] = time.perf_counter() - t0
-    # Figures start as soon as their inputs exist, on the second core: the directions
-    # figure during the identification, the model figures during the sensitivity study.
-    figure_inputs = {"offset": extraction.offset, "points": extraction.points}
-    if report:
-        renderer.submit(**figure_inputs)
     t0 = time.perf_counter()
     ident = identify(
-        extraction.points, fixed=fixed, law=law, per_direction=per_direction, sensitivity=False
+        extraction.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
     )
-    if report:
-        renderer.submit(ident, **figure_inputs)
-    ident = add_sensitivity(ident)
     timings["identify"] = time.perf_counter() - t0
-    if report:
-        renderer.submit(ident, **figure_inputs)
     t0 = time.perf_counter()
     sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
     files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
@@ -137,16 +106,9 @@ def _fit(folder, out, fixed, law, per_direction, skip_bad, report, progress, nam
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
     timings["datasheet"] = time.perf_counter() - t0
     if report:
-        from .report import render_report, save_rendered, write_report
+        from .report import write_report_folder
 
         t0 = time.perf_counter()
-        figures_dir = out / "figures"
-        rendered = []
-        for stem, caption, png, svg in renderer.results():
-            files[f"figure_{stem}"] = save_rendered(figures_dir, stem, png, svg)["png"]
-            rendered.append((stem, caption, png))
-        files["report"] = write_report(
-            out / "report.html", render_report(sheet, ident, extraction, rendered)
-        )
+        files.update(write_report_folder(out, sheet, ident, extraction))
         timings["report"] = time.perf_counter() - t0
     return FitOutputs(out, sheet, ident, extraction, files, timings)

@@ -22,6 +22,8 @@ from .laws import (
     lugre_z_update,
     stiction,
     stribeck,
+    stribeck_shape,
+    stribeck_unchecked,
     viscous,
 )
 from .pressure import operating_pressure, params_at_pressure, simscape_cylinder_friction
@@ -36,6 +38,8 @@ __all__ = [
     "viscous",
     "stiction",
     "stribeck",
+    "stribeck_shape",
+    "stribeck_unchecked",
     "dahl_derivative",
     "lugre_g",
     "lugre_state_derivative",

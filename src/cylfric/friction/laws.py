@@ -26,6 +26,8 @@ __all__ = [
     "viscous",
     "stiction",
     "stribeck",
+    "stribeck_unchecked",
+    "stribeck_shape",
     "dahl_derivative",
     "lugre_g",
     "lugre_state_derivative",
@@ -155,10 +157,29 @@ def stribeck(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     """
     check_parameters(F_c=F_c, F_s=F_s, v_r=v_r, sigma_2=sigma_2, alpha=alpha)
     v = check_signal("velocity", velocity)
-    speed = np.abs(v)
-    g = F_c + (F_s - F_c) * np.exp(-((speed / v_r) ** alpha))  # eq. 2.5, g(v)
-    force = np.sign(v) * (g + sigma_2 * speed)  # eq. 2.7
+    force = stribeck_unchecked(v, F_c, F_s, v_r, sigma_2, alpha=alpha)
     return as_output(force, velocity, F_c, F_s, v_r, sigma_2, alpha)
+
+
+def stribeck_shape(speed, v_r, alpha=1.0):
+    """The Stribeck decay ``exp(-(|v|/v_r)^alpha)`` of g(v), thesis eq. 2.5 [-].
+
+    ``g(v) = F_c + (F_s - F_c) * stribeck_shape(v)``; no parameter checks (callers check).
+    """
+    return np.exp(-((np.abs(speed) / v_r) ** alpha))
+
+
+def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+    """Eq. 2.7 as :func:`stribeck`, without parameter checks and always as an array.
+
+    For optimisers, whose trial steps may leave the physical range (F_c < 0, ...); every
+    other caller uses :func:`stribeck`. Velocity [m/s], forces [N], ``v_r`` [m/s],
+    ``sigma_2`` [N*s/m], ``alpha`` [-].
+    """
+    v = np.asarray(velocity, dtype=float)
+    speed = np.abs(v)
+    g = F_c + (F_s - F_c) * stribeck_shape(speed, v_r, alpha)  # eq. 2.5, g(v)
+    return np.sign(v) * (g + sigma_2 * speed)  # eq. 2.7
 
 
 def dahl_derivative(velocity, force, F_c, sigma, *, exponent=1.0):
@@ -203,7 +224,7 @@ def lugre_g(velocity, F_c, F_s, v_r, *, alpha=1.0):
     """
     check_parameters(F_c=F_c, F_s=F_s, v_r=v_r, alpha=alpha)
     v = check_signal("velocity", velocity)
-    g = F_c + (F_s - F_c) * np.exp(-((np.abs(v) / v_r) ** alpha))  # eq. 2.5
+    g = F_c + (F_s - F_c) * stribeck_shape(v, v_r, alpha)  # eq. 2.5
     return as_output(g, velocity, F_c, F_s, v_r, alpha)
 
 

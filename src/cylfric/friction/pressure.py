@@ -22,6 +22,8 @@ from ._checks import check_signal
 
 __all__ = [
     "PRESSURE_LAWS",
+    "PRESSURE_LAW_COEFFICIENTS",
+    "constant",
     "PRESSURE_REFERENCES",
     "linear",
     "quadratic",
@@ -30,6 +32,19 @@ __all__ = [
     "params_at_pressure",
     "simscape_cylinder_friction",
 ]
+
+
+def constant(pressure, intercept):
+    """Pressure-independent value ``a`` (broadcast to the shape of ``pressure``).
+
+    Parameters
+    ----------
+    pressure : float or array_like
+        Operating pressure [Pa] (sets only the shape of the result).
+    intercept : float
+        The value [unit of the parameter].
+    """
+    return intercept + 0.0 * np.asarray(pressure, dtype=float)
 
 
 def linear(pressure, intercept, slope):
@@ -60,12 +75,41 @@ def exponential(pressure, intercept, amplitude, rate):
     p = 0 is ``intercept``, the initial slope ``amplitude * rate``; it tends to the linear law
     as ``rate -> 0``. ``rate`` in [1/Pa], ``amplitude`` in the unit of the parameter.
     """
+    return exponential_by_slope(pressure, intercept, amplitude * rate, rate)
+
+
+MIN_RATE = 1e-14
+"""Smallest ``|rate|`` [1/Pa] of the exponential law; below it the law is the linear law."""
+
+
+def exponential_by_slope(pressure, intercept, initial_slope, rate):
+    """The exponential law by its initial slope: ``a + s (exp(c p) - 1) / c``.
+
+    The same law as :func:`exponential` with ``amplitude = s / c``, written so that it stays
+    well posed as ``rate -> 0`` (where it becomes the linear law ``a + s p``): the form fits
+    use. ``initial_slope`` in [unit/Pa], ``rate`` in [1/Pa].
+    """
     p = np.asarray(pressure, dtype=float)
-    return intercept + amplitude * np.expm1(rate * p)
+    c = np.where(np.abs(rate) < MIN_RATE, MIN_RATE, rate)
+    return intercept + initial_slope * np.expm1(c * p) / c
 
 
-PRESSURE_LAWS = {"linear": linear, "quadratic": quadratic, "exponential": exponential}
+PRESSURE_LAWS = {
+    "constant": constant,
+    "linear": linear,
+    "quadratic": quadratic,
+    "exponential": exponential,
+}
 """Scalar pressure laws by name; each maps (pressure [Pa], coefficients) to a value."""
+
+PRESSURE_LAW_COEFFICIENTS = {
+    "constant": ("intercept",),
+    "linear": ("intercept", "slope"),
+    "quadratic": ("intercept", "slope", "curvature"),
+    "exponential": ("intercept", "amplitude", "rate"),
+}
+"""Coefficient names of each pressure law, in order. Units: the parameter's unit
+(``intercept``, ``amplitude``), per Pa (``slope``, ``rate`` [1/Pa]), per Pa^2 (``curvature``)."""
 
 PRESSURE_REFERENCES = {
     "a": lambda pa, pb: pa,
@@ -111,7 +155,7 @@ def params_at_pressure(pressure, coefficients, *, law="linear"):
         Friction-parameter name -> constant (SI) or dict of coefficients of ``law``
         (e.g. ``{"intercept": 70.2, "slope": 5e-6}`` for ``linear``). A nested dict may carry
         its own ``"law"`` key to mix laws.
-    law : {"linear", "quadratic", "exponential"}
+    law : {"constant", "linear", "quadratic", "exponential"}
         Default scalar pressure law for the nested dicts.
 
     Returns

@@ -16,8 +16,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
+from ..model import FrictionModel
 from .pressure_fit import (
-    LAW_COEFFICIENTS,
+    FITTED_LAWS,
     PRESSURE_DEPENDENT,
     LawFit,
     SurfaceFit,
@@ -25,7 +27,7 @@ from .pressure_fit import (
     information_criteria,
     regress_parameters,
 )
-from .sensitivity import sensitivity_grid, thesis_tables
+from .sensitivity import sensitivity_grid, sensitivity_refits, thesis_tables
 from .stribeck_fit import (
     MIN_POINTS,
     PARAMETERS,
@@ -38,6 +40,7 @@ __all__ = [
     "identify",
     "add_sensitivity",
     "Identification",
+    "sensitivity_refits",
     "fit_stribeck",
     "StribeckFit",
     "fit_surface",
@@ -47,11 +50,12 @@ __all__ = [
     "sensitivity_grid",
     "thesis_tables",
     "pressure_levels",
+    "validity_of",
     "IdentificationWarning",
     "PARAMETERS",
 ]
 
-LAWS_COMPARED = ("linear", "quadratic", "exponential")
+LAWS_COMPARED = FITTED_LAWS
 
 
 def pressure_levels(pressure, *, gap=1e5, relative=0.05):
@@ -76,79 +80,97 @@ def _distinct_speeds(speed, relative=0.1):
     return 1 + int(np.sum(np.diff(s) > relative * s[1:])) if s.size else 0
 
 
+def validity_of(points) -> dict:
+    """The ranges a points table covers: ``pressure_min/max`` [Pa], ``velocity_min/max`` [m/s]."""
+    speed = points["velocity [m/s]"].abs()
+    return {
+        "pressure_min": float(points["pressure [Pa]"].min()),
+        "pressure_max": float(points["pressure [Pa]"].max()),
+        "velocity_min": float(speed.min()),
+        "velocity_max": float(speed.max()),
+    }
+
+
 @dataclass
 class Identification:
-    """Everything :func:`identify` found (SI units).
+    """Everything :func:`identify` found (SI units); the report draws from it, fitting nothing.
 
     Attributes
     ----------
+    model : FrictionModel
+        The datasheet's model: the global surface fit with the chosen pressure law, its
+        covariance, statistics and validity ranges.
+    models : dict
+        Pressure law -> FrictionModel for every compared law.
+    residuals : ndarray
+        Data minus ``model`` [N], in the order of ``points``.
+    points : pandas.DataFrame
+        The points used (flag ``"ok"``), with their pressure ``level`` (index into ``levels``).
+    levels : ndarray
+        Mean pressure of each level [Pa] (computed once, here).
     per_pressure : pandas.DataFrame
         Table 4.1 layout: one row per pressure level with ``pressure [Pa]``, ``F_c [N]``,
         ``F_s [N]``, ``sigma_2 [N*s/m]``, ``v_r [m/s]``, ``alpha [-]``,
-        ``stribeck_velocity [m/s]``, ``rmse [N]``, ``n_points [-]`` and ``*_stderr`` columns.
-    fits : list of StribeckFit
+        ``stribeck_velocity [m/s]``, ``rmse [N]``, ``n_points [-]`` and ``*_stderr`` columns
+        (NaN where a parameter is not identified).
+    per_pressure_fits : list of StribeckFit
         The per-pressure fits.
     regressions : dict
-        Parameter -> law -> :class:`LawFit` (route a).
-    surface : SurfaceFit
-        The global fit with the chosen law (route b); the datasheet's model.
-    surfaces : dict
-        Law -> SurfaceFit for every compared law.
+        Parameter -> pressure law -> :class:`LawFit` (route a).
     comparison : pandas.DataFrame
-        Law, number of coefficients, RMSE, AIC, BIC of the surface fits.
-    sensitivity : pandas.DataFrame
-        Tables 4.2-4.4 (``table``, ``alpha [-]``, ``v_r [m/s]``, ``rmse [N]``).
-    grid : pandas.DataFrame
-        RMSE over a finer alpha x v_r grid.
-    recommended : dict
-        Grid minimum: ``alpha``, ``v_r``, ``rmse``.
-    directions : dict
-        ``"extension"``/``"retraction"`` -> Identification, with ``per_direction``.
+        ``law``, ``coefficients [-]``, ``rmse [N]``, ``aic``, ``bic`` of the surface fits.
+    pressure_law : str
+        Pressure law of ``model``.
+    fixed : dict
+        Parameters held fixed in every fit (SI).
     stribeck_identifiable : bool
         False when the data has too few speeds per pressure (e.g. one speed per direction).
+    sensitivity, grid, recommended, sensitivity_refits
+        The alpha / v_r study (:func:`add_sensitivity`): Tables 4.2-4.4, the RMSE grid, its
+        minimum, and the refits of Figs. 4.4-4.12 (dicts with a ``model``).
+    directions : dict
+        ``"extension"``/``"retraction"`` -> Identification.
     notes : list of str
         Warnings raised on the way, in words, for the report.
     """
 
-    per_pressure: pd.DataFrame
-    fits: list
-    regressions: dict
-    surface: SurfaceFit
-    surfaces: dict
-    comparison: pd.DataFrame
-    sensitivity: pd.DataFrame | None
-    grid: pd.DataFrame | None
-    recommended: dict
-    law: str
-    fixed: dict
+    model: FrictionModel
+    models: dict
+    residuals: np.ndarray
     points: pd.DataFrame
+    levels: np.ndarray
+    per_pressure: pd.DataFrame
+    per_pressure_fits: list
+    regressions: dict
+    comparison: pd.DataFrame
+    pressure_law: str
+    fixed: dict
     stribeck_identifiable: bool = True
+    sensitivity: pd.DataFrame | None = None
+    grid: pd.DataFrame | None = None
+    recommended: dict = field(default_factory=dict)
+    sensitivity_refits: list | None = None
     directions: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
 
-    @property
-    def parameters(self) -> dict:
-        """The pressure coefficient set of the surface fit (plugs into params_at_pressure)."""
-        return self.surface.coefficients
-
     def summary(self) -> pd.DataFrame:
-        """Pressure laws in engineering units: parameter, intercept, slope per bar, unit."""
+        """Pressure laws in engineering units: parameter, coefficient, value, stderr, unit."""
         rows = []
-        units = {"F_c": ("N", 1.0), "F_s": ("N", 1.0), "sigma_2": ("N*s/mm", 1e-3)}
-        for par in PRESSURE_DEPENDENT:
-            unit, k = units[par]
-            c = self.surface.coefficients[par]
-            e = self.surface.stderr[par]
-            row = {
-                "parameter": par,
-                "unit": unit,
-                "intercept": c["intercept"] * k,
-                "intercept_stderr": e["intercept"] * k,
-            }
-            if "slope" in c:
-                row.update(slope_per_bar=c["slope"] * k * 1e5, slope_stderr=e["slope"] * k * 1e5)
-            rows.append(row)
+        for p in self.model.parameters.values():
+            value, stderr, unit = p.engineering()
+            rows.append(
+                {
+                    "parameter": p.name,
+                    "value": value,
+                    "stderr": stderr,
+                    "unit": unit,
+                    "vary": p.vary,
+                }
+            )
         return pd.DataFrame(rows)
+
+
+_TABLE_UNITS = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
 
 
 def _per_pressure(points, levels, fixed):
@@ -159,15 +181,14 @@ def _per_pressure(points, levels, fixed):
             continue
         fit = fit_stribeck(sel["velocity [m/s]"], sel["friction [N]"], fixed=fixed)
         fits.append(fit)
-        units = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
         row = {"pressure [Pa]": float(sel["pressure [Pa]"].mean())}
         for p in PARAMETERS:
-            row[f"{p} [{units[p]}]"] = fit.params[p]
+            row[f"{p} [{_TABLE_UNITS[p]}]"] = fit.params[p]
         row["stribeck_velocity [m/s]"] = fit.stribeck_velocity
         row["rmse [N]"] = fit.rmse
         row["n_points [-]"] = fit.n_points
         for p in PARAMETERS:
-            row[f"{p}_stderr [{units[p]}]"] = fit.stderr[p]
+            row[f"{p}_stderr [{_TABLE_UNITS[p]}]"] = fit.stderr[p]
         rows.append(row)
     return pd.DataFrame(rows), fits
 
@@ -199,14 +220,13 @@ def _check_per_pressure(per_pressure, fits):
             )
 
 
-def _core(points, *, law, fixed, notes):
-    labels, levels = pressure_levels(points["pressure [Pa]"])
-    points = points.assign(level=labels)
+def _core(points, levels, *, pressure_law, fixed, notes, validity):
     per_pressure, fits = _per_pressure(points, levels, fixed)
     _check_per_pressure(per_pressure, fits)
     regressions = {}
     if len(per_pressure) >= 2:
-        for par, unit in (("F_c", "N"), ("F_s", "N"), ("sigma_2", "N*s/m")):
+        for par in PRESSURE_DEPENDENT:
+            unit = _TABLE_UNITS[par]
             regressions[par] = regress_parameters(
                 per_pressure["pressure [Pa]"],
                 per_pressure[f"{par} [{unit}]"],
@@ -220,44 +240,53 @@ def _core(points, *, law, fixed, notes):
             "dependence rests on the surface fit alone"
         )
     surface_fixed = {k: v for k, v in fixed.items() if k in ("v_r", "alpha")}
-    surfaces = {}
+    fits_by_law = {}
     for name in LAWS_COMPARED:
-        n_levels = len(levels)
-        if len(LAW_COEFFICIENTS[name]) > n_levels:
+        if len(PRESSURE_LAW_COEFFICIENTS[name]) > len(levels):
             continue
+        linear = fits_by_law.get("linear")  # LAWS_COMPARED starts with linear
         try:
-            surfaces[name] = fit_surface(
+            fits_by_law[name] = fit_surface(
                 points["velocity [m/s]"],
                 points["pressure [Pa]"],
                 points["friction [N]"],
-                law=name,
+                pressure_law=name,
                 fixed=surface_fixed,
-                start=surfaces.get("linear"),  # LAWS_COMPARED starts with linear
+                start=None if linear is None else linear.model,
             )
         except (ValueError, np.linalg.LinAlgError) as exc:
-            notes.append(f"surface fit with the {name} law failed: {exc}")
-    if law not in surfaces:
+            notes.append(f"surface fit with the {name} pressure law failed: {exc}")
+    if pressure_law not in fits_by_law:
         raise ValueError(
-            f"the {law} pressure law cannot be fitted to {len(levels)} pressure "
-            "level(s); use --law linear or measure more pressures"
+            f"the {pressure_law} pressure law cannot be fitted to {len(levels)} pressure "
+            "level(s); use --pressure-law linear or measure more pressures"
         )
+    models = {n: f.model.replace(validity=validity) for n, f in fits_by_law.items()}
     comparison = pd.DataFrame(
         [
             {
                 "law": n,
-                "coefficients [-]": 3 * len(LAW_COEFFICIENTS[n]) + 2 - len(surface_fixed),
-                "rmse [N]": s.rmse,
-                "aic": s.aic,
-                "bic": s.bic,
+                "coefficients [-]": m.statistics["n_variables"],
+                "rmse [N]": m.statistics["rmse"],
+                "aic": m.statistics["aic"],
+                "bic": m.statistics["bic"],
             }
-            for n, s in surfaces.items()
+            for n, m in models.items()
         ]
     )
-    return points, per_pressure, fits, regressions, surfaces, comparison
+    for name, f in fits_by_law.items():
+        if not f.success:
+            notes.append(f"surface fit with the {name} pressure law: {f.message}")
+    return per_pressure, fits, regressions, models, fits_by_law, comparison
 
 
 def identify(
-    points: pd.DataFrame, *, fixed=None, law="linear", per_direction=False, sensitivity=True
+    points: pd.DataFrame,
+    *,
+    fixed=None,
+    pressure_law="linear",
+    per_direction=False,
+    sensitivity=True,
 ) -> Identification:
     """Identify the pressure-dependent friction model from a points table.
 
@@ -269,7 +298,7 @@ def identify(
     fixed : dict, optional
         Parameters held fixed in every fit (SI), e.g. ``{"alpha": 1, "v_r": 0.010}`` as the
         thesis chose.
-    law : {"linear", "quadratic", "exponential"}
+    pressure_law : {"linear", "quadratic", "exponential"}
         Pressure law of the datasheet model; all three are fitted and compared.
     per_direction : bool
         Also identify extension and retraction separately.
@@ -289,8 +318,8 @@ def identify(
     unknown = set(fixed) - set(PARAMETERS)
     if unknown:
         raise ValueError(f"unknown fixed parameters {sorted(unknown)}; valid: {list(PARAMETERS)}")
-    if law not in LAW_COEFFICIENTS:
-        raise ValueError(f"unknown pressure law {law!r}; valid: {sorted(LAW_COEFFICIENTS)}")
+    if pressure_law not in LAWS_COMPARED:
+        raise ValueError(f"unknown pressure law {pressure_law!r}; valid: {list(LAWS_COMPARED)}")
     needed = {"velocity [m/s]", "pressure [Pa]", "friction [N]"}
     missing = needed - set(points.columns)
     if missing:
@@ -306,66 +335,85 @@ def identify(
         )
     notes = []
     labels, levels = pressure_levels(used["pressure [Pa]"])
+    used = used.assign(level=labels)
+    validity = validity_of(used)
     speeds_per_level = [
         _distinct_speeds(used["velocity [m/s]"].to_numpy()[labels == k]) for k in range(len(levels))
     ]
     if max(speeds_per_level) < 4:
+        if pressure_law != "linear":
+            raise ValueError(
+                f"at most {max(speeds_per_level)} distinct speed(s) per pressure: only the "
+                "friction level against pressure can be identified, and cylfric fits it with "
+                f"the linear law; the {pressure_law} pressure law is not available for it"
+            )
         message = (
             f"at most {max(speeds_per_level)} distinct speed(s) per pressure: the "
             "Stribeck shape (F_s, v_r, alpha, sigma_2) cannot be identified; the datasheet "
-            "gives the friction level versus pressure (F_c(p), with F_s = F_c, sigma_2 = 0)"
+            "gives the Coulomb friction level against pressure, F_c(p), and marks the rest "
+            "not identified"
         )
         warnings.warn(message, IdentificationWarning, stacklevel=2)
-        return _level_only(used, labels, levels, law, fixed, notes + [message])
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        core = _core(used, law=law, fixed=fixed, notes=notes)
-    notes += [str(w.message) for w in caught]
-    for w in caught:  # recorded for the report, and still shown to the caller
-        warnings.warn(w.message, w.category, stacklevel=2)
-    pts, per_pressure, fits, regressions, surfaces, comparison = core
-    surface = surfaces[law]
-    for par in PRESSURE_DEPENDENT:
-        slope = surface.coefficients[par].get("slope")
-        if slope is not None and slope < 0:
-            notes.append(
-                f"{par} falls with pressure (slope {slope * 1e5:.3g} per bar): check "
-                "the pressure column and the force-balance signs"
+        result = _level_only(used, levels, fixed, notes + [message], validity)
+    else:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            core = _core(
+                used,
+                levels,
+                pressure_law=pressure_law,
+                fixed=fixed,
+                notes=notes,
+                validity=validity,
             )
-    result = Identification(
-        per_pressure,
-        fits,
-        regressions,
-        surface,
-        surfaces,
-        comparison,
-        sensitivity=None,  # filled by add_sensitivity
-        grid=None,
-        recommended={},
-        law=law,
-        fixed=fixed,
-        points=pts,
-        stribeck_identifiable=True,
-        directions={},
-        notes=notes,
-    )
-    if sensitivity:
-        result = add_sensitivity(result)
+        notes += [str(w.message) for w in caught]
+        for w in caught:  # recorded for the report, and still shown to the caller
+            warnings.warn(w.message, w.category, stacklevel=2)
+        per_pressure, fits, regressions, models, fits_by_law, comparison = core
+        model = models[pressure_law]
+        for par in PRESSURE_DEPENDENT:
+            slope = model.coefficients()[par].get("slope")
+            if slope is not None and slope < 0:
+                notes.append(
+                    f"{par} falls with pressure (slope {slope * 1e5:.3g} per bar): check "
+                    "the pressure column and the force-balance signs"
+                )
+        result = Identification(
+            model=model,
+            models=models,
+            residuals=fits_by_law[pressure_law].residuals,
+            points=used,
+            levels=levels,
+            per_pressure=per_pressure,
+            per_pressure_fits=fits,
+            regressions=regressions,
+            comparison=comparison,
+            pressure_law=pressure_law,
+            fixed=fixed,
+            stribeck_identifiable=True,
+            notes=notes,
+        )
+        if sensitivity:
+            result = add_sensitivity(result)
     if per_direction and "direction [-]" in used:
         for name, sign in (("extension", 1), ("retraction", -1)):
-            subset = used[used["direction [-]"] == sign]
+            subset = used[used["direction [-]"] == sign].drop(columns="level")
             if len(subset) >= MIN_POINTS:
-                result.directions[name] = identify(subset, fixed=fixed, law=law, sensitivity=False)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", IdentificationWarning)
+                    result.directions[name] = identify(
+                        subset, fixed=fixed, pressure_law=pressure_law, sensitivity=False
+                    )
     return result
 
 
 def add_sensitivity(ident: Identification) -> Identification:
     """A copy of ``ident`` with the alpha / v_r sensitivity study (thesis 4.1.1-4.1.2).
 
-    Fills ``sensitivity`` (Tables 4.2-4.4), ``grid`` and ``recommended``; warnings raised on
-    the way are added to ``notes``. :func:`identify` calls it unless ``sensitivity=False``;
-    calling it separately lets a caller use the model (e.g. start drawing figures) while the
-    study runs. An identification without a Stribeck shape is returned unchanged.
+    Fills ``sensitivity`` (Tables 4.2-4.4), ``grid``, ``recommended`` and
+    ``sensitivity_refits`` (the refits of Figs. 4.4-4.12); warnings raised on the way are
+    added to ``notes``. :func:`identify` calls it unless ``sensitivity=False``. An
+    identification without a Stribeck shape is returned unchanged.
     """
     if not ident.stribeck_identifiable:
         return ident
@@ -375,6 +423,7 @@ def add_sensitivity(ident: Identification) -> Identification:
         warnings.simplefilter("always")
         table = thesis_tables(*args)
         grid, recommended = sensitivity_grid(*args)
+        refits = sensitivity_refits(*args, reference=ident.model.reference)
     for w in caught:
         warnings.warn(w.message, w.category, stacklevel=2)
     return replace(
@@ -382,91 +431,94 @@ def add_sensitivity(ident: Identification) -> Identification:
         sensitivity=table,
         grid=grid,
         recommended=recommended,
+        sensitivity_refits=refits,
+        directions=dict(ident.directions),
         notes=ident.notes + [str(w.message) for w in caught],
     )
 
 
-def _level_only(points, labels, levels, law, fixed, notes):
-    """Friction level versus pressure when the Stribeck shape is not identifiable."""
+def _level_only(points, levels, fixed, notes, validity):
+    """Coulomb friction level against pressure when the Stribeck shape is not identifiable."""
+    labels = points["level"].to_numpy()
     level_rows = []
     for k in range(len(levels)):
         sel = points[labels == k]
         f = sel["friction [N]"].to_numpy()
-        level_rows.append(
-            {
-                "pressure [Pa]": float(sel["pressure [Pa]"].mean()),
-                "F_c [N]": float(f.mean()),
-                "F_s [N]": float(f.mean()),
-                "sigma_2 [N*s/m]": 0.0,
-                "v_r [m/s]": math.nan,
-                "alpha [-]": math.nan,
-                "stribeck_velocity [m/s]": math.nan,
-                "rmse [N]": float(f.std()),
-                "n_points [-]": int(f.size),
-                "F_c_stderr [N]": float(f.std(ddof=1) / math.sqrt(f.size))
-                if f.size > 1
-                else math.nan,
-            }
-        )
+        row = {
+            "pressure [Pa]": float(sel["pressure [Pa]"].mean()),
+            **{f"{p} [{_TABLE_UNITS[p]}]": math.nan for p in PARAMETERS},
+            "stribeck_velocity [m/s]": math.nan,
+            "rmse [N]": float(f.std()),
+            "n_points [-]": int(f.size),
+            **{f"{p}_stderr [{_TABLE_UNITS[p]}]": math.nan for p in PARAMETERS},
+        }
+        row["F_c [N]"] = float(f.mean())
+        if f.size > 1:
+            row["F_c_stderr [N]"] = float(f.std(ddof=1) / math.sqrt(f.size))
+        level_rows.append(row)
     per_pressure = pd.DataFrame(level_rows)
     p = points["pressure [Pa]"].to_numpy()
     f = points["friction [N]"].to_numpy()
     if len(levels) >= 2:
         design = np.column_stack([np.ones_like(p), p])
-        coef, *_ = np.linalg.lstsq(design, f, rcond=None)
-        res = f - design @ coef
-        cov = np.linalg.pinv(design.T @ design) * float(res @ res) / max(f.size - 2, 1)
-        se = np.sqrt(np.diag(cov))
+        names = ["F_c.intercept", "F_c.slope"]
     else:
-        coef, se, res = np.array([f.mean(), 0.0]), np.array([f.std(), 0.0]), f - f.mean()
-    v_r = float(fixed.get("v_r", 0.010))
-    alpha = float(fixed.get("alpha", 1.0))
-    line = {"intercept": float(coef[0]), "slope": float(coef[1])}
-    line_se = {"intercept": float(se[0]), "slope": float(se[1])}
-    coefficients = {
-        "F_c": line,
-        "F_s": dict(line),
-        "sigma_2": {"intercept": 0.0, "slope": 0.0},
-        "v_r": v_r,
-        "alpha": alpha,
-    }
-    stderr = {
-        "F_c": line_se,
-        "F_s": dict(line_se),
-        "sigma_2": {"intercept": 0.0, "slope": 0.0},
-        "v_r": 0.0,
-        "alpha": 0.0,
-    }
-    aic, bic = information_criteria(float(res @ res), f.size, 2)
-    surface = SurfaceFit(
-        "linear",
-        coefficients,
-        stderr,
-        float(np.sqrt(np.mean(res**2))),
-        aic,
-        bic,
-        int(f.size),
-        res,
-        True,
-        "friction level versus pressure only",
+        design = np.ones((p.size, 1))
+        names = ["F_c"]
+    coef, *_ = np.linalg.lstsq(design, f, rcond=None)
+    res = f - design @ coef
+    dof = max(f.size - len(coef), 1)
+    cov = np.linalg.pinv(design.T @ design) * float(res @ res) / dof
+    se = np.sqrt(np.diag(cov))
+    if len(coef) == 2:
+        F_c = {"intercept": float(coef[0]), "slope": float(coef[1])}
+        F_c_se = {"intercept": float(se[0]), "slope": float(se[1])}
+    else:
+        F_c = {"law": "constant", "intercept": float(coef[0])}
+        F_c_se = {"intercept": float(se[0])}
+    aic, bic = information_criteria(float(res @ res), f.size, len(coef))
+    reason = "one speed per direction: the Stribeck shape cannot be identified"
+    model = FrictionModel(
+        {"F_c": F_c, "F_s": None, "sigma_2": None, "v_r": None, "alpha": None},
+        friction_law="coulomb",
+        stderr={"F_c": F_c_se},
+        covariance=(names, cov),
+        statistics={
+            "n_points": int(f.size),
+            "n_variables": len(coef),
+            "rmse": float(np.sqrt(np.mean(res**2))),
+            "residual_std": float(np.sqrt(float(res @ res) / dof)),
+            "dof": int(dof),
+            "aic": aic,
+            "bic": bic,
+        },
+        validity=validity,
+        provenance={"method": "friction level versus pressure (Stribeck shape not identifiable)"},
+        not_identified={n: reason for n in ("F_s", "sigma_2", "v_r", "alpha")},
     )
     comparison = pd.DataFrame(
-        [{"law": "linear", "coefficients [-]": 2, "rmse [N]": surface.rmse, "aic": aic, "bic": bic}]
+        [
+            {
+                "law": "linear" if len(coef) == 2 else "constant",
+                "coefficients [-]": len(coef),
+                "rmse [N]": model.statistics["rmse"],
+                "aic": aic,
+                "bic": bic,
+            }
+        ]
     )
     return Identification(
-        per_pressure,
-        [],
-        {},
-        surface,
-        {"linear": surface},
-        comparison,
-        None,
-        None,
-        {},
-        "linear",
-        fixed,
-        points.assign(level=labels),
-        False,
-        {},
-        notes,
+        model=model,
+        models={"linear": model},
+        residuals=res,
+        points=points,
+        levels=levels,
+        per_pressure=per_pressure,
+        per_pressure_fits=[],
+        regressions={},
+        comparison=comparison,
+        pressure_law="linear",
+        fixed=fixed,
+        stribeck_identifiable=False,
+        notes=notes,
     )

@@ -5,8 +5,10 @@
 (b) :func:`fit_surface`: one fit of the whole surface F(v, p) with the pressure laws built in
     (F_c, F_s, sigma_2 pressure dependent; v_r and alpha shared). The starting point comes
     from a grid over (v_r, alpha) where the rest of the model is linear (variable projection).
+    It returns a :class:`~cylfric.model.FrictionModel` with the covariance of its coefficients.
 
-Both report AIC and BIC so linear, quadratic and exponential laws can be compared.
+Both report AIC and BIC so linear, quadratic and exponential laws can be compared. Every
+model evaluation goes through :mod:`cylfric.friction` (eq. 2.7 and the pressure laws).
 """
 
 from __future__ import annotations
@@ -17,8 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import curve_fit
 
-from ..friction import params_at_pressure, stribeck
-from ..friction.pressure import PRESSURE_LAWS
+from ..friction import stribeck_unchecked
+from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS, PRESSURE_LAWS, exponential_by_slope
+from ..model import PARAMETER_BOUNDS, FrictionModel
 from .stribeck_fit import design_columns, robust_least_squares, solve_linear
 
 __all__ = [
@@ -28,18 +31,14 @@ __all__ = [
     "fit_surface",
     "information_criteria",
     "PRESSURE_DEPENDENT",
-    "LAW_COEFFICIENTS",
+    "FITTED_LAWS",
 ]
 
 PRESSURE_DEPENDENT = ("F_c", "F_s", "sigma_2")
 """Parameters that carry a pressure law; v_r and alpha are shared."""
 
-LAW_COEFFICIENTS = {
-    "linear": ("intercept", "slope"),
-    "quadratic": ("intercept", "slope", "curvature"),
-    "exponential": ("intercept", "amplitude", "rate"),
-}
-"""Coefficient names of each scalar pressure law (SI: unit, unit/Pa, unit/Pa^2, 1/Pa)."""
+FITTED_LAWS = ("linear", "quadratic", "exponential")
+"""Pressure laws the identification fits and compares."""
 
 _BAR = 1e5
 _TO_SI = {
@@ -49,20 +48,15 @@ _TO_SI = {
     "amplitude": 1.0,
     "rate": 1 / _BAR,
 }
-"""Factor from the fitted coefficient (pressure in bar) to SI (pressure in Pa)."""
+"""Factor from a coefficient fitted with the pressure in bar to SI (pressure in Pa)."""
+
+
 _MIN_RATE = 1e-9  # [1/bar]: below it the exponential law is the linear law
 
 
-def _exp_slope_form(p_bar, a, s, c):
-    """a + s (exp(c p) - 1) / c: the exponential law by its initial slope s (well posed at c=0)."""
-    c = np.where(np.abs(c) < _MIN_RATE, _MIN_RATE, c)
-    return a + s * np.expm1(c * p_bar) / c
-
-
-def _exp_to_law(a, s, c):
-    """(intercept, amplitude, rate) of the exponential law, pressure in bar."""
-    c = c if abs(c) >= _MIN_RATE else _MIN_RATE
-    return a, s / c, c
+def _rate(c):
+    """The exponential rate [1/bar] kept away from 0 (where amplitude = slope / rate)."""
+    return c if abs(c) >= _MIN_RATE else math.copysign(_MIN_RATE, c)
 
 
 def information_criteria(rss, n, k):
@@ -72,12 +66,33 @@ def information_criteria(rss, n, k):
     return n * math.log(rss / n) + 2 * k, n * math.log(rss / n) + k * math.log(n)
 
 
+def _law_in_bar(law):
+    """The pressure law as fitted (pressure in bar; exponential by its initial slope)."""
+    return exponential_by_slope if law == "exponential" else PRESSURE_LAWS[law]
+
+
+def _to_si(law, coef, cov):
+    """Coefficients and covariance fitted in bar (exponential: slope form) -> the law in SI.
+
+    Returns ({name: value [SI]}, covariance [SI]) by the first-order delta rule.
+    """
+    coef = np.asarray(coef, dtype=float)
+    jac = _block_jacobian(law, coef)
+    if law == "exponential":  # (a, s, c) -> (a, s / c, c)
+        a, s, c = coef
+        c = _rate(c)
+        coef = np.array([a, s / c, c])
+    names = PRESSURE_LAW_COEFFICIENTS[law]
+    values = {n: float(v * _TO_SI[n]) for n, v in zip(names, coef, strict=True)}
+    return values, jac @ cov @ jac.T if cov is not None else None
+
+
 @dataclass(frozen=True)
 class LawFit:
-    """One parameter regressed on pressure with one law.
+    """One parameter regressed on pressure with one law (route a).
 
     ``coefficients`` and ``stderr`` in SI (e.g. N and N/Pa), ``aic``/``bic`` from the
-    weighted residuals, ``n`` levels.
+    weighted residuals, ``n`` levels. ``spec`` is the entry for a coefficient set.
     """
 
     parameter: str
@@ -88,9 +103,10 @@ class LawFit:
     bic: float
     n: int
 
-    def __call__(self, pressure):
-        """Evaluate the law at ``pressure`` [Pa]."""
-        return PRESSURE_LAWS[self.law](pressure, **self.coefficients)
+    @property
+    def spec(self) -> dict:
+        """``{"law": ..., coefficients}`` for :func:`cylfric.friction.params_at_pressure`."""
+        return {"law": self.law, **self.coefficients}
 
 
 def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("linear",)):
@@ -104,7 +120,7 @@ def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("li
         Parameter values and their standard errors (weights 1/stderr^2; equal weights when
         absent or zero).
     laws : iterable of str
-        Pressure laws to try; laws with more coefficients than levels are skipped.
+        Pressure laws to try; laws with at least as many coefficients as levels are skipped.
 
     Returns
     -------
@@ -117,42 +133,37 @@ def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("li
         se = None
     out = {}
     for law in laws:
-        names = LAW_COEFFICIENTS[law]
+        names = PRESSURE_LAW_COEFFICIENTS[law]
         if len(p_bar) <= len(names):
             continue
-        if law == "linear":
-
-            def f(p, a, b):
-                return a + b * p
-
-            p0 = np.polyfit(p_bar, y, 1)[::-1]
-        elif law == "quadratic":
-
-            def f(p, a, b, c):
-                return a + b * p + c * p * p
-
-            p0 = np.polyfit(p_bar, y, 2)[::-1]
-        else:
-            f = _exp_slope_form
-            p0 = [*np.polyfit(p_bar, y, 1)[::-1], 1e-4]
+        line = np.polyfit(p_bar, y, 1)[::-1]
+        p0 = {
+            "linear": line,
+            "quadratic": np.polyfit(p_bar, y, 2)[::-1],
+            "exponential": [*line, 1e-4],
+        }[law]
+        function = _law_in_bar(law)
         try:
             coef, cov = curve_fit(
-                f, p_bar, y, p0=p0, sigma=se, absolute_sigma=se is not None, maxfev=20000
+                lambda p, *c, f=function: f(p, *c),
+                p_bar,
+                y,
+                p0=p0,
+                sigma=se,
+                absolute_sigma=se is not None,
+                maxfev=20000,
             )
         except RuntimeError:
             continue
-        resid = (y - f(p_bar, *coef)) / (se if se is not None else 1.0)
+        resid = (y - function(p_bar, *coef)) / (se if se is not None else 1.0)
         aic, bic = information_criteria(float(resid @ resid), len(y), len(names))
-        if law == "exponential":  # back to (intercept, amplitude, rate); errors by the delta rule
-            a, s, c = coef
-            coef = np.array(_exp_to_law(a, s, c))
-            cov = _exp_covariance(cov, s, coef[2])
-        errs = np.sqrt(np.clip(np.diag(cov), 0, None))
+        values_si, cov_si = _to_si(law, coef, cov)
+        errs = np.sqrt(np.clip(np.diag(cov_si), 0, None))
         out[law] = LawFit(
             parameter,
             law,
-            {n: float(c * _TO_SI[n]) for n, c in zip(names, coef, strict=True)},
-            {n: float(e * _TO_SI[n]) for n, e in zip(names, errs, strict=True)},
+            values_si,
+            {n: float(e) for n, e in zip(names, errs, strict=True)},
             aic,
             bic,
             len(y),
@@ -160,34 +171,18 @@ def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("li
     return out
 
 
-def _exp_covariance(cov, s, c):
-    """Covariance of (a, s/c, c) from that of (a, s, c) (first-order delta rule)."""
-    jac = np.array([[1, 0, 0], [0, 1 / c, -s / c**2], [0, 0, 1]])
-    return jac @ cov @ jac.T
-
-
 @dataclass(frozen=True)
 class SurfaceFit:
-    """Global fit of F(v, p) (SI).
+    """Result of :func:`fit_surface`: the model and how the fit went.
 
-    ``coefficients`` is a pressure coefficient set (plugs into
-    :func:`cylfric.friction.params_at_pressure`); ``stderr`` mirrors it.
+    ``model`` is the fitted :class:`~cylfric.model.FrictionModel` (covariance, statistics);
+    ``residuals`` are data minus model [N], in the order of the points.
     """
 
-    law: str
-    coefficients: dict
-    stderr: dict
-    rmse: float
-    aic: float
-    bic: float
-    n_points: int
+    model: FrictionModel
     residuals: np.ndarray
     success: bool
     message: str
-
-    def friction(self, velocity, pressure):
-        """Model friction [N] at ``velocity`` [m/s] and ``pressure`` [Pa]."""
-        return stribeck(velocity, **params_at_pressure(pressure, self.coefficients, law=self.law))
 
 
 def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
@@ -203,23 +198,33 @@ def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
 
 
 def fit_surface(
-    velocity, pressure, friction, *, law="linear", fixed=None, loss="soft_l1", start=None
+    velocity,
+    pressure,
+    friction,
+    *,
+    pressure_law="linear",
+    fixed=None,
+    loss="soft_l1",
+    start=None,
+    reference="mean",
 ):
     """One fit of the whole surface F(v, p) with pressure laws for F_c, F_s and sigma_2.
 
     Parameters
     ----------
     velocity, pressure, friction : array_like
-        Points: [m/s], [Pa], [N] (friction magnitude).
-    law : {"linear", "quadratic", "exponential"}
+        Points: [m/s], [Pa] (operating pressure), [N] (friction magnitude).
+    pressure_law : {"linear", "quadratic", "exponential"}
         Pressure law of F_c, F_s and sigma_2.
     fixed : dict, optional
         ``v_r`` [m/s] and/or ``alpha`` [-] held fixed.
     loss : str
         Loss of :func:`scipy.optimize.least_squares` (robust by default).
-    start : SurfaceFit, optional
-        A fit of the same points whose linear coefficients, v_r and alpha start this one
-        (skips the grid search; used to compare laws).
+    start : FrictionModel, optional
+        A linear-law model of the same points whose coefficients, v_r and alpha start this
+        fit (skips the grid search; used to compare laws).
+    reference : str
+        Operating-pressure rule recorded in the model.
 
     Returns
     -------
@@ -234,81 +239,111 @@ def fit_surface(
         raise ValueError(
             f"only v_r and alpha can be fixed in the surface fit; got {sorted(unknown)}"
         )
+    if pressure_law not in FITTED_LAWS:
+        raise ValueError(f"unknown pressure law {pressure_law!r}; valid: {list(FITTED_LAWS)}")
     v_r_grid = (
         [fixed["v_r"]]
         if "v_r" in fixed
         else np.geomspace(max(speed.min(), 1e-4) * 0.5, max(speed.max(), 1e-3), 25)
     )
     alpha_grid = [fixed["alpha"]] if "alpha" in fixed else np.linspace(0.4, 3.0, 14)
-    if start is not None and start.law == "linear":
-        c = start.coefficients
+    if start is not None and start.laws["F_c"] == "linear":
         coef = [
-            c[par][key] * (_BAR if key == "slope" else 1.0)
+            start.parameters[f"{par}.{key}"].value * (_BAR if key == "slope" else 1.0)
             for par in PRESSURE_DEPENDENT
             for key in ("intercept", "slope")
         ]
-        v_r0, alpha0 = c["v_r"], c["alpha"]
+        v_r0, alpha0 = start.parameters["v_r"].value, start.parameters["alpha"].value
     else:
         coef, v_r0, alpha0 = _grid_start(speed, p_bar, force, v_r_grid, alpha_grid)
-    names = LAW_COEFFICIENTS[law]
+    names = PRESSURE_LAW_COEFFICIENTS[pressure_law]
     k = len(names)
-    # start: linear coefficients (pressure in bar) then zeros for higher-order terms
-    start = []
-    for j in range(3):
+    x0 = []
+    for j in range(3):  # the linear coefficients (pressure in bar), then higher-order terms
         a, b = coef[2 * j], coef[2 * j + 1]
-        start += [a, b] if law == "linear" else [a, b, 0.0 if law == "quadratic" else 1e-4]
+        extra = {"linear": [], "quadratic": [0.0], "exponential": [1e-4]}[pressure_law]
+        x0 += [a, b, *extra]
     shared = [n for n in ("v_r", "alpha") if n not in fixed]
-    start += [v_r0 if n == "v_r" else alpha0 for n in shared]
-    lower = [-np.inf] * (3 * k) + [1e-5 if n == "v_r" else 0.2 for n in shared]
-    upper = [np.inf] * (3 * k) + [10.0 if n == "v_r" else 5.0 for n in shared]
-    fn = _exp_slope_form if law == "exponential" else PRESSURE_LAWS[law]
-
-    def model(x):
-        vals = [fn(p_bar, *x[j * k : (j + 1) * k]) for j in range(3)]
-        sh = dict(zip(shared, x[3 * k :], strict=True))
-        v_r = sh.get("v_r", fixed.get("v_r"))
-        alpha = sh.get("alpha", fixed.get("alpha"))
-        e = np.exp(-((speed / v_r) ** alpha))
-        return vals[0] + (vals[1] - vals[0]) * e + vals[2] * speed
+    x0 += [v_r0 if n == "v_r" else alpha0 for n in shared]
+    lower = [-np.inf] * (3 * k) + [PARAMETER_BOUNDS[n][0] for n in shared]
+    upper = [np.inf] * (3 * k) + [PARAMETER_BOUNDS[n][1] for n in shared]
+    function = _law_in_bar(pressure_law)
 
     def residuals(x):
-        return model(x) - force
+        values = [function(p_bar, *x[j * k : (j + 1) * k]) for j in range(3)]
+        sh = {**fixed, **dict(zip(shared, x[3 * k :], strict=True))}
+        model = stribeck_unchecked(speed, *values[:2], sh["v_r"], values[2], alpha=sh["alpha"])
+        return model - force
 
-    x0 = np.clip(start, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
+    x0 = np.clip(x0, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
     result = robust_least_squares(residuals, x0, (lower, upper), loss)
     res = -result.fun
     n_free = len(result.x)
     dof = max(force.size - n_free, 1)
-    cov = np.linalg.pinv(result.jac.T @ result.jac) * float(res @ res) / dof
-    se = np.sqrt(np.clip(np.diag(cov), 0, None))
-    coefficients, stderr = {}, {}
+    rss = float(res @ res)
+    cov_x = np.linalg.pinv(result.jac.T @ result.jac) * rss / dof
+    # to SI and the model's coefficient names, block by block (delta rule)
+    transform = np.eye(n_free)
+    coefficients, cov_names = {}, []
     for j, par in enumerate(PRESSURE_DEPENDENT):
-        block = result.x[j * k : (j + 1) * k]
-        eblock = se[j * k : (j + 1) * k]
-        if law == "exponential":
-            sub = cov[j * k : (j + 1) * k, j * k : (j + 1) * k]
-            block = np.array(_exp_to_law(*block))
-            eblock = np.sqrt(
-                np.clip(np.diag(_exp_covariance(sub, result.x[j * k + 1], block[2])), 0, None)
-            )
-        coefficients[par] = {n: float(c * _TO_SI[n]) for n, c in zip(names, block, strict=True)}
-        stderr[par] = {n: float(e * _TO_SI[n]) for n, e in zip(names, eblock, strict=True)}
+        block = slice(j * k, (j + 1) * k)
+        coefficients[par], _ = _to_si(pressure_law, result.x[block], None)
+        transform[block, block] = _block_jacobian(pressure_law, result.x[block])
+        cov_names += [f"{par}.{n}" for n in names]
     for i, n in enumerate(shared):
         coefficients[n] = float(result.x[3 * k + i])
-        stderr[n] = float(se[3 * k + i])
+        cov_names.append(n)
     for n, value in fixed.items():
         coefficients[n] = float(value)
-        stderr[n] = 0.0
-    aic, bic = information_criteria(float(res @ res), force.size, n_free)
-    return SurfaceFit(
-        law,
+    covariance = transform @ cov_x @ transform.T
+    aic, bic = information_criteria(rss, force.size, n_free)
+    stderr = _stderr_of(coefficients, cov_names, covariance, fixed)
+    model = FrictionModel(
         coefficients,
-        stderr,
-        float(math.sqrt(np.mean(res**2))),
-        aic,
-        bic,
-        int(force.size),
-        res,
-        bool(result.success),
-        str(result.message),
+        pressure_law=pressure_law,
+        reference=reference,
+        stderr=stderr,
+        held=tuple(fixed),
+        covariance=(cov_names, covariance),
+        statistics={
+            "n_points": int(force.size),
+            "n_variables": int(n_free),
+            "rmse": float(math.sqrt(rss / force.size)),
+            "residual_std": float(math.sqrt(rss / dof)),
+            "dof": int(dof),
+            "aic": aic,
+            "bic": bic,
+        },
+        provenance={
+            "method": "global surface fit, bounded soft-L1 least squares "
+            f"({pressure_law} pressure laws)"
+        },
     )
+    return SurfaceFit(model, res, bool(result.success), str(result.message))
+
+
+def _block_jacobian(law, coef):
+    """d(SI coefficients)/d(fitted coefficients) of one parameter's pressure law.
+
+    Fitted: pressure in bar, the exponential law by its initial slope (a, s, c); SI: the
+    law's own coefficients with the pressure in Pa.
+    """
+    jac = np.eye(len(coef))
+    if law == "exponential":
+        _, s, c = coef
+        c = _rate(c)
+        jac = np.array([[1, 0, 0], [0, 1 / c, -s / c**2], [0, 0, 1]])
+    scale = np.diag([_TO_SI[n] for n in PRESSURE_LAW_COEFFICIENTS[law]])
+    return scale @ jac
+
+
+def _stderr_of(coefficients, names, covariance, fixed):
+    """Standard errors mirroring ``coefficients`` from the covariance (0 for held values)."""
+    se = dict(zip(names, np.sqrt(np.clip(np.diag(covariance), 0, None)), strict=True))
+    out = {}
+    for par, spec in coefficients.items():
+        if isinstance(spec, dict):
+            out[par] = {c: float(se[f"{par}.{c}"]) for c in spec}
+        else:
+            out[par] = 0.0 if par in fixed else float(se[par])
+    return out

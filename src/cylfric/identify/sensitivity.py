@@ -11,9 +11,18 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import minimize
 
+from ..model import FrictionModel
 from .stribeck_fit import design_columns, solve_linear
 
-__all__ = ["rmse_at", "sensitivity_grid", "thesis_tables", "THESIS_ALPHAS", "THESIS_V_R"]
+__all__ = [
+    "rmse_at",
+    "refit_at",
+    "sensitivity_grid",
+    "sensitivity_refits",
+    "thesis_tables",
+    "THESIS_ALPHAS",
+    "THESIS_V_R",
+]
 
 THESIS_ALPHAS = (0.5, 0.77, 0.8, 1.0, 1.5, 2.0)
 """alpha values of thesis Tables 4.2 and 4.3 [-]."""
@@ -29,6 +38,49 @@ def rmse_at(velocity, pressure, friction, v_r, alpha):
     a = design_columns(speed, p_bar, v_r, alpha)
     coef = solve_linear(a, force)
     return float(np.sqrt(np.mean((a @ coef - force) ** 2)))
+
+
+def refit_at(velocity, pressure, friction, v_r, alpha, *, reference="mean"):
+    """The linear-law model refit with ``v_r`` [m/s] and ``alpha`` [-] held: (model, RMSE [N]).
+
+    The six pressure-law coefficients of F_c, F_s and sigma_2 come from one linear
+    least-squares solve (the model is linear in them at fixed v_r and alpha).
+    """
+    speed = np.abs(np.asarray(velocity, dtype=float))
+    p_bar = np.asarray(pressure, dtype=float) / 1e5
+    force = np.asarray(friction, dtype=float)
+    a = design_columns(speed, p_bar, v_r, alpha)
+    coef = solve_linear(a, force)
+    rmse = float(np.sqrt(np.mean((a @ coef - force) ** 2)))
+    coefficients = {
+        par: {"intercept": float(coef[2 * j]), "slope": float(coef[2 * j + 1]) / 1e5}
+        for j, par in enumerate(("F_c", "F_s", "sigma_2"))
+    }
+    model = FrictionModel(
+        {**coefficients, "v_r": float(v_r), "alpha": float(alpha)},
+        reference=reference,
+        held=("v_r", "alpha"),
+        statistics={"rmse": rmse, "n_points": int(force.size)},
+        provenance={"method": "linear least squares at fixed v_r and alpha (sensitivity)"},
+    )
+    return model, rmse
+
+
+def sensitivity_refits(velocity, pressure, friction, *, reference="mean"):
+    """The refits of thesis Figs. 4.4-4.12: a list of dicts ``panel``, ``alpha [-]``,
+    ``v_r [m/s]``, ``rmse [N]``, ``model`` (:class:`~cylfric.model.FrictionModel`).
+
+    Panel ``"alpha"``: alpha in :data:`THESIS_ALPHAS` at v_r = 10 mm/s (Figs. 4.4-4.9);
+    panel ``"v_r"``: v_r in :data:`THESIS_V_R` at alpha = 1 (Figs. 4.10-4.12 and 4.7).
+    """
+    cases = [("alpha", a, 0.010) for a in THESIS_ALPHAS] + [("v_r", 1.0, v) for v in THESIS_V_R]
+    out = []
+    for panel, alpha, v_r in cases:
+        model, rmse = refit_at(velocity, pressure, friction, v_r, alpha, reference=reference)
+        out.append(
+            {"panel": panel, "alpha [-]": alpha, "v_r [m/s]": v_r, "rmse [N]": rmse, "model": model}
+        )
+    return out
 
 
 def sensitivity_grid(velocity, pressure, friction, *, alphas=None, v_rs=None):

@@ -15,7 +15,8 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import t as student_t
 
-from ..friction import NoStribeckMinimumWarning, stribeck, stribeck_velocity
+from ..friction import NoStribeckMinimumWarning, stribeck, stribeck_shape, stribeck_velocity
+from ..model import PARAMETER_BOUNDS, STEADY_PARAMETERS
 
 __all__ = [
     "StribeckFit",
@@ -26,17 +27,11 @@ __all__ = [
     "design_columns",
 ]
 
-PARAMETERS = ("F_c", "F_s", "sigma_2", "v_r", "alpha")
+PARAMETERS = STEADY_PARAMETERS
 """Order of the Stribeck parameters in vectors and tables."""
 
-BOUNDS = {
-    "F_c": (0.0, np.inf),  # [N]
-    "F_s": (0.0, np.inf),  # [N]
-    "sigma_2": (0.0, np.inf),  # [N*s/m]
-    "v_r": (1e-5, 10.0),  # [m/s]
-    "alpha": (0.2, 5.0),  # [-]
-}
-"""Bounds of the fit (SI)."""
+BOUNDS = {name: PARAMETER_BOUNDS[name] for name in PARAMETERS}
+"""Bounds of the fit (SI), the model's physical bounds."""
 
 MIN_POINTS = 6
 """Fewest points for a Stribeck fit."""
@@ -49,10 +44,12 @@ class IdentificationWarning(UserWarning):
 def design_columns(speed, pressure, v_r, alpha):
     """Columns of the model linear in the other coefficients at fixed ``v_r``, ``alpha``.
 
-    F = a_c (1 - e) + b_c p (1 - e) + a_s e + b_s p e + a_2 v + b_2 p v,
-    e = exp(-(v / v_r)^alpha): returns the (n, 6) matrix for (a_c, b_c, a_s, b_s, a_2, b_2).
+    Eq. 2.7 with linear pressure laws is linear in (a_c, b_c, a_s, b_s, a_2, b_2):
+    F = a_c (1 - e) + b_c p (1 - e) + a_s e + b_s p e + a_2 v + b_2 p v, with
+    e = :func:`~cylfric.friction.stribeck_shape`; returns the (n, 6) matrix. ``speed`` [m/s],
+    ``pressure`` in any unit (the b coefficients come out per that unit).
     """
-    e = np.exp(-((speed / v_r) ** alpha))
+    e = stribeck_shape(speed, v_r, alpha)
     return np.column_stack([1 - e, pressure * (1 - e), e, pressure * e, speed, pressure * speed])
 
 

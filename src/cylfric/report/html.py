@@ -9,8 +9,9 @@ import math
 import pandas as pd
 
 from ..io.writers import atomic_write_text
+from .figures import render_all, save_rendered
 
-__all__ = ["render_report", "write_report"]
+__all__ = ["render_report", "write_report", "write_report_folder"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;
@@ -40,24 +41,6 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
     return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
 
 
-def law_lines(sheet: dict) -> list[str]:
-    """The pressure laws in engineering units, e.g. ``F_c(p) = 70.2 N + 0.50 N/bar * p``."""
-    params = sheet["parameters"]
-    out = []
-    for name, unit, k in (("F_c", "N", 1.0), ("F_s", "N", 1.0), ("sigma_2", "N*s/mm", 1e-3)):
-        c = params[name]
-        text = f"{name}(p) = {c['intercept'] * k:.4g} {unit}"
-        if "slope" in c:
-            text += f" + {c['slope'] * k * 1e5:.3g} {unit}/bar * p"
-        if "curvature" in c:
-            text += f" + {c['curvature'] * k * 1e10:.3g} {unit}/bar^2 * p^2"
-        if "amplitude" in c:
-            text += f" + {c['amplitude'] * k:.4g} {unit} * (exp({c['rate'] * 1e5:.3g}/bar * p) - 1)"
-        out.append(text)
-    out.append(f"v_r = {params['v_r'] * 1e3:.4g} mm/s, alpha = {params['alpha']:.4g}")
-    return out
-
-
 def render_report(sheet, ident, extraction, figures, *, title="cylfric friction report") -> str:
     """HTML text of the report: datasheet summary, figures, tables, data quality."""
     parts = [
@@ -71,13 +54,16 @@ def render_report(sheet, ident, extraction, figures, *, title="cylfric friction 
         f"{html.escape(sheet.get('created', ''))}; model: steady-state LuGre/Stribeck "
         "law (thesis eq. 2.7) with pressure laws; units N, bar, mm/s.</p>"
     )
+    model = ident.model
     parts.append("<h2>Datasheet summary</h2>")
-    parts += [f"<div class='law'>{html.escape(line)}</div>" for line in law_lines(sheet)]
+    parts.append("<p class='muted'>Each coefficient ± its standard error.</p>")
+    parts += [f"<div class='law'>{html.escape(line)}</div>" for line in model.law_lines()]
     offset = sheet.get("offset")
     fit = sheet["fit"]
     val = sheet["validity"]
     parts.append(
-        "<p>RMSE of the global fit: <b>{:.3f} N</b> over {} points. Weight offset: {}. "
+        "<p>RMSE of the global fit: <b>{:.3f} N</b> over {} points. Load-cell offset "
+        "(weight, preload or pressure force, whatever the rig has): {}. "
         "Valid for {:.3g}-{:.3g} bar and {:.3g}-{:.3g} mm/s.</p>".format(
             fit["rmse"],
             fit.get("n_points", ""),
@@ -91,11 +77,14 @@ def render_report(sheet, ident, extraction, figures, *, title="cylfric friction 
             val["velocity_max"] * 1e3,
         )
     )
-    if not sheet["model"].get("stribeck_identifiable", True):
+    for name, reason in model.not_identified.items():
         parts.append(
-            "<p class='note'>The data has too few speeds per pressure: only the "
-            "friction level versus pressure is identified.</p>"
+            f"<p class='note'>{html.escape(name)} not identified: {html.escape(reason)}</p>"
         )
+    dyn = ", ".join(
+        f"{name} {status} ({reason})" for name, (status, reason) in model.dynamic_status.items()
+    )
+    parts.append(f"<p class='muted'>Dynamic (LuGre) parameters: {html.escape(dyn)}.</p>")
     for note in sheet.get("notes", []):
         parts.append(f"<p class='note'>{html.escape(note)}</p>")
     parts.append("<h2>Figures</h2>")
@@ -106,6 +95,8 @@ def render_report(sheet, ident, extraction, figures, *, title="cylfric friction 
             f"src='data:image/png;base64,{data}'><figcaption>{html.escape(caption)}"
             "</figcaption></figure>"
         )
+    parts.append("<h2>Fit report</h2>")
+    parts.append(f"<pre>{html.escape(model.fit_report())}</pre>")
     parts.append("<h2>Per-pressure parameters (thesis Table 4.1 layout)</h2>")
     parts.append(_table(_engineering_per_pressure(ident.per_pressure)))
     parts.append("<h2>Pressure laws compared</h2>")
@@ -176,3 +167,23 @@ def _quality(extraction) -> str:
 def write_report(path, text: str):
     """Write the report atomically."""
     return atomic_write_text(path, text)
+
+
+def write_report_folder(out, sheet, ident, extraction, *, workers=2) -> dict:
+    """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
+
+    Returns {output name: path}. ``workers=2`` draws on two cores (see
+    :func:`~cylfric.report.figures.render_all`).
+    """
+    from pathlib import Path
+
+    out = Path(out)
+    offset = None if extraction is None else extraction.offset
+    files, shown = {}, []
+    for stem, caption, png, svg in render_all(ident, offset, workers=workers):
+        files[f"figure_{stem}"] = save_rendered(out / "figures", stem, png, svg)["png"]
+        shown.append((stem, caption, png))
+    files["report"] = write_report(
+        out / "report.html", render_report(sheet, ident, extraction, shown)
+    )
+    return files

@@ -251,7 +251,7 @@ def run_virtual_test(
     length, n = _stroke_plan(s, speed, interval)
     stroke = s.cylinder.stroke
     x_top = stroke / 2 + length / 2
-    params = s.friction.parameters(pressure)
+    params = s.friction.params_at(s.friction.operating_pressure(pressure))
     raw = _bench_kernel(
         h,
         n_sub,
@@ -265,8 +265,8 @@ def run_virtual_test(
         stroke,
         s.cushion_length,
         s.cushion_coefficient,
-        s.friction.sigma_0,
-        s.friction.sigma_1,
+        params["sigma_0"],
+        params["sigma_1"],
         params["F_c"],
         params["F_s"],
         params["sigma_2"],

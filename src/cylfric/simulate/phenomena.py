@@ -74,7 +74,7 @@ def presliding(pressure, *, fraction=0.5, ramp_time=0.5, hold=0.5, sigma_0=1e6):
     the linear-spring estimate.
     """
     model = _model(sigma_0=sigma_0, mass=2.5)
-    peak = fraction * model.parameters(pressure)["F_c"]
+    peak = fraction * model.params_at(pressure)["F_c"]
     total = 2 * ramp_time + hold
 
     def force(t):
@@ -97,7 +97,7 @@ def breakaway_force(pressure, rate, *, sigma_0=1e6):
     it falls as the force rate rises.
     """
     model = _model(sigma_0=sigma_0, mass=2.5)
-    F_s = model.parameters(pressure)["F_s"]
+    F_s = model.params_at(pressure)["F_s"]
     duration = 3.0 * F_s / rate
     dt = min(1e-3, duration / 4000)
     result = simulate(

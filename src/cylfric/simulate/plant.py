@@ -12,14 +12,13 @@ Dormand-Prince 5(4)), ``"scipy"`` (``solve_ivp``, the validation backend, any la
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from types import MappingProxyType
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..friction import get_law, law_params, operating_pressure, params_at_pressure
-from ..friction.literature import THESIS_2016
+from ..friction import get_law, law_params
+from ..model import FrictionModel
 from . import kernels
 from .result import SimulationResult
 
@@ -85,48 +84,9 @@ THESIS_CYLINDER = Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, st
 an assumption."""
 
 
-@dataclass(frozen=True)
-class FrictionModel:
-    """A friction law with pressure laws composed on top.
-
-    Attributes
-    ----------
-    coefficients : mapping
-        Pressure coefficient set for :func:`cylfric.friction.params_at_pressure` (constants or
-        coefficient dicts of ``pressure_law``), with the parameters of ``law``.
-    law : str
-        Registered friction law; the compiled integrators need ``"lugre"``.
-    sigma_0 : float
-        Bristle stiffness [N/m] (LuGre).
-    sigma_1 : float
-        Bristle damping [N*s/m] (LuGre).
-    pressure_law : str
-        Default scalar pressure law of the coefficient set.
-    reference : str
-        Which chamber pressure the law sees (see :func:`cylfric.friction.operating_pressure`).
-    """
-
-    coefficients: Mapping = field(
-        default_factory=lambda: MappingProxyType(THESIS_2016.coefficients)
-    )
-    law: str = "lugre"
-    sigma_0: float = 1e6
-    sigma_1: float = 1.58e3
-    pressure_law: str = "linear"
-    reference: str = "mean"
-
-    def __post_init__(self):
-        get_law(self.law)
-        if self.law == "lugre" and not (self.sigma_0 > 0 and self.sigma_1 >= 0):
-            raise ValueError("LuGre needs sigma_0 > 0 N/m and sigma_1 >= 0 N*s/m")
-
-    def parameters(self, pressure_a, pressure_b=None) -> dict:
-        """Friction parameters (SI) at the given chamber pressures [Pa]."""
-        p = operating_pressure(pressure_a, pressure_b, reference=self.reference)
-        params = params_at_pressure(p, self.coefficients, law=self.pressure_law)
-        if self.law in ("lugre", "lugre_state"):
-            params.update(sigma_0=self.sigma_0, sigma_1=self.sigma_1)
-        return params
+def _friction_params(friction, pressure_a, pressure_b=None) -> dict:
+    """Friction parameters (SI, dynamic ones included) at chamber pressures [Pa]."""
+    return friction.params_at(friction.operating_pressure(pressure_a, pressure_b))
 
 
 Signal = float | np.ndarray | Callable
@@ -289,9 +249,9 @@ def simulate(
         and not callable(pressure_a)
         and not callable(pressure_b)
     ):
-        params = friction.parameters(float(pa[0]), float(pb[0]))  # constant pressures
+        params = _friction_params(friction, float(pa[0]), float(pb[0]))  # constant pressures
     else:
-        params = friction.parameters(pa, pb)
+        params = _friction_params(friction, pa, pb)
     f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
     info = {"method": method, "dt": dt}
 
@@ -300,19 +260,19 @@ def simulate(
         position = drive.position0 + np.concatenate(
             ([0.0], np.cumsum(0.5 * (velocity[1:] + velocity[:-1]) * dt))
         )
-        if friction.law == "lugre" and method == "scipy":
+        if friction.simulation_law == "lugre" and method == "scipy":
             from .reference import solve_prescribed_reference
 
             z, force = solve_prescribed_reference(time, velocity, z0, params, rtol=rtol)
             info["method"] = "scipy Radau prescribed velocity"
-        elif friction.law == "lugre":
+        elif friction.simulation_law == "lugre":
             substeps = max(1, int(math.ceil(dt / step - 1e-9)))
             z, force = kernels.prescribed_velocity(
                 time,
                 velocity,
                 z0,
-                friction.sigma_0,
-                friction.sigma_1,
+                _const(params, "sigma_0"),
+                _const(params, "sigma_1"),
                 _arr(params["F_c"], n),
                 _arr(params["F_s"], n),
                 _arr(params["sigma_2"], n),
@@ -325,7 +285,9 @@ def simulate(
             )
         else:
             z = np.zeros(n)
-            force = get_law(friction.law).function(velocity, **law_params(friction.law, params))
+            force = get_law(friction.simulation_law).function(
+                velocity, **law_params(friction.simulation_law, params)
+            )
         acceleration = np.gradient(velocity, time)
         load = cylinder.mass * acceleration + force - f_pressure
         return SimulationResult(
@@ -337,12 +299,12 @@ def simulate(
 
     x_ref, v_ref, f_ext, k, c, ki = _drive_signals(drive, time, x0)
     f_ext = f_ext + f_pressure
-    if method == "scipy" or friction.law != "lugre":
+    if method == "scipy" or friction.simulation_law != "lugre":
         from .reference import solve_reference
 
         if method != "scipy":
             raise ValueError(
-                f"law {friction.law!r} runs only with method='scipy'; the compiled "
+                f"law {friction.simulation_law!r} runs only with method='scipy'; the compiled "
                 "integrators need 'lugre'"
             )
         states, force, info_extra = solve_reference(
@@ -417,8 +379,8 @@ def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_re
         _arr(params["F_c"], n),
         _arr(params["F_s"], n),
         _arr(params["sigma_2"], n),
-        friction.sigma_0,
-        friction.sigma_1,
+        _const(params, "sigma_0"),
+        _const(params, "sigma_1"),
         _const(params, "v_r"),
         _const(params, "alpha"),
     )
@@ -505,8 +467,8 @@ def simulate_batch(
             f"{len(models)} models for {pressures.size} pressures; expected one "
             "model per pressure (or a single model)"
         )
-    if any(m.law != "lugre" for m in models):
-        raise ValueError("simulate_batch needs LuGre models (law='lugre')")
+    if any(m.simulation_law != "lugre" for m in models):
+        raise ValueError("simulate_batch needs LuGre models (simulation_law='lugre')")
     if isinstance(drive, PrescribedMotion):
         raise ValueError(
             "simulate_batch takes AppliedForce, SpringPull or PositionServo; "
@@ -524,7 +486,7 @@ def simulate_batch(
         for name in ("F_c", "F_s", "sigma_2", "v_r", "alpha", "sigma_0", "sigma_1")
     }
     for i, (model, p) in enumerate(zip(models, pressures, strict=True)):
-        params = model.parameters(p)
+        params = _friction_params(model, p)
         for name in table:
             table[name][i] = float(params[name])
     positions, frictions, reached = kernels.dopri_batch(

@@ -32,7 +32,7 @@ def solve_reference(
     stiction with its Karnopp band) are evaluated at the velocity. Returns (states dict,
     friction force on ``time``, info dict).
     """
-    law = friction.law
+    law = friction.simulation_law
     dt = time[1] - time[0]
 
     def at(signal, t):

@@ -1,0 +1,704 @@
+"""The friction model: one object that identification, datasheet, simulation and report share.
+
+A :class:`FrictionModel` holds the steady-state friction law (thesis eq. 2.7) with a pressure
+law per parameter (eq. 2.10, 4.1-4.3), the LuGre bristle parameters ``sigma_0`` and ``sigma_1``
+with their status, the operating-pressure rule, the validity ranges, the covariance of the
+fitted coefficients and the provenance. It is built on :mod:`cylfric.friction` only: every
+evaluation goes through :func:`~cylfric.friction.stribeck`,
+:func:`~cylfric.friction.lugre_force` and :func:`~cylfric.friction.params_at_pressure`.
+
+Each coefficient is a :class:`Parameter` (value, standard error, unit, bounds, vary),
+named ``"<parameter>.<coefficient>"`` for pressure-dependent parameters (``"F_c.slope"``) and
+``"<parameter>"`` for constants (``"v_r"``). All values are SI: N, Pa, m/s, N*s/m, N/m.
+
+Examples
+--------
+>>> from cylfric.model import FrictionModel
+>>> model = FrictionModel()                      # the thesis law, eq. 4.1-4.3
+>>> round(model.friction(0.025, 55e5), 2)         # [N] at 25 mm/s and 55 bar
+111.26
+>>> model.parameters["F_c.slope"].unit
+'N/Pa'
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from ..friction import get_law, lugre_force, operating_pressure, params_at_pressure, stribeck
+from ..friction._checks import check_parameters
+from ..friction.literature import THESIS_2016
+from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS, PRESSURE_LAWS, PRESSURE_REFERENCES
+
+__all__ = [
+    "FrictionModel",
+    "Parameter",
+    "ValidityWarning",
+    "STEADY_PARAMETERS",
+    "DYNAMIC_PARAMETERS",
+    "PARAMETER_UNITS",
+    "PARAMETER_BOUNDS",
+    "FRICTION_LAWS",
+    "DYNAMIC_STATUS",
+    "engineering_unit",
+]
+
+STEADY_PARAMETERS = ("F_c", "F_s", "sigma_2", "v_r", "alpha")
+"""Parameters of the steady-state law (eq. 2.7), in the order of vectors and tables."""
+DYNAMIC_PARAMETERS = ("sigma_0", "sigma_1")
+"""LuGre bristle stiffness and damping (eq. 2.5); they do not act in steady state."""
+
+PARAMETER_UNITS = {
+    "F_c": "N",
+    "F_s": "N",
+    "sigma_2": "N*s/m",
+    "v_r": "m/s",
+    "alpha": "-",
+    "sigma_0": "N/m",
+    "sigma_1": "N*s/m",
+}
+"""SI unit of each friction parameter."""
+
+PARAMETER_BOUNDS = {
+    "F_c": (0.0, math.inf),
+    "F_s": (0.0, math.inf),
+    "sigma_2": (0.0, math.inf),
+    "v_r": (1e-5, 10.0),
+    "alpha": (0.2, 5.0),
+    "sigma_0": (0.0, math.inf),
+    "sigma_1": (0.0, math.inf),
+}
+"""Physical bounds of each friction parameter (SI); fits use them for the shape parameters
+``v_r`` [m/s] and ``alpha`` [-] and for the parameters of a single-pressure fit."""
+
+FRICTION_LAWS = {
+    "stribeck": (
+        STEADY_PARAMETERS,
+        "F = F_c + (F_s - F_c) exp(-(|v|/v_r)^alpha) + sigma_2 |v| (thesis eq. 2.7), times sign(v)",
+    ),
+    "coulomb_viscous": (
+        ("F_c", "sigma_2"),
+        "F = F_c + sigma_2 |v| (thesis eq. 2.1 + 2.2), times sign(v)",
+    ),
+    "coulomb": (("F_c",), "F = F_c (thesis eq. 2.1), times sign(v)"),
+}
+"""Steady-state laws a model can carry: name -> (identified parameters, equation). The
+reduced laws are eq. 2.7 with ``F_s = F_c`` (no Stribeck term) and, for ``coulomb``,
+``sigma_2 = 0``; the parameters they lack are not identified (null in the datasheet)."""
+
+DYNAMIC_STATUS = ("identified", "assumed")
+"""Status of ``sigma_0`` and ``sigma_1``: identified from data, or assumed (a default)."""
+
+_DEFAULT_DYNAMIC = {
+    "sigma_0": (1e6, "typical of hydraulic seals (presliding F_s/sigma_0 of about 0.1 mm)"),
+    "sigma_1": (
+        1.58e3,
+        "critically damped bristles for a 2.5 kg moving mass, sqrt(sigma_0 m)",
+    ),
+}
+
+_PRESSURE_UNIT = {
+    "intercept": ("", 1.0),
+    "slope": ("/Pa", 1.0),
+    "curvature": ("/Pa^2", 1.0),
+    "amplitude": ("", 1.0),
+    "rate": ("/Pa", 1.0),
+}
+
+_ENGINEERING = {
+    "N": ("N", 1.0),
+    "N*s/m": ("N*s/mm", 1e-3),
+    "m/s": ("mm/s", 1e3),
+    "-": ("-", 1.0),
+    "N/m": ("N/mm", 1e-3),
+}
+
+
+class ValidityWarning(UserWarning):
+    """A model was evaluated outside the range its data cover, or with suspect units."""
+
+
+def engineering_unit(name: str) -> tuple[str, float]:
+    """Engineering unit of a coefficient and the factor from SI: ``("N/bar", 1e5)``.
+
+    ``name`` is a :class:`Parameter` name (``"F_c.slope"``, ``"sigma_2.intercept"``, ``"v_r"``).
+    Forces stay in N, velocities go to mm/s, viscous coefficients to N*s/mm, pressures to bar.
+    """
+    parameter, _, coefficient = name.partition(".")
+    unit, factor = _ENGINEERING[PARAMETER_UNITS[parameter]]
+    if coefficient == "rate":
+        return "1/bar", 1e5
+    power = {"slope": 1, "curvature": 2}.get(coefficient, 0)
+    if power:
+        return f"{unit}/bar" + ("^2" if power == 2 else ""), factor * 1e5**power
+    return unit, factor
+
+
+def _si_unit(parameter: str, coefficient: str | None) -> str:
+    unit = PARAMETER_UNITS[parameter]
+    if coefficient == "rate":
+        return "1/Pa"
+    suffix = _PRESSURE_UNIT[coefficient][0] if coefficient else ""
+    if not suffix:
+        return unit
+    return f"{unit}{suffix}" if unit != "-" else f"1{suffix}"
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One coefficient of a friction model, as lmfit's Parameter: value and all about it.
+
+    Attributes
+    ----------
+    name : str
+        ``"F_c.slope"`` for a pressure-law coefficient, ``"v_r"`` for a constant.
+    value : float or None
+        SI value; None when the parameter was not identified.
+    unit : str
+        SI unit (``"N/Pa"``).
+    stderr : float or None
+        Standard error [unit]; None when unknown, 0 for a parameter held fixed.
+    vary : bool
+        False when the parameter was held fixed (not fitted).
+    bounds : tuple of float
+        (lower, upper) bounds of the fit [unit].
+    """
+
+    name: str
+    value: float | None
+    unit: str
+    stderr: float | None = None
+    vary: bool = True
+    bounds: tuple = (-math.inf, math.inf)
+
+    @property
+    def parameter(self) -> str:
+        """The friction parameter this coefficient belongs to (``"F_c"``)."""
+        return self.name.partition(".")[0]
+
+    @property
+    def coefficient(self) -> str | None:
+        """The pressure-law coefficient (``"slope"``), or None for a constant."""
+        return self.name.partition(".")[2] or None
+
+    def engineering(self) -> tuple[float | None, float | None, str]:
+        """(value, stderr, unit) in engineering units (bar, mm/s, N*s/mm)."""
+        unit, k = engineering_unit(self.name)
+        value = None if self.value is None else self.value * k
+        stderr = None if self.stderr is None else self.stderr * k
+        return value, stderr, unit
+
+
+def _spec_items(spec, default_law):
+    """(law, {coefficient: value}) of one parameter's entry in a coefficient set."""
+    if spec is None:
+        return None, None
+    if isinstance(spec, Mapping):
+        spec = dict(spec)
+        law = spec.pop("law", default_law)
+        if law not in PRESSURE_LAW_COEFFICIENTS:
+            raise ValueError(f"unknown pressure law {law!r}; valid: {sorted(PRESSURE_LAWS)}")
+        names = PRESSURE_LAW_COEFFICIENTS[law]
+        if set(spec) != set(names):
+            raise ValueError(
+                f"coefficients {sorted(spec)} do not fit the {law} pressure law; "
+                f"expected {list(names)}"
+            )
+        return law, {n: float(spec[n]) for n in names}
+    return "constant", {"intercept": float(spec)}
+
+
+def _stderr_items(spec, law):
+    """{coefficient: standard error or None} of one parameter's stderr entry."""
+    if spec is None:
+        return {}
+    if isinstance(spec, Mapping):
+        return {c: (None if v is None else float(v)) for c, v in spec.items() if c != "law"}
+    return {"intercept": float(spec)} if law == "constant" else {}
+
+
+class FrictionModel:
+    """Pressure-dependent friction of a cylinder: steady-state law, LuGre dynamics, uncertainty.
+
+    Parameters
+    ----------
+    coefficients : mapping, optional
+        Friction parameter -> constant (SI) or dict of pressure-law coefficients
+        (``{"intercept": 70.2, "slope": 5e-6}``; a dict may carry its own ``"law"``), or None
+        for a parameter that was not identified. Default: the thesis law (eq. 4.1-4.3).
+        ``sigma_0`` [N/m] and ``sigma_1`` [N*s/m] may be included (e.g. a LuGre literature set).
+    pressure_law : {"constant", "linear", "quadratic", "exponential"}
+        Pressure law of the dict entries that name none.
+    friction_law : {"stribeck", "coulomb_viscous", "coulomb"}
+        Steady-state law; the reduced ones identify fewer parameters.
+    sigma_0, sigma_1 : float or mapping, optional
+        Bristle stiffness [N/m] and damping [N*s/m] (constants or pressure laws). They
+        override entries of ``coefficients``; defaults 1e6 N/m and 1.58e3 N*s/m, ``assumed``.
+    dynamic_status : mapping, optional
+        ``{"sigma_0": ("identified", "from presliding tests"), ...}``: status and reason.
+        Default: ``identified`` when the value came from ``coefficients``, ``assumed``
+        (with the reason for the default) otherwise, and ``assumed`` for explicit keywords.
+    reference : {"a", "b", "sum", "mean", "max"}
+        Which chamber pressure the pressure laws see (:func:`cylfric.friction.operating_pressure`).
+    simulation_law : str
+        Registered friction law that :func:`cylfric.simulate.simulate` integrates
+        (``"lugre"`` for the compiled integrators; others with ``method="scipy"``).
+    stderr : mapping, optional
+        Standard errors mirroring ``coefficients`` (SI).
+    held : iterable of str, optional
+        Parameter names held fixed in the fit (``"alpha"``, ``"F_c.slope"``).
+    bounds : mapping, optional
+        Parameter name -> (lower, upper) used by the fit.
+    covariance : (names, matrix), optional
+        Covariance [SI] of the fitted (varying) coefficients, in the order of ``names``.
+    statistics : mapping, optional
+        ``n_points``, ``n_variables``, ``rmse`` [N], ``residual_std`` [N], ``dof``, ``aic``,
+        ``bic`` of the fit that made the model.
+    validity : mapping, optional
+        ``pressure_min``, ``pressure_max`` [Pa], ``velocity_min``, ``velocity_max`` [m/s]:
+        the range the data covered.
+    provenance : mapping, optional
+        ``method`` (str) and ``source`` (``campaign``, ``files`` with ``name`` and ``sha256``).
+    not_identified : mapping, optional
+        Parameter -> reason, for the parameters the data could not identify.
+    record : mapping, optional
+        Everything else a datasheet says (per-pressure table, offset, notes, ...), kept
+        verbatim so that datasheet -> model -> datasheet is the identity.
+    """
+
+    def __init__(
+        self,
+        coefficients=None,
+        *,
+        pressure_law="linear",
+        friction_law="stribeck",
+        sigma_0=None,
+        sigma_1=None,
+        dynamic_status=None,
+        reference="mean",
+        simulation_law="lugre",
+        stderr=None,
+        held=(),
+        bounds=None,
+        covariance=None,
+        statistics=None,
+        validity=None,
+        provenance=None,
+        not_identified=None,
+        record=None,
+    ):
+        if coefficients is None:
+            coefficients = THESIS_2016.coefficients
+        if pressure_law not in PRESSURE_LAWS:
+            raise ValueError(
+                f"unknown pressure law {pressure_law!r}; valid: {sorted(PRESSURE_LAWS)}"
+            )
+        if friction_law not in FRICTION_LAWS:
+            raise ValueError(
+                f"unknown friction law {friction_law!r} for a model; valid: {sorted(FRICTION_LAWS)}"
+            )
+        if reference not in PRESSURE_REFERENCES:
+            raise ValueError(
+                f"unknown pressure reference {reference!r}; valid: {sorted(PRESSURE_REFERENCES)}"
+            )
+        get_law(simulation_law)
+        unknown = set(coefficients) - set(PARAMETER_UNITS)
+        if unknown:
+            raise ValueError(
+                f"unknown friction parameters {sorted(unknown)}; valid: {list(PARAMETER_UNITS)}"
+            )
+        self.pressure_law = pressure_law
+        self.friction_law = friction_law
+        self.reference = reference
+        self.simulation_law = simulation_law
+        not_identified = dict(not_identified or {})
+        needed = FRICTION_LAWS[friction_law][0]
+        for name in STEADY_PARAMETERS:
+            if name in needed and coefficients.get(name) is None:
+                raise ValueError(f"the {friction_law} law needs {name}; got {sorted(coefficients)}")
+            if name not in needed:
+                if coefficients.get(name) is not None:
+                    raise ValueError(
+                        f"{name} is given but the {friction_law} law has no {name}; "
+                        f"give it as None (not identified) or use another friction_law"
+                    )
+                not_identified.setdefault(
+                    name, f"not part of the {friction_law} law the data support"
+                )
+        status = dict(dynamic_status or {})
+        dynamic = {}
+        for name, keyword in (("sigma_0", sigma_0), ("sigma_1", sigma_1)):
+            if keyword is not None:
+                dynamic[name] = keyword
+                status.setdefault(name, ("assumed", "given by the user"))
+            elif coefficients.get(name) is not None:
+                dynamic[name] = coefficients[name]
+                status.setdefault(name, ("identified", "given with the coefficient set"))
+            else:
+                dynamic[name] = _DEFAULT_DYNAMIC[name][0]
+                status.setdefault(name, ("assumed", _DEFAULT_DYNAMIC[name][1]))
+        for name, value in dynamic.items():
+            if not isinstance(value, Mapping):
+                check_parameters(**{name: value})
+        for name, (state, _) in status.items():
+            if state not in DYNAMIC_STATUS:
+                raise ValueError(
+                    f"status of {name} {state!r} is unknown; valid: {list(DYNAMIC_STATUS)}"
+                )
+        self.dynamic_status = MappingProxyType({k: tuple(v) for k, v in status.items()})
+        stderr = stderr or {}
+        held = set(held)
+        bounds = dict(bounds or {})
+        laws, parameters = {}, {}
+        for name in STEADY_PARAMETERS + DYNAMIC_PARAMETERS:
+            spec = dynamic[name] if name in DYNAMIC_PARAMETERS else coefficients.get(name)
+            if name not in needed and name in STEADY_PARAMETERS:
+                spec = None
+            law, values = _spec_items(spec, pressure_law)
+            laws[name] = law
+            if values is None:
+                parameters[name] = Parameter(name, None, PARAMETER_UNITS[name], None, False)
+                continue
+            errors = _stderr_items(stderr.get(name), law)
+            for coefficient, value in values.items():
+                key = name if law == "constant" else f"{name}.{coefficient}"
+                if not math.isfinite(value):
+                    raise ValueError(f"parameter {key} = {value} is not finite")
+                default_bounds = (
+                    PARAMETER_BOUNDS[name]
+                    if law == "constant" or coefficient == "intercept"
+                    else (-math.inf, math.inf)
+                )
+                parameters[key] = Parameter(
+                    key,
+                    value,
+                    _si_unit(name, None if law == "constant" else coefficient),
+                    errors.get(coefficient),
+                    key not in held and name not in held,
+                    tuple(bounds.get(key, default_bounds)),
+                )
+        self.laws = MappingProxyType(laws)
+        self.parameters = MappingProxyType(parameters)
+        self.not_identified = MappingProxyType(not_identified)
+        if covariance is not None:
+            names, matrix = covariance
+            matrix = np.array(matrix, dtype=float)
+            names = tuple(names)
+            if matrix.shape != (len(names), len(names)):
+                raise ValueError(
+                    f"covariance is {matrix.shape}; expected {len(names)} x {len(names)} "
+                    "for its names"
+                )
+            missing = set(names) - set(parameters)
+            if missing:
+                raise ValueError(f"covariance names {sorted(missing)} are not model parameters")
+            matrix.setflags(write=False)
+            covariance = (names, matrix)
+        self.covariance = covariance
+        self.statistics = MappingProxyType(dict(statistics or {}))
+        self.validity = None if validity is None else MappingProxyType(dict(validity))
+        self.provenance = MappingProxyType(dict(provenance or {}))
+        self.record = MappingProxyType(dict(record or {}))
+
+    # ------------------------------------------------------------------ construction helpers
+    def _init_kwargs(self) -> dict:
+        held = [p.name for p in self.parameters.values() if not p.vary and p.value is not None]
+        bounds = {p.name: p.bounds for p in self.parameters.values() if p.value is not None}
+        return {
+            "coefficients": self.coefficients(include_dynamic=False),
+            "pressure_law": self.pressure_law,
+            "friction_law": self.friction_law,
+            "sigma_0": self.coefficients()["sigma_0"],
+            "sigma_1": self.coefficients()["sigma_1"],
+            "dynamic_status": dict(self.dynamic_status),
+            "reference": self.reference,
+            "simulation_law": self.simulation_law,
+            "stderr": self.stderr(),
+            "held": held,
+            "bounds": bounds,
+            "covariance": self.covariance,
+            "statistics": dict(self.statistics),
+            "validity": None if self.validity is None else dict(self.validity),
+            "provenance": dict(self.provenance),
+            "not_identified": dict(self.not_identified),
+            "record": dict(self.record),
+        }
+
+    def replace(self, **changes) -> FrictionModel:
+        """A copy with some constructor arguments changed (``model.replace(sigma_0=2e6)``).
+
+        Changing a coefficient drops the covariance unless a new one is given.
+        """
+        kwargs = self._init_kwargs()
+        if "coefficients" in changes and "covariance" not in changes:
+            kwargs["covariance"] = None
+        for name in ("sigma_0", "sigma_1"):
+            if name in changes and "dynamic_status" not in changes:
+                kwargs["dynamic_status"].pop(name, None)
+        if "friction_law" in changes:
+            kwargs["not_identified"] = {}
+        kwargs.update(changes)
+        return FrictionModel(**kwargs)
+
+    # ------------------------------------------------------------------ views
+    def coefficients(self, *, include_dynamic=True) -> dict:
+        """The coefficient set (SI) for :func:`cylfric.friction.params_at_pressure`.
+
+        Constants are floats, pressure laws dicts (with ``"law"`` when it differs from
+        :attr:`pressure_law`), parameters not identified None.
+        """
+        names = STEADY_PARAMETERS + (DYNAMIC_PARAMETERS if include_dynamic else ())
+        return {name: self._spec(name, "value") for name in names}
+
+    def stderr(self) -> dict:
+        """Standard errors mirroring :meth:`coefficients` (None where unknown)."""
+        return {name: self._spec(name, "stderr") for name in STEADY_PARAMETERS}
+
+    def _spec(self, name, attribute):
+        law = self.laws[name]
+        if law is None:
+            return None
+        if law == "constant":
+            return getattr(self.parameters[name], attribute)
+        spec = {
+            c: getattr(self.parameters[f"{name}.{c}"], attribute)
+            for c in PRESSURE_LAW_COEFFICIENTS[law]
+        }
+        if law != self.pressure_law:
+            spec["law"] = law
+        return spec
+
+    @property
+    def identified(self) -> tuple[str, ...]:
+        """Steady-state parameters the model identifies (those of its friction law)."""
+        return FRICTION_LAWS[self.friction_law][0]
+
+    @property
+    def varying(self) -> tuple[str, ...]:
+        """Names of the fitted (varying) coefficients."""
+        return tuple(p.name for p in self.parameters.values() if p.vary and p.value is not None)
+
+    def __repr__(self):
+        laws = ", ".join(f"{n}: {self.laws[n]}" for n in self.identified)
+        return (
+            f"FrictionModel({self.friction_law}, pressure laws {{{laws}}}, "
+            f"reference={self.reference!r})"
+        )
+
+    # ------------------------------------------------------------------ evaluation
+    def operating_pressure(self, pressure_a, pressure_b=None):
+        """The pressure the laws see [Pa] from chamber pressures [Pa] (the model's rule)."""
+        return operating_pressure(pressure_a, pressure_b, reference=self.reference)
+
+    def params_at(self, pressure) -> dict:
+        """Friction-law parameters (SI) at an operating pressure [Pa], dynamic ones included.
+
+        A reduced law is returned as eq. 2.7 with ``F_s = F_c`` (and ``sigma_2 = 0`` for
+        ``coulomb``; ``v_r`` and ``alpha`` then do not act), so every model plugs into
+        :func:`~cylfric.friction.stribeck` and :func:`~cylfric.friction.lugre_force`.
+        """
+        return self._params(pressure, self.coefficients())
+
+    def _params(self, pressure, coefficients):
+        given = {k: v for k, v in coefficients.items() if v is not None}
+        params = params_at_pressure(pressure, given, law=self.pressure_law)
+        if "F_s" not in given:
+            params["F_s"] = params["F_c"]
+        if "sigma_2" not in given:
+            params["sigma_2"] = 0.0 * params["F_c"]
+        params.setdefault("v_r", 1.0)
+        params.setdefault("alpha", 1.0)
+        return params
+
+    def friction(self, velocity, pressure, *, strict=False):
+        """Steady-state friction force [N] at ``velocity`` [m/s] and operating ``pressure`` [Pa].
+
+        Vectorised (velocity and pressure broadcast). Warns with :class:`ValidityWarning`
+        outside the validity ranges (raises with ``strict=True``); see :meth:`check`.
+        """
+        self.check(velocity, pressure, strict=strict)
+        return self._friction(velocity, pressure, self.coefficients())
+
+    def _friction(self, velocity, pressure, coefficients):
+        params = self._params(pressure, coefficients)
+        return stribeck(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
+
+    def dynamic_force(self, velocity, z, pressure):
+        """LuGre friction force [N] (eq. 2.5) at velocity [m/s], bristle deflection z [m]."""
+        params = self.params_at(pressure)
+        return lugre_force(velocity, z, **{k: params[k] for k in PARAMETER_UNITS})
+
+    def check(self, velocity, pressure, *, strict=False):
+        """Where (velocity [m/s], pressure [Pa]) lie inside the validity ranges.
+
+        Returns a boolean array (broadcast shape). Points outside, or pressures below 1e3 Pa
+        (pressures given in bar?), give a :class:`ValidityWarning`, or a ValueError with
+        ``strict=True``. A model without validity ranges accepts everything.
+        """
+        speed, p = np.broadcast_arrays(
+            np.abs(np.asarray(velocity, dtype=float)), np.asarray(pressure, dtype=float)
+        )
+        problems = []
+        positive = p[p > 0]
+        if positive.size and positive.max() < 1e3:
+            problems.append(
+                f"pressures of at most {positive.max():.4g} Pa: pressures are in Pa "
+                "(1 bar = 1e5 Pa)"
+            )
+        inside = np.ones(p.shape, dtype=bool)
+        if self.validity is not None:
+            val = self.validity
+            tol_p = 1e-6 * max(abs(val["pressure_max"]), 1.0)
+            tol_v = 1e-6 * max(val["velocity_max"], 1e-9)
+            inside = (
+                (p >= val["pressure_min"] - tol_p)
+                & (p <= val["pressure_max"] + tol_p)
+                & (speed >= val["velocity_min"] - tol_v)
+                & (speed <= val["velocity_max"] + tol_v)
+            )
+            if not inside.all():
+                problems.append(
+                    f"{int((~inside).sum())} of {inside.size} point(s) outside the validity "
+                    f"ranges {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} bar"
+                    f", {val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s: "
+                    "the model is extrapolated there"
+                )
+        if problems:
+            message = "; ".join(problems)
+            if strict:
+                raise ValueError(message)
+            warnings.warn(message, ValidityWarning, stacklevel=3)
+        return inside
+
+    # ------------------------------------------------------------------ uncertainty
+    def _jacobian(self, velocity, pressure):
+        """d friction / d coefficient [N/unit] for the covariance names, by central differences."""
+        names, matrix = self.covariance
+        base = {n: p.value for n, p in self.parameters.items()}
+        columns = []
+        for i, name in enumerate(names):
+            scale = math.sqrt(matrix[i, i]) if matrix[i, i] > 0 else 0.0
+            h = max(1e-4 * scale, 1e-9 * abs(base[name]), 1e-300)
+            values = []
+            for sign in (1.0, -1.0):
+                shifted = dict(base, **{name: base[name] + sign * h})
+                values.append(self._friction(velocity, pressure, self._coefficients_from(shifted)))
+            columns.append((values[0] - values[1]) / (2 * h))
+        return np.stack(columns, axis=-1)
+
+    def _coefficients_from(self, values):
+        out = {}
+        for name in STEADY_PARAMETERS:
+            law = self.laws[name]
+            if law is None:
+                out[name] = None
+            elif law == "constant":
+                out[name] = values[name]
+            else:
+                out[name] = {
+                    "law": law,
+                    **{c: values[f"{name}.{c}"] for c in PRESSURE_LAW_COEFFICIENTS[law]},
+                }
+        return out
+
+    def _quantile(self, level):
+        if not 0 < level < 1:
+            raise ValueError(f"level = {level} is out of range; expected 0 < level < 1")
+        from scipy.special import stdtrit
+
+        dof = self.statistics.get("dof")
+        q = 0.5 + level / 2
+        return float(stdtrit(dof, q)) if dof else float(_normal_quantile(q))
+
+    def standard_error(self, velocity, pressure):
+        """Standard error [N] of the mean friction at (velocity [m/s], pressure [Pa]).
+
+        First-order propagation of the coefficient covariance: ``sqrt(J C J^T)``.
+        """
+        if self.covariance is None:
+            raise ValueError(
+                "this model carries no covariance (a literature set or a hand-made model); "
+                "uncertainty bands need a fitted model"
+            )
+        v, p = np.broadcast_arrays(
+            np.asarray(velocity, dtype=float), np.asarray(pressure, dtype=float)
+        )
+        jac = self._jacobian(v, p)
+        var = np.einsum("...i,ij,...j->...", jac, self.covariance[1], jac)
+        return np.sqrt(np.clip(var, 0.0, None))
+
+    def band(self, velocity, pressure, level=0.95):
+        """Confidence band (lower, upper) [N] of the mean friction at ``level``.
+
+        The model's friction plus and minus the Student-t quantile (the fit's degrees of
+        freedom) times :meth:`standard_error`. It covers the *true steady-state curve*,
+        not individual measurements (see :meth:`prediction_band`).
+        """
+        f = self._friction(velocity, pressure, self.coefficients())
+        half = self._quantile(level) * self.standard_error(velocity, pressure)
+        return f - half, f + half
+
+    def prediction_band(self, velocity, pressure, level=0.95):
+        """Band (lower, upper) [N] for a new measured point: the mean's band plus the scatter.
+
+        Adds the fit's residual standard deviation (``statistics["residual_std"]``) to the
+        variance of the mean.
+        """
+        scatter = self.statistics.get("residual_std")
+        if scatter is None:
+            raise ValueError("this model carries no residual scatter (statistics.residual_std)")
+        f = self._friction(velocity, pressure, self.coefficients())
+        se = self.standard_error(velocity, pressure)
+        half = self._quantile(level) * np.sqrt(se**2 + scatter**2)
+        return f - half, f + half
+
+    def correlations(self):
+        """(names, matrix) of the correlation coefficients of the fitted coefficients."""
+        if self.covariance is None:
+            return None
+        names, cov = self.covariance
+        sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = cov / np.outer(sd, sd)
+        corr[~np.isfinite(corr)] = 0.0
+        np.fill_diagonal(corr, 1.0)
+        return names, corr
+
+    # ------------------------------------------------------------------ reports
+    def fit_report(self, *, min_correlation=0.1) -> str:
+        """A text report like lmfit's ``fit_report``, in engineering units (N, bar, mm/s)."""
+        from .text import fit_report
+
+        return fit_report(self, min_correlation=min_correlation)
+
+    def law_lines(self) -> list[str]:
+        """The pressure laws as text with standard errors, e.g. ``F_c(p) = 70.2 ± 0.1 N + ...``."""
+        from .text import law_lines
+
+        return law_lines(self)
+
+    # ------------------------------------------------------------------ datasheet
+    def to_datasheet(self) -> dict:
+        """The datasheet dict (SI, JSON-ready) of this model and its :attr:`record`."""
+        from .serialize import to_datasheet
+
+        return to_datasheet(self)
+
+    @classmethod
+    def from_datasheet(cls, source) -> FrictionModel:
+        """The model of a datasheet (a path to a JSON file, or the dict); validated."""
+        from .serialize import from_datasheet
+
+        return from_datasheet(cls, source)
+
+
+def _normal_quantile(q):
+    from statistics import NormalDist
+
+    return NormalDist().inv_cdf(q)

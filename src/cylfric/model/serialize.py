@@ -1,0 +1,316 @@
+"""A friction model as a datasheet (JSON, SI) and back; the schema and its validation.
+
+The datasheet is the serialised :class:`~cylfric.model.FrictionModel`: the model owns the
+keys ``model``, ``parameters``, ``stderr``, ``not_identified``, ``dynamic``, ``validity`` and,
+under ``fit``, ``method``, ``rmse``, ``n_points``, ``fixed``, ``bounds``, ``covariance``,
+``correlations``, ``statistics`` and ``source``. Every other key (the per-pressure table,
+the offset, notes, ...) is kept verbatim in :attr:`FrictionModel.record`, so that
+datasheet -> model -> datasheet is the identity.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from datetime import UTC, datetime
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .core import (
+    DYNAMIC_PARAMETERS,
+    FRICTION_LAWS,
+    PARAMETER_UNITS,
+    STEADY_PARAMETERS,
+)
+
+__all__ = [
+    "SCHEMA",
+    "SCHEMA_ID",
+    "DatasheetError",
+    "validate",
+    "read_datasheet",
+    "to_datasheet",
+    "from_datasheet",
+    "clean",
+]
+
+SCHEMA_ID = "cylfric-datasheet/1"
+SCHEMA = json.loads(resources.files("cylfric.model").joinpath("datasheet.schema.json").read_text())
+"""The JSON Schema of a datasheet (draft 2020-12)."""
+
+UNITS = {
+    "force": "N",
+    "pressure": "Pa",
+    "velocity": "m/s",
+    "sigma_2": "N*s/m",
+    "sigma_0": "N/m",
+    "sigma_1": "N*s/m",
+    "slope": "unit per Pa",
+    "curvature": "unit per Pa^2",
+    "rate": "1/Pa",
+}
+"""Units of a datasheet's values (SI)."""
+
+_MODEL_FIT_KEYS = (
+    "method",
+    "rmse",
+    "n_points",
+    "fixed",
+    "bounds",
+    "covariance",
+    "correlations",
+    "statistics",
+    "source",
+)
+_MODEL_KEYS = ("model", "parameters", "stderr", "not_identified", "dynamic", "validity", "fit")
+
+MAX_FORCE = 1e8
+"""Largest friction force a datasheet may promise [N] (10x the largest presses' force)."""
+
+
+class DatasheetError(ValueError):
+    """A datasheet does not follow the schema; the message names the file and the key."""
+
+
+def clean(value):
+    """JSON-safe copy: NaN/inf -> None, numpy scalars and arrays -> Python, tuples -> lists."""
+    if isinstance(value, dict):
+        return {str(k): clean(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return clean(value.tolist())
+    if isinstance(value, list | tuple):
+        return [clean(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _matrix(pair):
+    if pair is None:
+        return None
+    names, matrix = pair
+    return {"names": list(names), "matrix": np.asarray(matrix, dtype=float).tolist()}
+
+
+def _bound(x):
+    return None if not math.isfinite(x) else float(x)
+
+
+def to_datasheet(model) -> dict:
+    """The datasheet dict of ``model`` (see the module docstring for who owns which key)."""
+    from .. import __version__
+
+    record = dict(model.record)
+    record_fit = dict(record.pop("fit", {}))
+    stats = dict(model.statistics)
+    rmse = stats.pop("rmse", None)
+    n_points = stats.pop("n_points", None)
+    coefficients = model.coefficients()
+    dynamic = {}
+    for name in DYNAMIC_PARAMETERS:
+        status, reason = model.dynamic_status[name]
+        dynamic[name] = {
+            "value": coefficients[name],
+            "unit": PARAMETER_UNITS[name],
+            "status": status,
+            "reason": reason,
+        }
+    identified = [p for p in model.parameters.values() if p.value is not None]
+    fit = {
+        "method": model.provenance.get("method", "given (not fitted)"),
+        "rmse": rmse,
+        "n_points": n_points,
+        "fixed": {
+            p.name: p.value for p in identified if not p.vary and p.parameter in STEADY_PARAMETERS
+        },
+        "bounds": {p.name: [_bound(p.bounds[0]), _bound(p.bounds[1])] for p in identified},
+        "covariance": _matrix(model.covariance),
+        "correlations": _matrix(model.correlations()),
+        "statistics": stats,
+        "source": dict(model.provenance.get("source", {"campaign": "", "files": []})),
+        **record_fit,
+    }
+    if n_points is None:
+        del fit["n_points"]
+    sheet = {
+        "schema": SCHEMA_ID,
+        "cylfric_version": __version__,
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "name": "cylinder",
+        "units": dict(UNITS),
+        "offset": None,
+        "per_pressure": [],
+        "notes": [],
+        **record,
+        "model": {
+            "friction_law": model.friction_law,
+            "equation": FRICTION_LAWS[model.friction_law][1],
+            "pressure_law": model.pressure_law,
+            "pressure_reference": model.reference,
+            "stribeck_identifiable": model.friction_law == "stribeck",
+        },
+        "parameters": model.coefficients(include_dynamic=False),
+        "stderr": model.stderr(),
+        "not_identified": dict(model.not_identified),
+        "dynamic": dynamic,
+        "validity": None if model.validity is None else dict(model.validity),
+        "fit": fit,
+    }
+    return clean(sheet)
+
+
+def from_datasheet(cls, source):
+    """Build ``cls`` (a FrictionModel) from a datasheet path or dict, after validation."""
+    if isinstance(source, str | Path):
+        sheet, where = read_datasheet(source), str(source)
+    else:
+        sheet, where = validate(dict(source)), "datasheet"
+    model_part = sheet["model"]
+    fit = dict(sheet["fit"])
+    stats = dict(fit.get("statistics") or {})
+    if fit.get("rmse") is not None:
+        stats["rmse"] = fit["rmse"]
+    if fit.get("n_points") is not None:
+        stats["n_points"] = fit["n_points"]
+    dynamic = sheet.get("dynamic") or {}
+    covariance = fit.get("covariance")
+    bounds = {
+        name: (-math.inf if lo is None else lo, math.inf if hi is None else hi)
+        for name, (lo, hi) in (fit.get("bounds") or {}).items()
+    }
+    record = {k: v for k, v in sheet.items() if k not in _MODEL_KEYS}
+    record_fit = {k: v for k, v in fit.items() if k not in _MODEL_FIT_KEYS}
+    if record_fit:
+        record["fit"] = record_fit
+    parameters = dict(sheet["parameters"])
+    friction_law = model_part.get("friction_law", "stribeck")
+    held = list((fit.get("fixed") or {}).keys())
+    held = [h for h in held if h in _coefficient_names(parameters, model_part["pressure_law"])]
+    try:
+        return cls(
+            {k: parameters.get(k) for k in STEADY_PARAMETERS},
+            pressure_law=model_part["pressure_law"],
+            friction_law=friction_law,
+            sigma_0=dynamic.get("sigma_0", {}).get("value"),
+            sigma_1=dynamic.get("sigma_1", {}).get("value"),
+            dynamic_status={k: (v["status"], v.get("reason", "")) for k, v in dynamic.items()}
+            or None,
+            reference=model_part["pressure_reference"],
+            stderr={k: v for k, v in (sheet.get("stderr") or {}).items() if v is not None},
+            held=held,
+            bounds=bounds,
+            covariance=None if covariance is None else (covariance["names"], covariance["matrix"]),
+            statistics=stats,
+            validity=sheet.get("validity"),
+            provenance={"method": fit["method"], "source": fit["source"]},
+            not_identified=sheet.get("not_identified") or {},
+            record=record,
+        )
+    except (ValueError, TypeError) as exc:
+        raise DatasheetError(f"{where}: {exc}") from None
+
+
+def _coefficient_names(parameters, default_law):
+    from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
+
+    names = set()
+    for name, spec in parameters.items():
+        if isinstance(spec, dict):
+            law = spec.get("law", default_law)
+            names.update(f"{name}.{c}" for c in PRESSURE_LAW_COEFFICIENTS.get(law, ()))
+            names.add(name)
+        elif spec is not None:
+            names.add(name)
+    return names
+
+
+def _numbers(value, path=""):
+    """(path, number) of every number in a nested JSON value."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from _numbers(v, f"{path}/{k}" if path else str(k))
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            yield from _numbers(v, f"{path}/{i}")
+    elif isinstance(value, int | float) and not isinstance(value, bool):
+        yield path, value
+
+
+def _physical(sheet):
+    """The first physical violation of a datasheet's model, or None.
+
+    F_c >= 0, F_s >= F_c, sigma_2 >= 0 and forces below :data:`MAX_FORCE` over the
+    validity pressure range (0-200 bar when the sheet has none).
+    """
+    from ..friction import params_at_pressure
+
+    val = sheet.get("validity") or {}
+    p = np.linspace(val.get("pressure_min", 0.0), val.get("pressure_max", 200e5), 41)
+    v_max = val.get("velocity_max", 1.0)
+    given = {k: v for k, v in sheet["parameters"].items() if v is not None}
+    try:
+        params = params_at_pressure(p, given, law=sheet["model"]["pressure_law"])
+    except (ValueError, TypeError) as exc:
+        return f"parameters: {exc}"
+    F_c = params.get("F_c")
+    F_s = params.get("F_s", F_c)
+    sigma_2 = params.get("sigma_2", 0.0 * p)
+    span = f"{p[0] / 1e5:.4g}-{p[-1] / 1e5:.4g} bar"
+    checks = (
+        (np.min(F_c) < 0, "parameters/F_c", f"F_c < 0 N within {span}"),
+        (np.any(F_s < F_c - 1e-9 * np.abs(F_c)), "parameters/F_s", f"F_s < F_c within {span}"),
+        (np.min(sigma_2) < 0, "parameters/sigma_2", f"sigma_2 < 0 N*s/m within {span}"),
+        (
+            np.max(np.maximum(F_s, F_c) + sigma_2 * v_max) > MAX_FORCE,
+            "parameters",
+            f"friction above {MAX_FORCE:.0e} N within {span}: not a cylinder's friction",
+        ),
+    )
+    for bad, where, what in checks:
+        if bad:
+            return f"{where}: unphysical: {what}"
+    return None
+
+
+def validate(sheet: dict, *, source="datasheet") -> dict:
+    """Raise :class:`DatasheetError` naming the first problem; return ``sheet``.
+
+    Checks the schema, that every number is finite (no NaN, no infinity), and the physics
+    of the model over its validity range (F_c >= 0, F_s >= F_c, sigma_2 >= 0, forces below
+    1e8 N).
+    """
+    import jsonschema
+
+    validator = jsonschema.Draft202012Validator(SCHEMA)
+    errors = sorted(validator.iter_errors(sheet), key=lambda e: list(e.path))
+    if errors:
+        first = errors[0]
+        where = "/".join(str(p) for p in first.path) or "(top level)"
+        raise DatasheetError(f"{source}: {where}: {first.message}")
+    for where, number in _numbers({k: sheet[k] for k in sheet if k != "per_pressure"}):
+        if not math.isfinite(number):
+            raise DatasheetError(f"{source}: {where}: {number} is not finite; expected a number")
+    problem = _physical(sheet)
+    if problem:
+        raise DatasheetError(f"{source}: {problem}")
+    return sheet
+
+
+def read_datasheet(path) -> dict:
+    """Read and validate a datasheet JSON file (errors name the file)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise DatasheetError(f"{path}: cannot read ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise DatasheetError(f"{path}: not UTF-8 text ({exc})") from None
+    try:
+        sheet = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise DatasheetError(f"{path}: not valid JSON ({exc})") from None
+    return validate(sheet, source=str(path))

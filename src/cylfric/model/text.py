@@ -1,0 +1,152 @@
+"""Text views of a friction model: the pressure laws with ± and an lmfit-style fit report.
+
+Engineering units throughout (N, bar, mm/s, N*s/mm), as the thesis and its users write them.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
+from .core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
+
+__all__ = ["law_lines", "fit_report", "format_value"]
+
+
+def format_value(value, stderr=None, digits=4) -> str:
+    """``"70.18 ± 0.021"``: the value to ``digits`` significant digits, stderr to two."""
+    if value is None:
+        return "n/a"
+    text = f"{value:.{digits}g}"
+    if stderr is not None and math.isfinite(stderr) and stderr > 0:
+        text += f" ± {stderr:.2g}"
+    return text
+
+
+def _term(model, name):
+    p = model.parameters[name]
+    value, stderr, unit = p.engineering()
+    text = format_value(value, stderr if p.vary else None)
+    return text + ("" if p.vary else " (fixed)"), unit
+
+
+def law_lines(model) -> list[str]:
+    """The steady-state laws in engineering units with standard errors, one line each.
+
+    ``F_c(p) = 70.18 ± 0.021 N + 0.5 ± 0.00021 N/bar * p``; parameters not identified say so.
+    """
+    lines = []
+    for name in ("F_c", "F_s", "sigma_2"):
+        law = model.laws[name]
+        if law is None:
+            lines.append(f"{name}: not identified ({model.not_identified.get(name, '')})")
+            continue
+        if law == "constant":
+            text, unit = _term(model, name)
+            lines.append(f"{name} = {text} {unit}")
+            continue
+        terms = {c: _term(model, f"{name}.{c}") for c in PRESSURE_LAW_COEFFICIENTS[law]}
+        text = f"{name}(p) = ({terms['intercept'][0]}) {terms['intercept'][1]}"
+        if "slope" in terms:
+            text += f" + ({terms['slope'][0]}) {terms['slope'][1]} * p"
+        if "curvature" in terms:
+            text += f" + ({terms['curvature'][0]}) {terms['curvature'][1]} * p^2"
+        if "amplitude" in terms:
+            text += (
+                f" + ({terms['amplitude'][0]}) {terms['amplitude'][1]}"
+                f" * (exp(({terms['rate'][0]}) {terms['rate'][1]} * p) - 1)"
+            )
+        lines.append(text)
+    shape = []
+    for name in ("v_r", "alpha"):
+        if model.laws[name] is None:
+            continue
+        text, unit = _term(model, name)
+        shape.append(f"{name} = {text}" + ("" if unit == "-" else f" {unit}"))
+    if shape:
+        lines.append(", ".join(shape))
+    return lines
+
+
+def fit_report(model, *, min_correlation=0.1) -> str:
+    """lmfit-style report: model, fit statistics, variables ± stderr, correlations, dynamics."""
+    stats = model.statistics
+    lines = ["[[Model]]"]
+    lines.append(
+        f"    {model.friction_law} friction law; pressure laws: "
+        + ", ".join(f"{n} {model.laws[n]}" for n in STEADY_PARAMETERS if model.laws[n])
+        + f"; operating pressure: {model.reference} of the chambers"
+    )
+    if model.provenance.get("method"):
+        lines.append(f"    method: {model.provenance['method']}")
+    if stats:
+        lines.append("[[Fit Statistics]]")
+        labels = (
+            ("n_points", "# data points", ""),
+            ("n_variables", "# variables", ""),
+            ("rmse", "RMSE", " N"),
+            ("residual_std", "residual std", " N"),
+            ("dof", "degrees of freedom", ""),
+            ("aic", "Akaike info crit", ""),
+            ("bic", "Bayesian info crit", ""),
+        )
+        for key, label, unit in labels:
+            if stats.get(key) is not None:
+                value = stats[key]
+                text = f"{value:d}" if isinstance(value, int) else f"{value:.5g}"
+                lines.append(f"    {label:20s} = {text}{unit}")
+    lines.append("[[Variables]]")
+    width = max(len(n) for n in model.parameters)
+    for p in model.parameters.values():
+        if p.parameter in DYNAMIC_PARAMETERS:
+            continue
+        if p.value is None:
+            reason = model.not_identified.get(p.parameter, "")
+            lines.append(f"    {p.name:{width}s}:  not identified ({reason})")
+            continue
+        value, stderr, unit = p.engineering()
+        if not p.vary:
+            lines.append(f"    {p.name:{width}s}:  {value:.6g} {unit} (fixed)")
+            continue
+        text = f"    {p.name:{width}s}:  {value:.6g}"
+        if stderr is not None:
+            rel = abs(stderr / value) * 100 if value else math.inf
+            text += f" +/- {stderr:.3g}" + (f" ({rel:.2f}%)" if math.isfinite(rel) else "")
+        lines.append(text + f" {unit}")
+    correlations = model.correlations()
+    if correlations is not None:
+        names, corr = correlations
+        pairs = [
+            (abs(corr[i, j]), names[i], names[j], corr[i, j])
+            for i in range(len(names))
+            for j in range(i + 1, len(names))
+            if abs(corr[i, j]) >= min_correlation
+        ]
+        lines.append(f"[[Correlations]] (unreported correlations are < {min_correlation:.3f})")
+        for _, a, b, c in sorted(pairs, reverse=True):
+            lines.append(f"    C({a}, {b}) = {c:+.4f}")
+    lines.append("[[Dynamic]]")
+    for name in DYNAMIC_PARAMETERS:
+        status, reason = model.dynamic_status[name]
+        law = model.laws[name]
+        if law == "constant":
+            value, _, unit = model.parameters[name].engineering()
+            text = f"{value:.4g} {unit}"
+        else:
+            text = (
+                f"{law} in pressure, "
+                + ", ".join(
+                    f"{c} {model.parameters[f'{name}.{c}'].value:.4g}"
+                    for c in PRESSURE_LAW_COEFFICIENTS[law]
+                )
+                + " (SI)"
+            )
+        lines.append(f"    {name:8s} = {text} ({status}: {reason})")
+    if model.validity is not None:
+        val = model.validity
+        lines.append("[[Validity]]")
+        lines.append(
+            f"    {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} bar, "
+            f"{val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
+        )
+    return "\n".join(lines)
