@@ -278,6 +278,21 @@ def extraction_options(config: CampaignConfig, options: dict) -> dict:
     return merged
 
 
+def _window_speed(time, position, velocity, window, keep):
+    """Mean velocity of a window [m/s]: the slope of position against time (least squares).
+
+    Exact at constant velocity, and free of the smoothing filter's bias near the window
+    edges (the filtered velocity read 0.05-0.08 % low on the short windows of fast strokes).
+    Without a position column: the mean of the velocity column over the kept samples.
+    """
+    if position is None or window.stop - window.start < 3:
+        return float(velocity[window.start : window.stop][keep].mean())
+    t = time[window.start : window.stop]
+    x = position[window.start : window.stop]
+    t = t - t.mean()
+    return float(np.dot(t, x - x.mean()) / np.dot(t, t))
+
+
 def _point_rows(data, metadata, config, run, options):
     options = dict(options)
     spike_sigma = options.pop("spike_sigma", 5.0)
@@ -300,6 +315,9 @@ def _point_rows(data, metadata, config, run, options):
             "Displacement/Position/Weg or Velocity",
         )
     force = friction_signal(data, config, velocity)
+    position = (
+        config.position_sign * np.asarray(data["position [m]"]) if "position [m]" in data else None
+    )
     pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
     if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
         raise BenchFileError(
@@ -336,7 +354,7 @@ def _point_rows(data, metadata, config, run, options):
                 "direction [-]": w.direction,
                 "pressure [Pa]": p_mean,
                 "pressure_std [Pa]": p_std,
-                "velocity [m/s]": float(v[keep].mean()) if n else nan,
+                "velocity [m/s]": _window_speed(time, position, v, w, keep) if n else nan,
                 "velocity_std [m/s]": float(v[keep].std()) if n else nan,
                 "force [N]": float(f[keep].mean()) if n else nan,
                 "friction [N]": nan,

@@ -51,6 +51,7 @@ __all__ = [
     "thesis_tables",
     "pressure_levels",
     "validity_of",
+    "point_errors",
     "IdentificationWarning",
     "PARAMETERS",
 ]
@@ -220,6 +221,25 @@ def _check_per_pressure(per_pressure, fits):
             )
 
 
+def point_errors(points):
+    """(sigma [N], groups) of a points table for the weighted, run-clustered surface fit.
+
+    ``sigma`` is each window's standard error ``friction_std / sqrt(n)`` (floored at a tenth
+    of the median, so that no window weighs without bound), or None when the table lacks
+    those columns; ``groups`` is the ``run`` column (the points of one run share its
+    offset) or None.
+    """
+    sigma = None
+    if {"friction_std [N]", "n [-]"} <= set(points.columns):
+        sem = points["friction_std [N]"].to_numpy(float) / np.sqrt(points["n [-]"].to_numpy(float))
+        valid = np.isfinite(sem) & (sem > 0)
+        if valid.any():
+            typical = float(np.median(sem[valid]))
+            sigma = np.where(valid, np.maximum(sem, 0.1 * typical), typical)
+    groups = points["run"].to_numpy() if "run" in points.columns else None
+    return sigma, groups
+
+
 def _core(points, levels, *, pressure_law, fixed, notes, validity):
     per_pressure, fits = _per_pressure(points, levels, fixed)
     _check_per_pressure(per_pressure, fits)
@@ -240,6 +260,7 @@ def _core(points, levels, *, pressure_law, fixed, notes, validity):
             "dependence rests on the surface fit alone"
         )
     surface_fixed = {k: v for k, v in fixed.items() if k in ("v_r", "alpha")}
+    sigma, groups = point_errors(points)
     fits_by_law = {}
     for name in LAWS_COMPARED:
         if len(PRESSURE_LAW_COEFFICIENTS[name]) > len(levels):
@@ -253,6 +274,8 @@ def _core(points, levels, *, pressure_law, fixed, notes, validity):
                 pressure_law=name,
                 fixed=surface_fixed,
                 start=None if linear is None else linear.model,
+                sigma=sigma,
+                groups=groups,
             )
         except (ValueError, np.linalg.LinAlgError) as exc:
             notes.append(f"surface fit with the {name} pressure law failed: {exc}")

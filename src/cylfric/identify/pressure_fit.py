@@ -207,6 +207,8 @@ def fit_surface(
     loss="soft_l1",
     start=None,
     reference="mean",
+    sigma=None,
+    groups=None,
 ):
     """One fit of the whole surface F(v, p) with pressure laws for F_c, F_s and sigma_2.
 
@@ -225,6 +227,13 @@ def fit_surface(
         fit (skips the grid search; used to compare laws).
     reference : str
         Operating-pressure rule recorded in the model.
+    sigma : array_like, optional
+        Standard error of each point [N]: weighted least squares (weights 1/sigma^2).
+    groups : array_like, optional
+        Label of the run each point comes from. Points of one run share its errors (both
+        directions of a run share its offset), so the covariance is cluster-robust by run
+        (a sandwich estimator, also robust to unequal scatter); without groups it is the
+        classical one, scaled by the residual variance.
 
     Returns
     -------
@@ -269,19 +278,25 @@ def fit_surface(
     upper = [np.inf] * (3 * k) + [PARAMETER_BOUNDS[n][1] for n in shared]
     function = _law_in_bar(pressure_law)
 
-    def residuals(x):
+    weight = np.ones_like(force) if sigma is None else 1.0 / np.asarray(sigma, dtype=float)
+    if not (np.all(np.isfinite(weight)) and np.all(weight > 0)):
+        raise ValueError("sigma must be finite and > 0 N for every point")
+
+    def model_force(x):
         values = [function(p_bar, *x[j * k : (j + 1) * k]) for j in range(3)]
         sh = {**fixed, **dict(zip(shared, x[3 * k :], strict=True))}
-        model = stribeck_unchecked(speed, *values[:2], sh["v_r"], values[2], alpha=sh["alpha"])
-        return model - force
+        return stribeck_unchecked(speed, *values[:2], sh["v_r"], values[2], alpha=sh["alpha"])
+
+    def residuals(x):
+        return (model_force(x) - force) * weight
 
     x0 = np.clip(x0, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
     result = robust_least_squares(residuals, x0, (lower, upper), loss)
-    res = -result.fun
+    res = force - model_force(result.x)  # data minus model [N]
     n_free = len(result.x)
     dof = max(force.size - n_free, 1)
     rss = float(res @ res)
-    cov_x = np.linalg.pinv(result.jac.T @ result.jac) * rss / dof
+    cov_x, dof = _covariance(residuals, result.x, groups, dof)
     # to SI and the model's coefficient names, block by block (delta rule)
     transform = np.eye(n_free)
     coefficients, cov_names = {}, []
@@ -309,7 +324,7 @@ def fit_surface(
             "n_points": int(force.size),
             "n_variables": int(n_free),
             "rmse": float(math.sqrt(rss / force.size)),
-            "residual_std": float(math.sqrt(rss / dof)),
+            "residual_std": float(math.sqrt(rss / max(force.size - n_free, 1))),
             "dof": int(dof),
             "aic": aic,
             "bic": bic,
@@ -320,6 +335,47 @@ def fit_surface(
         },
     )
     return SurfaceFit(model, res, bool(result.success), str(result.message))
+
+
+def _covariance(residuals, x, groups, dof):
+    """Covariance of the fitted coefficients and its degrees of freedom.
+
+    ``residuals`` are the weighted residuals; their Jacobian is taken by central
+    differences (the robust loss's own Jacobian is reweighted). Without ``groups``:
+    ``s^2 (J^T J)^-1``. With groups: the cluster-robust sandwich
+    ``(J^T J)^-1 (sum_g J_g^T r_g r_g^T J_g) (J^T J)^-1`` with the usual small-sample
+    factor G/(G-1) (N-1)/(N-K), and G - K degrees of freedom (Cameron & Miller 2015).
+    """
+    r = residuals(x)
+    steps = 1e-6 * np.maximum(np.abs(x), 1e-3)
+    jac = np.column_stack(
+        [
+            (residuals(x + h * e) - residuals(x - h * e)) / (2 * h)
+            for h, e in zip(steps, np.eye(x.size), strict=True)
+        ]
+    )
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0] = 1.0
+    scaled = jac / scale
+    bread = np.linalg.pinv(scaled.T @ scaled) / np.outer(scale, scale)
+    n, k = jac.shape
+    if groups is None:
+        return bread * float(r @ r) / dof, dof
+    labels, index = np.unique(np.asarray(groups), return_inverse=True)
+    g = labels.size
+    if g <= k:
+        return bread * float(r @ r) / dof, dof
+    # leave-one-run-out jackknife, linearised (CR3): robust to unequal scatter and to the
+    # high leverage of the few fastest runs
+    information = scaled.T @ scaled
+    deltas = np.empty((g, k))
+    for label in range(g):
+        rows = index == label
+        js = scaled[rows]
+        reduced = np.linalg.pinv(information - js.T @ js)
+        deltas[label] = (reduced @ (js.T @ r[rows])) / scale
+    centred = deltas - deltas.mean(axis=0)
+    return (g - 1) / g * centred.T @ centred, g - k
 
 
 def _block_jacobian(law, coef):
