@@ -232,3 +232,79 @@ def test_no_second_definition_of_the_model_outside_friction_and_model():
                 if pattern.search(code):
                     found.append(f"{path.relative_to(SRC)}:{number}: {what}: {line.strip()}")
     assert not found, "\n".join(found)
+
+
+def _campaign_points(seed, truth, pressures_bar=(0.1, 55.0, 103.0, 159.0)):
+    """Points shaped like a campaign: two directions per run sharing the run's error, whose
+    spread grows with speed (short windows at high speed), with per-window std and n."""
+    rng = np.random.default_rng(seed)
+    speeds = np.array([1, 2, 4, 7, 10, 15, 25, 40, 70, 135]) * 1e-3
+    rows = []
+    for i, (p, v) in enumerate((p, v) for p in pressures_bar for v in speeds):
+        spread = 0.015 + 0.4 * v  # [N]
+        friction = truth.friction(v, p * 1e5) + rng.normal(0, spread)
+        n = max(int((0.8 / spread) ** 2), 10)
+        for sign in (1, -1):
+            rows.append(
+                {
+                    "run": i,
+                    "direction [-]": sign,
+                    "velocity [m/s]": sign * v,
+                    "pressure [Pa]": p * 1e5,
+                    "friction [N]": friction,
+                    "friction_std [N]": 0.8,
+                    "n [-]": n,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.slow
+def test_band_of_the_mean_is_calibrated_over_50_campaigns():
+    truth = FrictionModel()
+    v = np.array([0.002, 0.010, 0.025, 0.1, 0.005, 0.05, 0.13, 0.001])
+    p = np.array([55e5, 103e5, 80e5, 159e5, 20e5, 5e5, 0.1e5, 159e5])
+    true = truth.friction(v, p)
+    inside = []
+    for seed in range(50):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = identify(_campaign_points(seed, truth), sensitivity=False).model
+        lower, upper = model.band(v, p, level=0.95)
+        inside.append((lower <= true) & (true <= upper))
+    inside = np.array(inside)
+    assert 0.90 <= inside.mean() <= 0.99, inside.mean(axis=0)
+    assert inside.mean(axis=0).min() >= 0.84, inside.mean(axis=0)
+
+
+@pytest.mark.slow
+def test_band_holds_the_truth_of_50_virtual_campaigns(tmp_path):
+    """The issue's acceptance: raw files of the virtual bench -> extraction -> identification.
+
+    Measured when written: coverage 0.94, 0.94, 0.98, 0.88, 0.90, 0.92 (the fastest point,
+    100 mm/s at 159 bar, is the weakest: few short windows carry sigma_2 there).
+    """
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+    from cylfric.steady_state import extract_campaign
+
+    truth = FrictionModel()  # the bench's default friction: the thesis law
+    v = np.array([0.002, 0.010, 0.025, 0.1, 0.005, 0.05])
+    p = np.array([55e5, 103e5, 80e5, 159e5, 20e5, 5e5])
+    true = truth.friction(v, p)
+    inside = []
+    for seed in range(50):
+        folder = tmp_path / f"campaign{seed}"
+        settings = BenchSettings(
+            pressures_bar=(0.1, 55, 103, 159),
+            speeds_mm_s=(1, 2, 4, 7, 10, 15, 25, 40, 70, 135),
+            seed=seed,
+        )
+        generate_campaign(folder, settings)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = identify(extract_campaign(folder).points, sensitivity=False).model
+        lower, upper = model.band(v, p, level=0.95)
+        inside.append((lower <= true) & (true <= upper))
+    inside = np.array(inside)
+    assert 0.90 <= inside.mean() <= 0.99, inside.mean(axis=0)
+    assert inside.mean(axis=0).min() >= 0.84, inside.mean(axis=0)  # binomial sd 0.03 at 50
