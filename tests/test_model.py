@@ -48,7 +48,7 @@ def test_default_is_the_thesis_law_and_matches_the_friction_functions():
 
 
 def test_parameters_carry_value_unit_bounds_and_vary():
-    model = FrictionModel(held=("alpha",))
+    model = FrictionModel(fixed=("alpha",))
     slope = model.parameters["F_c.slope"]
     assert slope == Parameter("F_c.slope", 5e-6, "N/Pa", None, True, (-math.inf, math.inf))
     assert model.parameters["v_r"].bounds == (1e-5, 10.0)

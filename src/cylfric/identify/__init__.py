@@ -21,7 +21,7 @@ from ..model import FrictionModel
 from .pressure_fit import (
     FITTED_LAWS,
     PRESSURE_DEPENDENT,
-    LawFit,
+    PressureLawFit,
     SurfaceFit,
     fit_surface,
     information_criteria,
@@ -46,7 +46,7 @@ __all__ = [
     "fit_surface",
     "SurfaceFit",
     "regress_parameters",
-    "LawFit",
+    "PressureLawFit",
     "sensitivity_grid",
     "thesis_tables",
     "pressure_levels",
@@ -117,7 +117,7 @@ class Identification:
     per_pressure_fits : list of StribeckFit
         The per-pressure fits.
     regressions : dict
-        Parameter -> pressure law -> :class:`LawFit` (route a).
+        Parameter -> pressure law -> :class:`PressureLawFit` (route a).
     comparison : pandas.DataFrame
         ``law``, ``coefficients [-]``, ``rmse [N]``, ``aic``, ``bic`` of the surface fits.
     pressure_law : str

@@ -25,7 +25,7 @@ from ..model import PARAMETER_BOUNDS, FrictionModel
 from .stribeck_fit import design_columns, robust_least_squares, solve_linear
 
 __all__ = [
-    "LawFit",
+    "PressureLawFit",
     "regress_parameters",
     "SurfaceFit",
     "fit_surface",
@@ -88,7 +88,7 @@ def _to_si(law, coef, cov):
 
 
 @dataclass(frozen=True)
-class LawFit:
+class PressureLawFit:
     """One parameter regressed on pressure with one law (route a).
 
     ``coefficients`` and ``stderr`` in SI (e.g. N and N/Pa), ``aic``/``bic`` from the
@@ -124,7 +124,7 @@ def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("li
 
     Returns
     -------
-    dict of law -> LawFit
+    dict of law -> PressureLawFit
     """
     p_bar = np.asarray(pressure, dtype=float) / _BAR
     y = np.asarray(values, dtype=float)
@@ -159,7 +159,7 @@ def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("li
         aic, bic = information_criteria(float(resid @ resid), len(y), len(names))
         values_si, cov_si = _to_si(law, coef, cov)
         errs = np.sqrt(np.clip(np.diag(cov_si), 0, None))
-        out[law] = LawFit(
+        out[law] = PressureLawFit(
             parameter,
             law,
             values_si,
@@ -318,7 +318,7 @@ def fit_surface(
         pressure_law=pressure_law,
         reference=reference,
         stderr=stderr,
-        held=tuple(fixed),
+        fixed=tuple(fixed),
         covariance=(cov_names, covariance),
         statistics={
             "n_points": int(force.size),

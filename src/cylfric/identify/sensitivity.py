@@ -59,7 +59,7 @@ def refit_at(velocity, pressure, friction, v_r, alpha, *, reference="mean"):
     model = FrictionModel(
         {**coefficients, "v_r": float(v_r), "alpha": float(alpha)},
         reference=reference,
-        held=("v_r", "alpha"),
+        fixed=("v_r", "alpha"),
         statistics={"rmse": rmse, "n_points": int(force.size)},
         provenance={"method": "linear least squares at fixed v_r and alpha (sensitivity)"},
     )

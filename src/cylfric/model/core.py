@@ -251,8 +251,9 @@ class FrictionModel:
         (``"lugre"`` for the compiled integrators; others with ``method="scipy"``).
     stderr : mapping, optional
         Standard errors mirroring ``coefficients`` (SI).
-    held : iterable of str, optional
-        Parameter names held fixed in the fit (``"alpha"``, ``"F_c.slope"``).
+    fixed : iterable of str, optional
+        Names held fixed in the fit (``"alpha"``, ``"F_c.slope"``, or ``"F_c"`` for all of
+        its coefficients); their ``vary`` is False.
     bounds : mapping, optional
         Parameter name -> (lower, upper) used by the fit.
     covariance : (names, matrix), optional
@@ -284,7 +285,7 @@ class FrictionModel:
         reference="mean",
         simulation_law="lugre",
         stderr=None,
-        held=(),
+        fixed=(),
         bounds=None,
         covariance=None,
         statistics=None,
@@ -353,7 +354,7 @@ class FrictionModel:
                 )
         self.dynamic_status = MappingProxyType({k: tuple(v) for k, v in status.items()})
         stderr = stderr or {}
-        held = set(held)
+        fixed = set(fixed)
         bounds = dict(bounds or {})
         laws, parameters = {}, {}
         for name in STEADY_PARAMETERS + DYNAMIC_PARAMETERS:
@@ -380,7 +381,7 @@ class FrictionModel:
                     value,
                     _si_unit(name, None if law == "constant" else coefficient),
                     errors.get(coefficient),
-                    key not in held and name not in held,
+                    key not in fixed and name not in fixed,
                     tuple(bounds.get(key, default_bounds)),
                 )
         self.laws = MappingProxyType(laws)
@@ -408,7 +409,7 @@ class FrictionModel:
 
     # ------------------------------------------------------------------ construction helpers
     def _init_kwargs(self) -> dict:
-        held = [p.name for p in self.parameters.values() if not p.vary and p.value is not None]
+        fixed = [p.name for p in self.parameters.values() if not p.vary and p.value is not None]
         bounds = {p.name: p.bounds for p in self.parameters.values() if p.value is not None}
         return {
             "coefficients": self.coefficients(include_dynamic=False),
@@ -420,7 +421,7 @@ class FrictionModel:
             "reference": self.reference,
             "simulation_law": self.simulation_law,
             "stderr": self.stderr(),
-            "held": held,
+            "fixed": fixed,
             "bounds": bounds,
             "covariance": self.covariance,
             "statistics": dict(self.statistics),

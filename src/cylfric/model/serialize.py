@@ -188,8 +188,8 @@ def from_datasheet(cls, source):
         record["fit"] = record_fit
     parameters = dict(sheet["parameters"])
     friction_law = model_part.get("friction_law", "stribeck")
-    held = list((fit.get("fixed") or {}).keys())
-    held = [h for h in held if h in _coefficient_names(parameters, model_part["pressure_law"])]
+    names = _coefficient_names(parameters, model_part["pressure_law"])
+    fixed = [name for name in (fit.get("fixed") or {}) if name in names]
     try:
         return cls(
             {k: parameters.get(k) for k in STEADY_PARAMETERS},
@@ -201,7 +201,7 @@ def from_datasheet(cls, source):
             or None,
             reference=model_part["pressure_reference"],
             stderr={k: v for k, v in (sheet.get("stderr") or {}).items() if v is not None},
-            held=held,
+            fixed=fixed,
             bounds=bounds,
             covariance=None if covariance is None else (covariance["names"], covariance["matrix"]),
             statistics=stats,
