@@ -15,7 +15,9 @@ from cylfric.steady_state import extract_points
 def test_cylinder_and_model_checks():
     with pytest.raises(ValueError, match="rod diameter 0.03 m must be >= 0 and smaller than"):
         Cylinder.from_diameters(0.02, 0.03, 1.0)
-    with pytest.raises(ValueError, match=r"parameter sigma_0 = 0.0 is out of range; expected > 0 N/m"):
+    with pytest.raises(
+        ValueError, match=r"parameter sigma_0 = 0.0 is out of range; expected > 0 N/m"
+    ):
         FrictionModel(sigma_0=0.0)
     with pytest.raises(ValueError, match="unknown friction law 'nope'"):
         FrictionModel(simulation_law="nope")

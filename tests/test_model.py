@@ -210,9 +210,12 @@ def test_compiled_kernels_agree_with_the_model_to_1e_12():
 
 _FORMULAS = {
     "g(v) or eq. 2.7": re.compile(
-        r"\(\s*F_s\s*-\s*F_c\s*\)\s*\*|exp\(\s*-\s*\(?\s*\(?\s*(speed|u|v)"
+        r"\(\s*f_?s\s*-\s*f_?c\s*\)\s*\*|exp\(\s*-\s*[(\s]*(np\.)?(abs\()?\s*(speed|u|v)\b",
+        re.IGNORECASE,
     ),
-    "the LuGre force": re.compile(r"sigma_?0\s*\*\s*\w+\s*\+\s*sigma_?1\s*\*"),
+    "the LuGre force": re.compile(
+        r"(sigma_?0|s0)\s*\*\s*\w+\s*\+\s*(sigma_?1|s1)\s*\*", re.IGNORECASE
+    ),
     "a pressure law": re.compile(r"intercept\s*\+\s*slope\s*\*|\+\s*b\s*\*\s*p\b"),
 }
 

@@ -56,7 +56,9 @@ def test_operating_pressure_unknown_reference_lists_valid():
 
 
 def test_unknown_pressure_law_and_wrong_coefficients():
-    with pytest.raises(ValueError, match=r"unknown pressure law 'cubic'; valid: \['constant', 'exponential'"):
+    with pytest.raises(
+        ValueError, match=r"unknown pressure law 'cubic'; valid: \['constant', 'exponential'"
+    ):
         fr.params_at_pressure(1.0, {"F_c": {"law": "cubic", "intercept": 1.0}})
     with pytest.raises(ValueError, match="coefficients of F_c do not fit the linear pressure law"):
         fr.params_at_pressure(1.0, {"F_c": {"intercept": 1.0, "rate": 2.0}})

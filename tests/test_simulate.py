@@ -182,7 +182,9 @@ def test_simulation_errors_name_the_problem():
     with pytest.raises(ValueError, match="SpringPull stiffness = -1 is out of range"):
         SpringPull(-1, 0.01)
     with pytest.raises(ValueError, match="law 'stribeck' runs only with method='scipy'"):
-        simulate(Cylinder(MASS), FrictionModel(simulation_law="stribeck"), SpringPull(2e4, 5e-3), 0.1)
+        simulate(
+            Cylinder(MASS), FrictionModel(simulation_law="stribeck"), SpringPull(2e4, 5e-3), 0.1
+        )
     with pytest.raises(TypeError, match="unknown drive str"):
         simulate(Cylinder(MASS), _model(), "spring", 0.1)
 

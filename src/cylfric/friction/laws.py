@@ -32,6 +32,7 @@ __all__ = [
     "lugre_g",
     "lugre_state_derivative",
     "lugre_force",
+    "lugre_unchecked",
     "lugre_steady_state",
     "lugre_z_update",
     "barus_viscosity",
@@ -259,13 +260,24 @@ def lugre_state_derivative(velocity, z, sigma_0, F_c, F_s, v_r, *, alpha=1.0):
     float or ndarray
         ``dz/dt = v - sigma_0 |v| z / g(v)`` [m/s].
     """
-    check_parameters(sigma_0=sigma_0)
+    check_parameters(sigma_0=sigma_0, F_c=F_c, F_s=F_s, v_r=v_r, alpha=alpha)
     _check_g_positive(F_c, F_s)
-    g = lugre_g(velocity, F_c, F_s, v_r, alpha=alpha)
-    v = np.asarray(velocity, dtype=float)
+    v = check_signal("velocity", velocity)
     zz = check_signal("z", z)
-    dz = v - sigma_0 * np.abs(v) * zz / g  # eq. 2.5
+    _, dz = lugre_unchecked(v, zz, sigma_0, 0.0, 0.0, F_c, F_s, v_r, alpha)
     return as_output(dz, velocity, z, sigma_0, F_c, F_s, v_r, alpha)
+
+
+def lugre_unchecked(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha=1.0):
+    """LuGre force and bristle rate (eq. 2.5) without parameter checks: (force [N], dz/dt [m/s]).
+
+    For integrators that call it at every step after checking the parameters once; every
+    other caller uses :func:`lugre_force` or :func:`lugre_state_derivative`. Works on
+    scalars (Python floats) and arrays alike.
+    """
+    g = F_c + (F_s - F_c) * stribeck_shape(velocity, v_r, alpha)  # eq. 2.5, g(v)
+    dz = velocity - sigma_0 * abs(velocity) * z / g  # eq. 2.5
+    return sigma_0 * z + sigma_1 * dz + sigma_2 * velocity, dz
 
 
 def lugre_force(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, *, alpha=1.0):
@@ -295,13 +307,12 @@ def lugre_force(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, *, alpha=
     float or ndarray
         Friction force [N], positive in the direction of motion.
     """
-    check_parameters(sigma_1=sigma_1, sigma_2=sigma_2)
-    dz = lugre_state_derivative(velocity, z, sigma_0, F_c, F_s, v_r, alpha=alpha)
-    force = (
-        sigma_0 * np.asarray(z, dtype=float)
-        + sigma_1 * dz
-        + sigma_2 * np.asarray(velocity, dtype=float)
-    )  # eq. 2.5
+    check_parameters(sigma_0=sigma_0, sigma_1=sigma_1, sigma_2=sigma_2, F_c=F_c, F_s=F_s)
+    check_parameters(v_r=v_r, alpha=alpha)
+    _check_g_positive(F_c, F_s)
+    v = check_signal("velocity", velocity)
+    zz = check_signal("z", z)
+    force, _ = lugre_unchecked(v, zz, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha)
     return as_output(force, velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..friction import get_law, law_params, lugre_g
+from ..friction import get_law, law_params, lugre_force, lugre_g, lugre_unchecked
 
 
 def solve_reference(
@@ -48,16 +48,14 @@ def solve_reference(
     if law == "lugre":
         s0, s1 = params["sigma_0"], params["sigma_1"]
 
+        v_r, alpha = params_const(params, "v_r"), params_const(params, "alpha")
+        given = (params["sigma_2"], params["F_c"], params["F_s"])
+        lugre_force(0.0, 0.0, s0, s1, *given, v_r, alpha=alpha)  # checks them all once
+
         def force_of(t, v, z):
-            g = lugre_g(
-                v,
-                param("F_c", t),
-                param("F_s", t),
-                params_const(params, "v_r"),
-                alpha=params_const(params, "alpha"),
-            )
-            dz = v - s0 * abs(v) * z / g
-            return s0 * z + s1 * dz + param("sigma_2", t) * v, dz
+            return lugre_unchecked(
+                v, z, s0, s1, param("sigma_2", t), param("F_c", t), param("F_s", t), v_r, alpha
+            )  # eq. 2.5: (force, dz/dt)
     elif law == "dahl":
 
         def force_of(t, v, z):
@@ -132,7 +130,7 @@ def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
         v = velocity[i] * (1 - w) + velocity[i + 1] * w
         fc = F_c[i] * (1 - w) + F_c[i + 1] * w
         fs = F_s[i] * (1 - w) + F_s[i + 1] * w
-        g = fc + (fs - fc) * np.exp(-((abs(v) / v_r) ** alpha))
+        g = lugre_g(v, fc, fs, v_r, alpha=alpha)  # eq. 2.5
         return v, s0 * abs(v) / g
 
     def rhs(t, y):
@@ -148,6 +146,5 @@ def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
     if not sol.success:
         raise RuntimeError(f"solve_ivp (Radau) failed: {sol.message}")
     z = sol.y[0]
-    g = lugre_g(velocity, F_c, F_s, v_r, alpha=alpha)
-    force = s0 * z + s1 * (velocity - s0 * np.abs(velocity) * z / g) + sigma_2 * velocity
+    force = lugre_force(velocity, z, s0, s1, sigma_2, F_c, F_s, v_r, alpha=alpha)  # eq. 2.5
     return z, force
