@@ -12,6 +12,7 @@ import functools
 import math
 import sys
 import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -196,7 +197,9 @@ def run_fit(
 
     fixed = _fixed(list(fix))
     n_files = len(discover_runs(campaign, load_config(campaign)))
-    with _progress() as progress:
+    # warnings reach the user once, as the notes printed below (not as Python's own lines)
+    with _progress() as progress, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
         task = progress.add_task(f"reading {campaign.name}", total=n_files)
         result = fit_campaign(
             campaign,
@@ -313,7 +316,8 @@ def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
 
     sheet = read_datasheet(datasheet)
     console.print(_summary_table(sheet, f"Friction datasheet {sheet.get('name', '')}"))
-    console.print(FrictionModel.from_datasheet(sheet).fit_report(), markup=False, highlight=False)
+    report = FrictionModel.from_datasheet(sheet).fit_report(min_correlation=0.3)
+    console.print(report, markup=False, highlight=False)
     rows = sheet.get("per_pressure", [])
     if rows:
         table = Table(title="Per pressure (thesis Table 4.1 layout)")

@@ -159,6 +159,7 @@ def figure_fit(ident):
     speed = pts["velocity [m/s]"].abs()
     grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 200)
     banded = model.covariance is not None
+    widest = 0.0
     for level, color in zip(levels, colors, strict=True):
         sel = pts[pts["level"] == level]
         p = float(ident.levels[level])
@@ -176,9 +177,11 @@ def figure_fit(ident):
         if banded:
             lower, upper = model.band(grid, pressure)
             ax.fill_between(grid * 1e3, lower, upper, color=color, alpha=0.25, lw=0)
+            widest = max(widest, float(np.max(upper - lower)) / 2)
     ax.plot([], [], "-", color="0.3", lw=1.2, label="model")
     if banded:
-        ax.fill_between([], [], [], color="0.3", alpha=0.25, lw=0, label="95 % band of the mean")
+        label = f"95 % band of the mean (± up to {widest:.2g} N)"
+        ax.fill_between([], [], [], color="0.3", alpha=0.25, lw=0, label=label)
     ax.set_xlabel("speed |v| [mm/s]")
     ax.set_ylabel("friction force F_f [N]")
     ax.set_title(

@@ -96,7 +96,7 @@ def render_report(sheet, ident, extraction, figures, *, title="cylfric friction 
             "</figcaption></figure>"
         )
     parts.append("<h2>Fit report</h2>")
-    parts.append(f"<pre>{html.escape(model.fit_report())}</pre>")
+    parts.append(f"<pre>{html.escape(model.fit_report(min_correlation=0.3))}</pre>")
     parts.append("<h2>Per-pressure parameters (thesis Table 4.1 layout)</h2>")
     parts.append(_table(_engineering_per_pressure(ident.per_pressure)))
     parts.append("<h2>Pressure laws compared</h2>")
