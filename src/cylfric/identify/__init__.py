@@ -18,6 +18,7 @@ import pandas as pd
 
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..model import FrictionModel
+from .linear_fit import fit_linear_surface
 from .pressure_fit import (
     FITTED_LAWS,
     PRESSURE_DEPENDENT,
@@ -52,6 +53,8 @@ __all__ = [
     "pressure_levels",
     "validity_of",
     "point_errors",
+    "unphysical",
+    "fit_linear_surface",
     "IdentificationWarning",
     "PARAMETERS",
 ]
@@ -240,6 +243,96 @@ def point_errors(points):
     return sigma, groups
 
 
+STRONG_EVIDENCE_BIC = 10.0
+"""BIC gain [-] the Stribeck law must show over Coulomb + viscous to be kept ("very strong"
+evidence on the scale of Kass & Raftery 1995)."""
+
+
+def unphysical(model, validity, *, points=41):
+    """Why a model is unphysical within the validity pressures, or None.
+
+    Checks F_c >= 0, F_s >= F_c and sigma_2 >= 0 at ``points`` pressures over the range.
+    """
+    p = np.linspace(validity["pressure_min"], validity["pressure_max"], points)
+    k = model.params_at(p)
+    tol = 1e-9 * max(float(np.max(np.abs(k["F_s"]))), 1.0)  # rounding of a value at a bound
+    tol_2 = 1e-9 * max(float(np.max(np.abs(k["sigma_2"]))), 1.0)
+    checks = (
+        (k["F_c"] < -tol, "F_c < 0"),
+        (k["F_s"] < k["F_c"] - tol, "F_s < F_c"),
+        (np.asarray(k["sigma_2"]) < -tol_2, "sigma_2 < 0"),
+    )
+    for bad, what in checks:
+        bad = np.broadcast_to(bad, p.shape)
+        if bad.any():
+            return f"it gives {what} at {p[bad][0] / 1e5:.4g} bar"
+    return None
+
+
+def _linear_model(args, fixed, weights, notes):
+    """The linear-law model the data support: Stribeck, else Coulomb + viscous, else Coulomb.
+
+    Returns (chosen SurfaceFit, the Coulomb + viscous alternative or None). Raises
+    ValueError when even the friction level is pushed to 0 N (a sign or unit error).
+    """
+    stribeck = fit_linear_surface(*args, friction_law="stribeck", fixed=fixed, **weights)
+    reduced_fixed = {k: v for k, v in fixed.items() if k in ("F_c", "sigma_2")}
+    gain = None
+    shape_bounds = [b for b in stribeck.at_bounds if b.split()[0] in ("amplitude", "v_r", "alpha")]
+    alternative = None
+    if not {"F_s", "v_r", "alpha"} & set(fixed) or shape_bounds:
+        alternative = fit_linear_surface(
+            *args, friction_law="coulomb_viscous", fixed=reduced_fixed, **weights
+        )
+        gain = alternative.model.statistics["bic"] - stribeck.model.statistics["bic"]
+    if shape_bounds or (gain is not None and gain <= STRONG_EVIDENCE_BIC):
+        why = (
+            "the fit pushes " + ", ".join(shape_bounds) + " to its physical bound"
+            if shape_bounds
+            else f"the Stribeck law improves BIC by only {gain:.3g} (<= "
+            f"{STRONG_EVIDENCE_BIC:g}) over Coulomb + viscous friction"
+        )
+        reason = f"no identifiable Stribeck dip: {why}"
+        notes.append(
+            f"{reason}; the datasheet gives the Coulomb + viscous model F_c(p) + "
+            "sigma_2(p) |v| and marks F_s, v_r and alpha not identified"
+        )
+        chosen = fit_linear_surface(
+            *args,
+            friction_law="coulomb_viscous",
+            fixed=reduced_fixed,
+            not_identified={n: reason for n in ("F_s", "v_r", "alpha")},
+            **weights,
+        )
+        alternative = stribeck
+        if sum(b.startswith("sigma_2") for b in chosen.at_bounds) == 2 and "sigma_2" not in fixed:
+            reason = "the data ask for a negative viscous coefficient at every pressure"
+            notes.append(f"{reason}: the datasheet gives the Coulomb level F_c(p) only")
+            chosen = fit_linear_surface(
+                *args,
+                friction_law="coulomb",
+                fixed={k: v for k, v in fixed.items() if k == "F_c"},
+                not_identified={"F_s": reason, "sigma_2": reason, "v_r": reason, "alpha": reason},
+                **weights,
+            )
+    else:
+        chosen = stribeck
+    level = [b for b in chosen.at_bounds if b.startswith("F_c")]
+    if level:
+        raise ValueError(
+            f"the friction level is pushed to 0 N ({', '.join(level)}): the data contradict a "
+            "positive friction force; check the force-balance signs (load_cell_sign, "
+            "position_sign), the offset and the force and position units"
+        )
+    for bound in chosen.at_bounds:
+        if bound.startswith("sigma_2"):
+            notes.append(
+                f"sigma_2 is held at its bound 0 N*s/m ({bound}): the data ask for a negative "
+                "viscous coefficient there"
+            )
+    return chosen, alternative
+
+
 def _core(points, levels, *, pressure_law, fixed, notes, validity):
     per_pressure, fits = _per_pressure(points, levels, fixed)
     _check_per_pressure(per_pressure, fits)
@@ -259,42 +352,52 @@ def _core(points, levels, *, pressure_law, fixed, notes, validity):
             "fewer than two pressure levels with enough points: the pressure "
             "dependence rests on the surface fit alone"
         )
-    surface_fixed = {k: v for k, v in fixed.items() if k in ("v_r", "alpha")}
     sigma, groups = point_errors(points)
-    fits_by_law = {}
-    for name in LAWS_COMPARED:
+    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
+    weights = {"sigma": sigma, "groups": groups}
+    linear, alternative = _linear_model(args, fixed, weights, notes)
+    fits_by_law = {"linear": linear}
+    shape_only = set(fixed) <= {"v_r", "alpha"}
+    for name in LAWS_COMPARED[1:]:
+        if linear.model.friction_law != "stribeck" or not shape_only:
+            notes.append(
+                f"the {name} pressure law was not fitted: cylfric fits it only for the "
+                "Stribeck law with at most v_r and alpha held"
+            )
+            continue
         if len(PRESSURE_LAW_COEFFICIENTS[name]) > len(levels):
             continue
-        linear = fits_by_law.get("linear")  # LAWS_COMPARED starts with linear
         try:
-            fits_by_law[name] = fit_surface(
-                points["velocity [m/s]"],
-                points["pressure [Pa]"],
-                points["friction [N]"],
-                pressure_law=name,
-                fixed=surface_fixed,
-                start=None if linear is None else linear.model,
-                sigma=sigma,
-                groups=groups,
-            )
+            fit = fit_surface(*args, pressure_law=name, fixed=fixed, start=linear.model, **weights)
         except (ValueError, np.linalg.LinAlgError) as exc:
             notes.append(f"surface fit with the {name} pressure law failed: {exc}")
+            continue
+        problem = unphysical(fit.model, validity)
+        if problem:
+            notes.append(f"the {name} pressure law was left out: {problem}")
+            continue
+        fits_by_law[name] = fit
     if pressure_law not in fits_by_law:
         raise ValueError(
-            f"the {pressure_law} pressure law cannot be fitted to {len(levels)} pressure "
-            "level(s); use --pressure-law linear or measure more pressures"
+            f"the {pressure_law} pressure law cannot be used on these data ({len(levels)} "
+            "pressure level(s); see the notes above); use --pressure-law linear"
+            + ("" if len(levels) > 2 else " or measure more pressures")
         )
     models = {n: f.model.replace(validity=validity) for n, f in fits_by_law.items()}
+    rows = [(n, m) for n, m in models.items()]
+    if alternative is not None:
+        rows.insert(1, ("linear", alternative.model))
     comparison = pd.DataFrame(
         [
             {
                 "law": n,
+                "friction_law": m.friction_law,
                 "coefficients [-]": m.statistics["n_variables"],
                 "rmse [N]": m.statistics["rmse"],
                 "aic": m.statistics["aic"],
                 "bic": m.statistics["bic"],
             }
-            for n, m in models.items()
+            for n, m in rows
         ]
     )
     for name, f in fits_by_law.items():
@@ -394,8 +497,10 @@ def identify(
             warnings.warn(w.message, w.category, stacklevel=2)
         per_pressure, fits, regressions, models, fits_by_law, comparison = core
         model = models[pressure_law]
+        shape = model.friction_law == "stribeck"
         for par in PRESSURE_DEPENDENT:
-            slope = model.coefficients()[par].get("slope")
+            spec = model.coefficients()[par]
+            slope = spec.get("slope") if isinstance(spec, dict) else None
             if slope is not None and slope < 0:
                 notes.append(
                     f"{par} falls with pressure (slope {slope * 1e5:.3g} per bar): check "
@@ -413,10 +518,10 @@ def identify(
             comparison=comparison,
             pressure_law=pressure_law,
             fixed=fixed,
-            stribeck_identifiable=True,
+            stribeck_identifiable=shape,
             notes=notes,
         )
-        if sensitivity:
+        if sensitivity and shape:
             result = add_sensitivity(result)
     if per_direction and "direction [-]" in used:
         for name, sign in (("extension", 1), ("retraction", -1)):

@@ -176,13 +176,15 @@ class SurfaceFit:
     """Result of :func:`fit_surface`: the model and how the fit went.
 
     ``model`` is the fitted :class:`~cylfric.model.FrictionModel` (covariance, statistics);
-    ``residuals`` are data minus model [N], in the order of the points.
+    ``residuals`` are data minus model [N], in the order of the points; ``at_bounds`` names
+    what the fit pressed against a physical bound (:func:`fit_linear_surface`).
     """
 
     model: FrictionModel
     residuals: np.ndarray
     success: bool
     message: str
+    at_bounds: tuple = ()
 
 
 def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):

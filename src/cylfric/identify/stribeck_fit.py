@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.stats import t as student_t
+from scipy.special import stdtrit
 
 from ..friction import NoStribeckMinimumWarning, stribeck, stribeck_shape, stribeck_velocity
 from ..model import PARAMETER_BOUNDS, STEADY_PARAMETERS
@@ -211,12 +211,25 @@ def fit_stribeck(velocity, friction, *, fixed=None, loss="soft_l1", start=None):
         raise ValueError(f"unknown fixed parameters {sorted(unknown)}; valid: {list(PARAMETERS)}")
     free = tuple(p for p in PARAMETERS if p not in fixed)
     s = {**_start_values(speed, force, fixed), **(start or {})}
-    lower = np.array([BOUNDS[p][0] for p in free])
-    upper = np.array([BOUNDS[p][1] for p in free])
+    bounds = {p: BOUNDS[p] for p in free}
+    # F_s >= F_c: fitted as F_c plus a non-negative Stribeck amplitude when both are free
+    amplitude = "F_c" in free and "F_s" in free
+    if amplitude:
+        bounds["F_s"] = (0.0, np.inf)
+        s["F_s"] = max(s["F_s"] - s["F_c"], 1e-6 * max(abs(s["F_c"]), 1.0))
+    elif "F_c" in free and "F_s" in fixed:
+        bounds["F_c"] = (BOUNDS["F_c"][0], fixed["F_s"])
+    elif "F_s" in free and "F_c" in fixed:
+        bounds["F_s"] = (fixed["F_c"], BOUNDS["F_s"][1])
+    lower = np.array([bounds[p][0] for p in free])
+    upper = np.array([bounds[p][1] for p in free])
     x0 = np.clip([s[p] for p in free], lower + 1e-12, upper - 1e-12)
 
     def unpack(x):
-        return {**fixed, **dict(zip(free, x, strict=True))}
+        params = {**fixed, **dict(zip(free, x, strict=True))}
+        if amplitude:
+            params["F_s"] = params["F_c"] + params["F_s"]
+        return params
 
     def residuals(x):
         return stribeck(speed, **unpack(x)) - force
@@ -231,8 +244,12 @@ def fit_stribeck(velocity, friction, *, fixed=None, loss="soft_l1", start=None):
         covariance = np.linalg.pinv(jac.T @ jac) * sigma2
     except np.linalg.LinAlgError:  # pragma: no cover - pinv is robust
         covariance = np.full((len(free), len(free)), np.nan)
+    if amplitude:  # (F_c, amplitude) -> (F_c, F_s = F_c + amplitude)
+        transform = np.eye(len(free))
+        transform[free.index("F_s"), free.index("F_c")] = 1.0
+        covariance = transform @ covariance @ transform.T
     se = np.sqrt(np.clip(np.diag(covariance), 0, None))
-    tq = float(student_t.ppf(0.975, dof))
+    tq = float(stdtrit(dof, 0.975))
     stderr = {p: 0.0 for p in PARAMETERS}
     stderr.update(dict(zip(free, se, strict=True)))
     ci95 = {p: (params[p] - tq * stderr[p], params[p] + tq * stderr[p]) for p in PARAMETERS}

@@ -52,6 +52,8 @@ __all__ = [
 STEADY_PARAMETERS = ("F_c", "F_s", "sigma_2", "v_r", "alpha")
 """Parameters of the steady-state law (eq. 2.7), in the order of vectors and tables."""
 DYNAMIC_PARAMETERS = ("sigma_0", "sigma_1")
+PRESSURE_DEPENDENT = ("F_c", "F_s", "sigma_2")
+"""Parameters the datasheet always writes as pressure laws (a constant as ``"constant"``)."""
 """LuGre bristle stiffness and damping (eq. 2.5); they do not act in steady state."""
 
 PARAMETER_UNITS = {
@@ -466,7 +468,10 @@ class FrictionModel:
         if law is None:
             return None
         if law == "constant":
-            return getattr(self.parameters[name], attribute)
+            value = getattr(self.parameters[name], attribute)
+            if name not in PRESSURE_DEPENDENT:
+                return value
+            return {"intercept": value, **({} if self.pressure_law == "constant" else {"law": law})}
         spec = {
             c: getattr(self.parameters[f"{name}.{c}"], attribute)
             for c in PRESSURE_LAW_COEFFICIENTS[law]

@@ -260,10 +260,12 @@ def _physical(sheet):
     F_s = params.get("F_s", F_c)
     sigma_2 = params.get("sigma_2", 0.0 * p)
     span = f"{p[0] / 1e5:.4g}-{p[-1] / 1e5:.4g} bar"
+    tol = 1e-9 * max(float(np.max(np.abs(F_s))), 1.0)  # [N], rounding of a bound value
+    tol_2 = 1e-9 * max(float(np.max(np.abs(sigma_2))), 1.0)  # [N*s/m]
     checks = (
-        (np.min(F_c) < 0, "parameters/F_c", f"F_c < 0 N within {span}"),
-        (np.any(F_s < F_c - 1e-9 * np.abs(F_c)), "parameters/F_s", f"F_s < F_c within {span}"),
-        (np.min(sigma_2) < 0, "parameters/sigma_2", f"sigma_2 < 0 N*s/m within {span}"),
+        (np.min(F_c) < -tol, "parameters/F_c", f"F_c < 0 N within {span}"),
+        (np.any(F_s < F_c - tol), "parameters/F_s", f"F_s < F_c within {span}"),
+        (np.min(sigma_2) < -tol_2, "parameters/sigma_2", f"sigma_2 < 0 N*s/m within {span}"),
         (
             np.max(np.maximum(F_s, F_c) + sigma_2 * v_max) > MAX_FORCE,
             "parameters",
