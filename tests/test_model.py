@@ -311,3 +311,12 @@ def test_band_holds_the_truth_of_50_virtual_campaigns(tmp_path):
     inside = np.array(inside)
     assert 0.90 <= inside.mean() <= 0.99, inside.mean(axis=0)
     assert inside.mean(axis=0).min() >= 0.84, inside.mean(axis=0)  # binomial sd 0.03 at 50
+
+
+def test_pressure_only_check_for_simulations(fitted):
+    model = fitted.model
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert model.check(None, np.array([1e5, 159e5])).all()
+    with pytest.raises(ValueError, match="1 of 2 point"):
+        model.check(None, np.array([1e5, 300e5]), strict=True)

@@ -543,13 +543,15 @@ class FrictionModel:
     def check(self, velocity, pressure, *, strict=False):
         """Where (velocity [m/s], pressure [Pa]) lie inside the validity ranges.
 
-        Returns a boolean array (broadcast shape). Points outside, or pressures below 1e3 Pa
+        ``velocity=None`` checks the pressures only (a simulation passes through every
+        speed, zero included). Returns a boolean array (broadcast shape). Points outside, or pressures below 1e3 Pa
         (pressures given in bar?), give a :class:`ValidityWarning`, or a ValueError with
         ``strict=True``. A model without validity ranges accepts everything.
         """
-        speed, p = np.broadcast_arrays(
-            np.abs(np.asarray(velocity, dtype=float)), np.asarray(pressure, dtype=float)
-        )
+        p = np.asarray(pressure, dtype=float)
+        speed = None
+        if velocity is not None:
+            speed, p = np.broadcast_arrays(np.abs(np.asarray(velocity, dtype=float)), p)
         problems = []
         positive = p[p > 0]
         if positive.size and positive.max() < 1e3:
@@ -562,12 +564,11 @@ class FrictionModel:
             val = self.validity
             tol_p = 1e-6 * max(abs(val["pressure_max"]), 1.0)
             tol_v = 1e-6 * max(val["velocity_max"], 1e-9)
-            inside = (
-                (p >= val["pressure_min"] - tol_p)
-                & (p <= val["pressure_max"] + tol_p)
-                & (speed >= val["velocity_min"] - tol_v)
-                & (speed <= val["velocity_max"] + tol_v)
-            )
+            inside = (p >= val["pressure_min"] - tol_p) & (p <= val["pressure_max"] + tol_p)
+            if speed is not None:
+                inside &= (speed >= val["velocity_min"] - tol_v) & (
+                    speed <= val["velocity_max"] + tol_v
+                )
             if not inside.all():
                 problems.append(
                     f"{int((~inside).sum())} of {inside.size} point(s) outside the validity "

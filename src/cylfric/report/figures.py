@@ -252,6 +252,7 @@ def figure_directions(points, offset=None):
     if "force [N]" in pts and "direction [-]" in pts:
         for level, color in zip(levels, colors, strict=True):
             sel = pts[pts["level"] == level]
+            pressure = sel["pressure [Pa]"].mean() / 1e5
             for sign, marker in ((1, "^"), (-1, "v")):
                 part = sel[sel["direction [-]"] == sign]
                 ax.plot(
@@ -261,11 +262,16 @@ def figure_directions(points, offset=None):
                     ms=3.5,
                     color=color,
                     alpha=0.8,
+                    label=f"{pressure:.3g} bar" if sign == 1 else None,
                 )
+        ax.plot([], [], "^", color="0.4", label="^ ascending (extension)")
+        ax.plot([], [], "v", color="0.4", label="v descending, sign flipped")
+        ax.legend(fontsize=6, loc="upper left", ncol=3)
         if offset is not None and np.isfinite(offset):
             ax.set_title(
-                "Ascending (^) and descending (v, sign flipped) levels (cf. thesis Fig. 4.3):\n"
-                f"they differ by 2 x the weight offset = {2 * offset:.2f} N",
+                "Ascending and descending levels (cf. thesis Fig. 4.3): they differ by\n"
+                f"2 x the load-cell offset (weight, preload or pressure force) = "
+                f"{2 * offset:.2f} N",
                 fontsize=9,
             )
     ax.set_xlabel("speed |v| [mm/s]")
@@ -364,13 +370,19 @@ def figure_residuals(ident):
     pts = ident.points
     res = ident.residuals
     fig, axes = _canvas("residuals")
-    axes[0].plot(pts["velocity [m/s]"].abs() * 1e3, res, ".", ms=3)
+    axes[0].plot(pts["velocity [m/s]"].abs() * 1e3, res, ".", ms=3, label="point (window)")
     axes[0].set_xlabel("speed |v| [mm/s]")
     axes[0].set_ylabel("residual (data - model) [N]")
-    axes[1].plot(pts["pressure [Pa]"] / 1e5, res, ".", ms=3)
+    axes[1].plot(pts["pressure [Pa]"] / 1e5, res, ".", ms=3, label="point (window)")
     axes[1].set_xlabel("pressure p [bar]")
+    scatter = ident.model.statistics.get("residual_std")
     for ax in axes:
         ax.axhline(0, color="k", lw=0.6)
+        if scatter:
+            ax.axhspan(
+                -2 * scatter, 2 * scatter, color="0.5", alpha=0.12, lw=0, label="± 2 x residual std"
+            )
+        ax.legend(fontsize=7, loc="upper right")
     fig.suptitle(f"Residuals of the global fit (RMSE {ident.model.statistics['rmse']:.3f} N)")
     return fig
 
