@@ -544,9 +544,10 @@ class FrictionModel:
         """Where (velocity [m/s], pressure [Pa]) lie inside the validity ranges.
 
         ``velocity=None`` checks the pressures only (a simulation passes through every
-        speed, zero included). Returns a boolean array (broadcast shape). Points outside, or pressures below 1e3 Pa
-        (pressures given in bar?), give a :class:`ValidityWarning`, or a ValueError with
-        ``strict=True``. A model without validity ranges accepts everything.
+        speed, zero included). Returns a boolean array (broadcast shape). Points outside,
+        or pressures below 1e3 Pa (pressures given in bar?), give a
+        :class:`ValidityWarning`, or a ValueError with ``strict=True``. A model without
+        validity ranges accepts everything.
         """
         p = np.asarray(pressure, dtype=float)
         speed = None
