@@ -61,13 +61,11 @@ UNITS: dict[str, tuple[str, float]] = {
     "n": ("force", 1.0),
     "kn": ("force", 1e3),
     "dan": ("force", 10.0),
-    "mn": ("force", 1e6),
     "lbf": ("force", 4.4482216152605),
     "kgf": ("force", 9.80665),
     # pressure
     "pa": ("pressure", 1.0),
     "kpa": ("pressure", 1e3),
-    "mpa": ("pressure", 1e6),
     "bar": ("pressure", 1e5),
     "mbar": ("pressure", 1e2),
     "psi": ("pressure", 6894.757293168),
@@ -95,12 +93,26 @@ UNITS: dict[str, tuple[str, float]] = {
     "g": ("mass", 1e-3),
     # electric (raw sensor channels)
     "v": ("voltage", 1.0),
-    "mv": ("voltage", 1e-3),
     # dimensionless
     "-": ("dimensionless", 1.0),
     "1": ("dimensionless", 1.0),
     "": ("dimensionless", 1.0),
 }
+
+
+# Symbols whose case carries the prefix (m milli, M mega): matched exactly as written, or
+# all upper-case as bench exports write them (MN, MPA, MV: mega). Lower-case "mn", "mpa",
+# "mv" are ambiguous and refused.
+CASED_UNITS: dict[str, tuple[str, float]] = {
+    "mN": ("force", 1e-3),
+    "MN": ("force", 1e6),
+    "mPa": ("pressure", 1e-3),
+    "MPa": ("pressure", 1e6),
+    "MPA": ("pressure", 1e6),
+    "mV": ("voltage", 1e-3),
+    "MV": ("voltage", 1e6),
+}
+_AMBIGUOUS = {"mn": ("mN", "MN"), "mpa": ("mPa", "MPa"), "mv": ("mV", "MV")}
 
 
 class UnitError(ValueError):
@@ -109,6 +121,21 @@ class UnitError(ValueError):
 
 def _key(unit: str) -> str:
     return unit.strip().replace(" ", "").replace("·", "*").lower()
+
+
+def _lookup(unit: str) -> tuple[str, float]:
+    """(dimension, factor to SI) of a unit symbol; prefixes m and M by their case."""
+    exact = unit.strip().replace(" ", "")
+    if exact in CASED_UNITS:
+        return CASED_UNITS[exact]
+    key = _key(unit)
+    if key in _AMBIGUOUS:
+        milli, mega = _AMBIGUOUS[key]
+        raise UnitError(
+            f"unit {unit!r} is ambiguous: write {milli} (milli) or {mega} (mega); "
+            "unit prefixes are case-sensitive"
+        )
+    return UNITS[key]
 
 
 def unit_dimension(unit: str) -> str:
@@ -120,18 +147,17 @@ def unit_dimension(unit: str) -> str:
         If the unit is unknown; the message lists the known symbols.
     """
     try:
-        return UNITS[_key(unit)][0]
+        return _lookup(unit)[0]
     except KeyError:
-        raise UnitError(
-            f"unknown unit {unit!r}; known units: {', '.join(sorted(k for k in UNITS if k))}"
-        ) from None
+        known = sorted([k for k in UNITS if k] + list(CASED_UNITS))
+        raise UnitError(f"unknown unit {unit!r}; known units: {', '.join(known)}") from None
 
 
 def _factor(unit: str, dimension: str | None) -> float:
     dim = unit_dimension(unit)
     if dimension is not None and dim != dimension:
         raise UnitError(f"unit {unit!r} is a {dim} unit, expected a {dimension} unit")
-    return UNITS[_key(unit)][1]
+    return _lookup(unit)[1]
 
 
 def to_si(value, unit: str, dimension: str | None = None):

@@ -123,10 +123,7 @@ def load_config(folder) -> CampaignConfig:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise BenchFileError(path, f"invalid TOML ({exc})") from None
-    known = {"files", "columns", "cylinder", "force_balance", "extraction"}
-    unknown = set(doc) - known
-    if unknown:
-        raise BenchFileError(path, f"unknown tables {sorted(unknown)}; valid: {sorted(known)}")
+    _validate_config(doc, path)
     files, cols = doc.get("files", {}), doc.get("columns", {})
     cyl, fb = doc.get("cylinder", {}), doc.get("force_balance", {})
     area_a = area_b = 0.0
@@ -143,6 +140,19 @@ def load_config(folder) -> CampaignConfig:
         }
         if kind not in kinds:
             raise BenchFileError(path, f"unknown cylinder kind {kind!r}; valid: {sorted(kinds)}")
+        if not bore > 0:
+            raise BenchFileError(
+                path,
+                'cylinder.bore is missing or 0; expected e.g. bore = "40 mm"',
+                line=_line_of(path, "bore"),
+            )
+        if rod >= bore:
+            raise BenchFileError(
+                path,
+                f"cylinder.rod ({rod * 1e3:g} mm) must be smaller than the bore "
+                f"({bore * 1e3:g} mm)",
+                line=_line_of(path, "rod"),
+            )
         area_a, area_b = kinds[kind]
     names, units = cols.get("names"), cols.get("units")
     if (names is None) != (units is None) or (names and len(names) != len(units)):
@@ -167,6 +177,100 @@ def load_config(folder) -> CampaignConfig:
     )
 
 
+_QUANTITY_TEXT = {"type": "string", "minLength": 1}
+CONFIG_SCHEMA = {
+    "type": "object",
+    "additionalProperties": False,
+    "properties": {
+        "files": {
+            "type": "object",
+            "additionalProperties": False,
+            "properties": {
+                "glob": {"type": "string", "minLength": 1},
+                "name_pattern": {"type": "string"},
+            },
+        },
+        "columns": {
+            "type": "object",
+            "additionalProperties": False,
+            "properties": {
+                "names": {"type": "array", "items": {"type": "string"}, "minItems": 1},
+                "units": {"type": "array", "items": {"type": "string"}, "minItems": 1},
+                "delimiter": {"enum": ["auto", "tab", "semicolon", "comma", "whitespace"]},
+                "decimal": {"enum": ["auto", ".", ","]},
+            },
+        },
+        "cylinder": {
+            "type": "object",
+            "additionalProperties": False,
+            "properties": {
+                "bore": _QUANTITY_TEXT,
+                "rod": _QUANTITY_TEXT,
+                "kind": {"enum": ["double-rod", "single-rod", "single-acting"]},
+            },
+        },
+        "force_balance": {
+            "type": "object",
+            "additionalProperties": False,
+            "properties": {
+                "load_cell_sign": {"enum": [1, -1]},
+                "position_sign": {"enum": [1, -1]},
+                "moving_mass": _QUANTITY_TEXT,
+            },
+        },
+        "extraction": {
+            "type": "object",
+            "properties": {"method": {"type": "string"}},
+            "additionalProperties": {"type": "number"},
+        },
+    },
+}
+"""JSON Schema of campaign.toml (tables and keys; extraction keys are checked by name later)."""
+
+
+def _line_of(path, key) -> int | None:
+    """1-based line of ``key = ...`` (or ``[key]``) in a TOML file, for error messages."""
+    pattern = re.compile(rf"^\s*(\[\s*{re.escape(key)}\s*\]|{re.escape(key)}\s*=)")
+    for number, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
+        if pattern.match(line):
+            return number
+    return None
+
+
+def _validate_config(doc, path):
+    """Raise BenchFileError naming the key (and its line) of the first schema violation."""
+    import jsonschema
+
+    validator = jsonschema.Draft202012Validator(CONFIG_SCHEMA)
+    errors = sorted(validator.iter_errors(doc), key=lambda e: (len(e.path), list(e.path)))
+    if errors:
+        error = errors[0]
+        where = ".".join(str(p) for p in error.path)
+        if error.validator == "additionalProperties":
+            extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
+            valid = sorted(error.schema.get("properties", {}))
+            table = f"[{where}] " if where else ""
+            raise BenchFileError(
+                path,
+                f"unknown key {extra[0]!r} in {table or 'the top level '}(valid: {valid})",
+                line=_line_of(path, extra[0]),
+            )
+        key = str(error.path[-1]) if error.path else ""
+        raise BenchFileError(
+            path, f"{where}: {error.message}", line=_line_of(path, key) if key else None
+        )
+    pattern = doc.get("files", {}).get("name_pattern")
+    if pattern is not None:
+        try:
+            re.compile(pattern)
+        except re.error as exc:
+            raise BenchFileError(
+                path,
+                f"files.name_pattern is not a valid regular expression ({exc})",
+                line=_line_of(path, "name_pattern"),
+            ) from None
+
+
 def name_tokens(name: str) -> dict:
     """Pressure [Pa] and velocity [m/s] from file-name tokens such as ``p55bar_v10mms``."""
     out = {}
@@ -185,7 +289,9 @@ def _read_manifest(folder: Path) -> dict:
         return {}
     rows = {}
     with path.open(newline="", encoding="utf-8-sig") as handle:
-        reader = csv.DictReader(handle)
+        reader = csv.DictReader(handle, skipinitialspace=True)
+        if reader.fieldnames:  # 'file, pressure_bar' or 'File' are the same columns
+            reader.fieldnames = [name.strip().lower() for name in reader.fieldnames]
         if not reader.fieldnames or "file" not in reader.fieldnames:
             raise BenchFileError(
                 path,
@@ -193,6 +299,7 @@ def _read_manifest(folder: Path) -> dict:
                 line=1,
             )
         for number, row in enumerate(reader, start=2):
+            row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
             extra = {
                 k: v
                 for k, v in row.items()
@@ -207,6 +314,24 @@ def _read_manifest(folder: Path) -> dict:
                 raise BenchFileError(
                     path, "pressure_bar and velocity_mm_s must be numbers", line=number
                 ) from None
+            if not (math.isnan(pressure) or (math.isfinite(pressure) and pressure >= 0)):
+                raise BenchFileError(
+                    path,
+                    f"pressure_bar = {row['pressure_bar']} of {row['file']}; expected a finite "
+                    "pressure >= 0 bar",
+                    line=number,
+                )
+            if not (math.isnan(velocity) or (math.isfinite(velocity) and velocity != 0)):
+                raise BenchFileError(
+                    path,
+                    f"velocity_mm_s = {row['velocity_mm_s']} of {row['file']}; expected a "
+                    "finite speed other than 0 mm/s",
+                    line=number,
+                )
+            if row["file"] in rows:
+                raise BenchFileError(
+                    path, f"{row['file']} is listed twice; expected one row per file", line=number
+                )
             rows[row["file"]] = (pressure, velocity, extra)
     return rows
 

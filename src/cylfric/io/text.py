@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..units import UNITS, UnitError, unit_dimension
+from ..units import UnitError, to_si, unit_dimension
 from ._scan import NUMERIC, TEXT, parse_block, scan_lines
 
 __all__ = [
@@ -97,7 +97,11 @@ def canonical_name(name: str) -> str | None:
 
 
 def _is_unit(token: str) -> bool:
-    return token.strip().replace(" ", "").lower() in UNITS
+    try:
+        unit_dimension(token)
+    except UnitError as exc:  # an ambiguous prefix is still a unit (and an error later)
+        return "ambiguous" in str(exc)
+    return True
 
 
 @dataclass
@@ -268,6 +272,20 @@ def read_bench_arrays(
         raise ValueError(
             f"unknown delimiter {delimiter!r}; valid: auto, tab, semicolon, comma, whitespace"
         )
+    # MTS 793 / TestSuite exports begin every data row with a separator (an empty first
+    # cell): read such rows from the byte after it
+    if delim is not None and sample.startswith(delim):
+        firsts = buf[starts[data_idx]]
+        if not np.all(firsts == ord(delim)):
+            bad = int(data_idx[np.flatnonzero(firsts != ord(delim))[0]])
+            raise BenchFileError(
+                path,
+                "some data rows begin with a separator (an empty first cell) and others "
+                "do not; expected one layout in the whole file",
+                line=bad + 1,
+            )
+        starts = starts.copy()
+        starts[data_idx] += 1
     if decimal == "auto":
         probe = b"".join(raw[starts[i] : ends[i]] for i in data_idx[:50])
         decimal = "," if delim != "," and b"," in probe else "."
@@ -425,7 +443,7 @@ def _assemble(frames, path):
                 key = f"{quantity} [{SI_UNITS[dim]}]"
                 if key in cols:
                     key = f"{name} [{SI_UNITS[dim]}]"
-                cols[key] = values[:, j] * UNITS[unit.strip().replace(" ", "").lower()][1]
+                cols[key] = to_si(values[:, j], unit, dim)
                 col_units[quantity] = unit
             else:
                 cols[f"{name} [{unit or '-'}]"] = values[:, j]

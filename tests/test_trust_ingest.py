@@ -1,0 +1,164 @@
+"""Ingestion faults of issue 11: each gives the corrected reading or a clear error naming the
+file, the line and the key."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from cylfric.io import BenchFileError, read_bench_text
+from cylfric.io.campaign import _read_manifest, load_config
+from cylfric.units import UnitError, parse_quantity
+
+
+def test_rows_that_begin_with_a_separator_are_read(tmp_path):
+    path = tmp_path / "mts793.txt"
+    path.write_text(
+        "Time\tPosition\tForce\nSec\tmm\tkN\n"
+        "\t0,000\t72,0000\t0,01423\n\t0,010\t72,0100\t0,01424\n\t0,020\t72,0200\t0,01425\n"
+    )
+    data, meta = read_bench_text(path)
+    assert list(data["force [N]"]) == pytest.approx([14.23, 14.24, 14.25])
+    assert list(data["position [m]"]) == pytest.approx([0.072, 0.07201, 0.07202])
+    path.write_text("Time\tPosition\tForce\nSec\tmm\tkN\n\t0,0\t72,0\t0,01\n0,01\t72,1\t0,02\n")
+    with pytest.raises(BenchFileError, match=r"mts793.txt, line 4: some data rows begin with"):
+        read_bench_text(path)
+
+
+@pytest.mark.parametrize(
+    "text, dimension, expected",
+    [
+        ("5 mN", "force", 5e-3),
+        ("5 MN", "force", 5e6),
+        ("5MPa", "pressure", 5e6),
+        ("5 MPA", "pressure", 5e6),  # bench exports write upper case
+        ("5 mPa", "pressure", 5e-3),
+        ("2 KN", "force", 2e3),
+        ("55 BAR", "pressure", 55e5),
+    ],
+)
+def test_unit_prefixes_are_case_sensitive(text, dimension, expected):
+    assert parse_quantity(text, dimension) == pytest.approx(expected)
+
+
+def test_ambiguous_lower_case_prefix_is_refused():
+    with pytest.raises(UnitError, match="'mn' is ambiguous: write mN \\(milli\\) or MN"):
+        parse_quantity("5 mn", "force")
+
+
+def test_manifest_header_with_spaces_and_capitals_is_read(tmp_path):
+    (tmp_path / "manifest.csv").write_text(
+        "File, Pressure_bar, velocity_mm_s\nrun1.txt, 55, 10\nrun2.txt, 80 ,20\n"
+    )
+    rows = _read_manifest(tmp_path)
+    assert rows["run1.txt"][:2] == (55e5, 0.010)
+    assert rows["run2.txt"][:2] == (80e5, 0.020)
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("run1.txt,-5,10\n", r"line 2: pressure_bar = -5 of run1.txt; expected a finite"),
+        ("run1.txt,inf,10\n", r"line 2: pressure_bar = inf"),
+        ("run1.txt,55,0\n", r"line 2: velocity_mm_s = 0 of run1.txt"),
+        ("run1.txt,55,10\nrun1.txt,80,10\n", r"line 3: run1.txt is listed twice"),
+        ("run1.txt,55bar,10\n", r"line 2: pressure_bar and velocity_mm_s must be numbers"),
+    ],
+)
+def test_manifest_errors_name_the_line(tmp_path, body, message):
+    (tmp_path / "manifest.csv").write_text("file,pressure_bar,velocity_mm_s\n" + body)
+    with pytest.raises(BenchFileError, match=message):
+        _read_manifest(tmp_path)
+
+
+@pytest.mark.parametrize(
+    "toml, message",
+    [
+        ('[cylinder]\nbor = "25 mm"\n', r"line 2: unknown key 'bor' in \[cylinder\]"),
+        ("[files]\nglob = 5\n", r"line 2: files.glob: 5 is not of type 'string'"),
+        ('[extraction]\nmin_samples = "ten"\n', r"line 2: extraction.min_samples: 'ten'"),
+        ('[files]\nname_pattern = "(?P<x"\n', r"line 2: files.name_pattern is not a valid"),
+        ('[cylinder]\nbore = "25 mm"\nrod = "30 mm"\n', r"line 3: cylinder.rod \(30 mm\)"),
+        ('[cylinder]\nkind = "single-acting"\n', r"cylinder.bore is missing or 0"),
+    ],
+)
+def test_campaign_toml_errors_name_the_key_and_line(tmp_path, toml, message):
+    (tmp_path / "campaign.toml").write_text(toml)
+    with pytest.raises(BenchFileError, match=message):
+        load_config(tmp_path)
+
+
+_TOML_KEYS = st.sampled_from(
+    [
+        "glob",
+        "name_pattern",
+        "bore",
+        "rod",
+        "kind",
+        "names",
+        "units",
+        "load_cell_sign",
+        "position_sign",
+        "moving_mass",
+        "min_samples",
+        "method",
+        "bor",
+        "x",
+    ]
+)
+_TOML_VALUES = st.one_of(
+    st.integers(-3, 3),
+    st.floats(allow_nan=False, allow_infinity=False),
+    st.booleans(),
+    st.sampled_from(['"25 mm"', '"40 mm"', '"*.txt"', '"(?P<p>\\\\d+)bar"', '"ten"', '"("', "[1]"]),
+)
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    table=st.sampled_from(["files", "columns", "cylinder", "force_balance", "extraction", "oops"]),
+    entries=st.lists(st.tuples(_TOML_KEYS, _TOML_VALUES), max_size=4, unique_by=lambda e: e[0]),
+)
+def test_fuzzed_campaign_toml_gives_a_config_or_a_bench_file_error(tmp_path, table, entries):
+    lines = [f"[{table}]"] + [
+        f"{k} = {str(v).lower() if isinstance(v, bool) else v}" for k, v in entries
+    ]
+    (tmp_path / "campaign.toml").write_text("\n".join(lines) + "\n")
+    try:
+        load_config(tmp_path)
+    except BenchFileError:
+        pass
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    header=st.lists(
+        st.sampled_from(["file", " File", "pressure_bar", " PRESSURE_BAR ", "velocity_mm_s", "x"]),
+        min_size=1,
+        max_size=4,
+    ),
+    cells=st.lists(
+        st.lists(
+            st.sampled_from(["run.txt", "55", "-1", "0", "inf", "nan", "", "1e3", "a,b"]),
+            max_size=4,
+        ),
+        max_size=4,
+    ),
+)
+def test_fuzzed_manifest_gives_rows_or_a_bench_file_error(tmp_path, header, cells):
+    text = ",".join(header) + "\n" + "".join(",".join(row) + "\n" for row in cells)
+    (tmp_path / "manifest.csv").write_text(text)
+    try:
+        rows = _read_manifest(tmp_path)
+    except BenchFileError:
+        return
+    for pressure, velocity, _ in rows.values():
+        assert math.isnan(pressure) or (math.isfinite(pressure) and pressure >= 0)
+        assert math.isnan(velocity) or (math.isfinite(velocity) and velocity != 0)
