@@ -162,3 +162,29 @@ def test_fuzzed_manifest_gives_rows_or_a_bench_file_error(tmp_path, header, cell
     for pressure, velocity, _ in rows.values():
         assert math.isnan(pressure) or (math.isfinite(pressure) and pressure >= 0)
         assert math.isnan(velocity) or (math.isfinite(velocity) and velocity != 0)
+
+
+def _two_forces(path, first="Force Setpoint"):
+    path.write_text(
+        f"Time\tPosition\t{first}\tAxial Force\ns\tmm\tkN\tkN\n"
+        "0.00\t10.0\t0.100\t0.071\n0.01\t10.1\t0.100\t0.072\n0.02\t10.2\t0.100\t0.073\n"
+    )
+
+
+def test_setpoint_column_is_never_the_measured_force(tmp_path):
+    _two_forces(tmp_path / "run.txt")
+    data, _ = read_bench_text(tmp_path / "run.txt")
+    assert list(data["force [N]"]) == pytest.approx([71.0, 72.0, 73.0])
+    assert "Force Setpoint [kN]" in data  # kept as read
+
+
+def test_two_measured_force_columns_are_an_error_unless_campaign_toml_chooses(tmp_path):
+    _two_forces(tmp_path / "run.txt", first="Load")
+    with pytest.raises(BenchFileError, match=r"columns \['Load', 'Axial Force'\] all look like"):
+        read_bench_text(tmp_path / "run.txt")
+    data, _ = read_bench_text(tmp_path / "run.txt", roles={"force": "Axial Force"})
+    assert list(data["force [N]"]) == pytest.approx([71.0, 72.0, 73.0])
+    (tmp_path / "campaign.toml").write_text('[columns]\nforce = "Axial Force"\n')
+    assert load_config(tmp_path).roles == {"force": "Axial Force"}
+    with pytest.raises(BenchFileError, match=r"\[columns\] force = 'Axial' names no column"):
+        read_bench_text(tmp_path / "run.txt", roles={"force": "Axial"})

@@ -72,6 +72,8 @@ class CampaignConfig:
         Rod, piston and load-cell mass for the inertia term [kg] (0: neglected).
     extraction : dict
         Keyword options for :func:`cylfric.steady_state.extract_points`.
+    roles : dict
+        Quantity -> column name chosen in ``[columns]`` (``force = "Axial Force"``).
     """
 
     glob: str = "*"
@@ -87,6 +89,7 @@ class CampaignConfig:
     moving_mass: float = 0.0
     extraction: dict = field(default_factory=dict)
     source: str | None = None
+    roles: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -174,10 +177,13 @@ def load_config(folder) -> CampaignConfig:
         moving_mass=_quantity(fb.get("moving_mass", "0 kg"), "mass", "kg", path),
         extraction=dict(doc.get("extraction", {})),
         source=str(path),
+        roles={k: v for k, v in cols.items() if k in ROLES},
     )
 
 
 _QUANTITY_TEXT = {"type": "string", "minLength": 1}
+ROLES = ("time", "position", "force", "pressure", "pressure_a", "pressure_b", "velocity")
+"""Quantities a ``[columns]`` key can assign to a named column (``force = "Axial Force"``)."""
 CONFIG_SCHEMA = {
     "type": "object",
     "additionalProperties": False,
@@ -198,6 +204,7 @@ CONFIG_SCHEMA = {
                 "units": {"type": "array", "items": {"type": "string"}, "minItems": 1},
                 "delimiter": {"enum": ["auto", "tab", "semicolon", "comma", "whitespace"]},
                 "decimal": {"enum": ["auto", ".", ","]},
+                **{role: {"type": "string", "minLength": 1} for role in ROLES},
             },
         },
         "cylinder": {
@@ -401,6 +408,7 @@ def read_run(info: RunInfo, config: CampaignConfig):
             units=config.units,
             delimiter=config.delimiter,
             decimal=config.decimal,
+            roles=config.roles,
         )
     pressure, velocity = info.pressure, info.velocity
     source = dict(info.source)

@@ -70,6 +70,21 @@ QUANTITY_DIMENSIONS = {
 }
 SI_UNITS = {"time": "s", "length": "m", "force": "N", "pressure": "Pa", "velocity": "m/s"}
 
+_DEMAND_WORDS = (
+    "setpoint",
+    "set point",
+    "command",
+    "cmd",
+    "target",
+    "demand",
+    "reference",
+    "soll",
+    "börvärde",
+    "borvarde",
+    "desired",
+)
+"""Words of a column that holds a demanded value, never the measured quantity."""
+
 _CELL_UNIT = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$")
 _KEY_VALUE = re.compile(r"^\s*([A-Za-zÀ-ÿ][^:=|]{0,60}?)\s*[:=]\s*(.*?)\s*$")
 _MAX_TEXT_LINES = 5000
@@ -77,9 +92,11 @@ _MAX_TEXT_LINES = 5000
 
 def canonical_name(name: str) -> str | None:
     """Map a column name such as ``Axial Force`` or ``Zeit`` to a canonical quantity."""
-    low = " ".join(name.lower().replace("_", " ").split())
+    low = " ".join(name.lower().replace("_", " ").replace("-", " ").split())
     if any(word in low.split() for word in ("raw", "volt", "voltage", "signal")):
         return None  # raw sensor channels are kept as read, never taken for a quantity
+    if any(word in low for word in _DEMAND_WORDS):
+        return None  # what was asked for, not what was measured
     if low in {"t", "s", "sec"}:
         return "time"
     if low in {"x", "pos"}:
@@ -150,7 +167,14 @@ def _decode(raw: bytes, path, encoding=None, line=None) -> str:
 
 
 def read_bench_text(
-    path, *, columns=None, units=None, delimiter="auto", decimal="auto", encoding=None
+    path,
+    *,
+    columns=None,
+    units=None,
+    delimiter="auto",
+    decimal="auto",
+    encoding=None,
+    roles=None,
 ):
     """Read a bench text file into a DataFrame in SI; see :func:`read_bench_arrays`.
 
@@ -165,12 +189,20 @@ def read_bench_text(
         delimiter=delimiter,
         decimal=decimal,
         encoding=encoding,
+        roles=roles,
     )
     return pd.DataFrame(arrays, copy=False), metadata
 
 
 def read_bench_arrays(
-    path, *, columns=None, units=None, delimiter="auto", decimal="auto", encoding=None
+    path,
+    *,
+    columns=None,
+    units=None,
+    delimiter="auto",
+    decimal="auto",
+    encoding=None,
+    roles=None,
 ):
     """Read a bench text file into SI arrays.
 
@@ -188,6 +220,11 @@ def read_bench_arrays(
         Decimal separator.
     encoding : str, optional
         Text encoding of the preamble (default: UTF-8, falling back to latin-1).
+    roles : dict, optional
+        Quantity -> column name (``{"force": "Axial Force"}``, campaign.toml ``[columns]``):
+        that column is the quantity, other candidates are kept as read. Without it, two
+        measured candidates for one quantity are an error listing them; setpoint, command,
+        target or demand columns are never taken for a measured quantity.
 
     Returns
     -------
@@ -351,7 +388,7 @@ def read_bench_arrays(
             raise BenchFileError(path, message, line=int(bad) + 1)
         frames.append((seg, hdr, values))
 
-    data, col_units = _assemble(frames, path)
+    data, col_units = _assemble(frames, path, roles or {})
     metadata = {
         "file": str(path),
         "header": header_meta,
@@ -410,14 +447,49 @@ def _header_before(previous, text_lines, delim, ncols):
     return None
 
 
-def _assemble(frames, path):
+def _column_roles(names, roles, path, line):
+    """Quantity of each column: the ``roles`` map first, else :func:`canonical_name`.
+
+    Raises BenchFileError when a role names no column, or when two columns are measured
+    candidates for one quantity and no role chooses.
+    """
+    unknown = {q: c for q, c in roles.items() if c not in names}
+    if unknown:
+        quantity, column = next(iter(unknown.items()))
+        raise BenchFileError(
+            path,
+            f"campaign.toml [columns] {quantity} = {column!r} names no column; the file has "
+            f"{names}",
+            line=line,
+        )
+    chosen = {c: q for q, c in roles.items()}
+    quantities = []
+    for name in names:
+        quantity = chosen.get(name) or canonical_name(name)
+        if name not in chosen and quantity in roles:
+            quantity = None  # another column was chosen for this quantity
+        quantities.append(quantity)
+    for quantity in set(q for q in quantities if q in QUANTITY_DIMENSIONS):
+        candidates = [n for n, q in zip(names, quantities, strict=True) if q == quantity]
+        if len(candidates) > 1:
+            raise BenchFileError(
+                path,
+                f"columns {candidates} all look like the measured {quantity}; choose one in "
+                f'campaign.toml: [columns] {quantity} = "{candidates[0]}"',
+                line=line,
+            )
+    return quantities
+
+
+def _assemble(frames, path, roles):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
     parts = []
     col_units = {}
     for seg, hdr, values in frames:
         cols = {}
+        quantities = _column_roles(hdr.names, roles, path, hdr.line or None)
         for j, (name, unit) in enumerate(zip(hdr.names, hdr.units, strict=True)):
-            quantity = canonical_name(name)
+            quantity = quantities[j]
             if quantity in QUANTITY_DIMENSIONS:
                 dim = QUANTITY_DIMENSIONS[quantity]
                 if not unit:
