@@ -191,7 +191,7 @@ def test_demo_prints_recovered_beside_thesis(tmp_path):
     result = runner.invoke(app, ["demo", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "Recovered against the thesis" in result.output
-    sheet = json.loads((tmp_path / "datasheet.json").read_text())
+    sheet = json.loads((tmp_path / "fit" / "datasheet.json").read_text())
     assert np.isclose(sheet["parameters"]["F_s"]["intercept"], 112.9, rtol=0.02)
     assert len(list((tmp_path / "campaign").glob("*.txt"))) == 270
 

@@ -188,3 +188,47 @@ def test_two_measured_force_columns_are_an_error_unless_campaign_toml_chooses(tm
     assert load_config(tmp_path).roles == {"force": "Axial Force"}
     with pytest.raises(BenchFileError, match=r"\[columns\] force = 'Axial' names no column"):
         read_bench_text(tmp_path / "run.txt", roles={"force": "Axial"})
+
+
+def _campaign_with(tmp_path, name, text):
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    folder = tmp_path / "camp"
+    generate_campaign(folder, BenchSettings(pressures_bar=(10.0,), speeds_mm_s=(5, 50)))
+    (folder / name).write_text(text)
+    return folder
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("Position\tForce\nmm\tkN\n1\t0.1\n2\t0.1\n3\t0.1\n", "no time column"),
+        ("Time\tPosition\tForce\ns\tmm\tkN\n1\t1\t0.1\n1\t2\t0.1\n0.5\t3\t0.1\n", "does not incr"),
+        (
+            "Time\tPosition\tForce\ns\tmm\tkN\n0\t1\t0.1\n0.01\t2\tinf\n0.02\t3\t0.1\n",
+            "line 4: expected a number in column 3, found .inf.",
+        ),
+    ],
+)
+def test_per_file_problems_name_the_file_and_are_skippable(tmp_path, text, message):
+    from cylfric.steady_state import extract_campaign
+
+    folder = _campaign_with(tmp_path, "zz_bad_p10bar_v5mms.txt", text)
+    (folder / "manifest.csv").unlink()  # let every file in
+    with pytest.raises(BenchFileError, match=rf"zz_bad_p10bar_v5mms.txt.*{message}.*--skip-bad"):
+        extract_campaign(folder)
+    extraction = extract_campaign(folder, skip_bad=True)
+    assert [s["file"].endswith("zz_bad_p10bar_v5mms.txt") for s in extraction.skipped] == [True]
+
+
+def test_every_file_bad_with_skip_bad_says_why(tmp_path):
+    from cylfric.steady_state import extract_campaign
+
+    folder = tmp_path / "camp"
+    folder.mkdir()
+    for i in range(3):
+        (folder / f"run{i}_p10bar_v5mms.txt").write_text("not a bench file at all\n" * 3)
+    with pytest.raises(
+        BenchFileError, match=r"none of the 3 run file\(s\) could be read; the first"
+    ):
+        extract_campaign(folder, skip_bad=True)

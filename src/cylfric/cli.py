@@ -8,8 +8,10 @@ bar, mm/s, s, kg, N/m as each option's help says.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
+import re
 import sys
 import traceback
 import warnings
@@ -111,7 +113,9 @@ def _fixed(options: list[str]) -> dict:
         "sigma_2": ("damping", "N*s/mm"),
     }
     out = {}
-    for item in options:
+    # 'alpha=1,v_r=10mm/s': split at commas that start a NAME= (not at decimal commas)
+    items = [part for option in options for part in re.split(r",(?=\s*[A-Za-z_]\w*\s*=)", option)]
+    for item in items:
         name, _, value = item.partition("=")
         name = name.strip()
         if name not in dims or not value:
@@ -190,33 +194,38 @@ def run_fit(
     skip_bad=False,
     report=True,
     quiet=False,
+    glob=None,
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
     from .io.campaign import discover_runs, load_config
     from .pipeline import fit_campaign
 
     fixed = _fixed(list(fix))
-    n_files = len(discover_runs(campaign, load_config(campaign)))
+    config = load_config(campaign)
+    if glob is not None:
+        config = dataclasses.replace(config, glob=glob)
+    n_files = len(discover_runs(campaign, config))
+    progress = _progress()
+    task = progress.add_task(f"reading {campaign.name}", total=n_files)
     # warnings reach the user once, as the notes printed below (not as Python's own lines)
-    with _progress() as progress, warnings.catch_warnings():
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        task = progress.add_task(f"reading {campaign.name}", total=n_files)
-        result = fit_campaign(
-            campaign,
-            out,
-            fixed=fixed,
-            pressure_law=pressure_law,
-            per_direction=per_direction,
-            skip_bad=skip_bad,
-            report=False,
-            progress=lambda _: progress.advance(task),
-        )
-    if report:  # after the progress bar's thread has stopped: figures may use both cores
-        from .report import write_report_folder
-
-        result.files.update(
-            write_report_folder(out, result.datasheet, result.identification, result.extraction)
-        )
+        progress.start()
+        try:
+            result = fit_campaign(
+                campaign,
+                out,
+                fixed=fixed,
+                pressure_law=pressure_law,
+                per_direction=per_direction,
+                skip_bad=skip_bad,
+                report=report,
+                progress=lambda _: progress.advance(task),
+                after_extraction=progress.stop,  # its thread ends before figures may fork
+                glob=glob,
+            )
+        finally:
+            progress.stop()
     if not quiet:
         console.print(_summary_table(result.datasheet))
         skipped = result.extraction.skipped
@@ -235,7 +244,9 @@ def run_fit(
 def fit(
     campaign: Path = typer.Argument(..., help="Folder of raw bench files (never modified)."),
     out: Path = typer.Option(Path("cylfric-out"), "--out", "-o", help="Output folder."),
-    fix: list[str] = typer.Option([], "--fix", help="Hold a parameter: alpha=1, v_r=10mm/s."),
+    fix: list[str] = typer.Option(
+        [], "--fix", help="Hold parameters: --fix alpha=1,v_r=10mm/s (or repeat --fix)."
+    ),
     pressure_law: str = typer.Option(
         "linear",
         "--pressure-law",
@@ -247,6 +258,9 @@ def fit(
     ),
     skip_bad: bool = typer.Option(False, "--skip-bad", help="Skip unreadable files."),
     no_report: bool = typer.Option(False, "--no-report", help="No figures or report.html."),
+    glob: str = typer.Option(
+        None, "--glob", help="Which files are runs, e.g. '*.txt' (default: campaign.toml)."
+    ),
 ):
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
@@ -259,6 +273,7 @@ def fit(
         per_direction=per_direction,
         skip_bad=skip_bad,
         report=not no_report,
+        glob=glob,
     )
 
 
@@ -275,7 +290,10 @@ def demo(
     out: Path = typer.Option(Path("cylfric-demo"), "--out", "-o", help="Output folder."),
     seed: int = typer.Option(0, "--seed", help="Seed of the virtual campaign."),
 ):
-    """Generate the thesis' virtual campaign (10 pressures x 27 speeds) and fit it."""
+    """Generate the thesis' virtual campaign (10 pressures x 27 speeds) and fit it.
+
+    Writes the raw files to OUT/campaign (regenerated on every run) and the fit to OUT/fit.
+    """
     from .simulate.bench import BenchSettings, generate_campaign
 
     settings = BenchSettings(seed=seed)
@@ -285,7 +303,7 @@ def demo(
         task = progress.add_task("virtual bench", total=n)
         generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
     console.print(f"virtual campaign: {n} files in {campaign}")
-    result = run_fit(campaign, out, quiet=True)
+    result = run_fit(campaign, out / "fit", quiet=True)
     sheet = result.datasheet
     console.print(_summary_table(sheet, "Recovered from the virtual campaign"))
     table = Table(title="Recovered against the thesis (eq. 4.1-4.3, alpha, v_r; p in bar)")
@@ -304,7 +322,7 @@ def demo(
     table.add_row("v_r", "10 mm/s", f"{params['v_r'] * 1e3:.2f} mm/s")
     table.add_row("offset", f"{35.67 / 2:.2f} N (35.67 N up-down)", f"{sheet['offset']:.2f} N")
     console.print(table)
-    console.print(f"report: {out / 'report.html'}")
+    console.print(f"report: {out / 'fit' / 'report.html'}")
 
 
 @app.command()
@@ -360,8 +378,16 @@ def generate(
     pressure_channel: bool = typer.Option(
         False, "--pressure-channel", help="Add a measured pressure column."
     ),
+    force: bool = typer.Option(
+        False, "--force", help="Write into a folder that already holds files (overwriting)."
+    ),
 ):
     """Virtual test bench: write a campaign of raw files and manifest.csv."""
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())) and not force:
+        raise BadInput(
+            f"{out_dir} is not empty; generate writes raw files and manifest.csv that would "
+            "overwrite what is there: choose an empty folder or add --force"
+        )
     from .simulate.bench import BenchSettings, generate_campaign
 
     kwargs = {"seed": seed, "decimal_comma": decimal_comma, "pressure_channel": pressure_channel}

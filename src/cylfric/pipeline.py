@@ -5,15 +5,20 @@
 
 from __future__ import annotations
 
+import contextlib
 import io
+import os
+import shutil
+import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import pandas as pd
 
 from .datasheet import build_datasheet, write_datasheet
 from .identify import identify
+from .io.campaign import load_config
 from .io.writers import atomic_write_text
 from .steady_state import extract_campaign
 
@@ -53,9 +58,17 @@ def fit_campaign(
     skip_bad=False,
     report=True,
     progress=None,
+    after_extraction=None,
     name=None,
+    glob=None,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
+
+    Every output is written into a staging folder beside ``out`` and swapped in only when
+    all succeeded: an earlier ``out`` is replaced whole (no stale files of another campaign)
+    or, on failure, left as it was. A lock file beside ``out`` refuses a second concurrent
+    fit into it; an ``out`` inside the campaign folder is refused (it would be read back as
+    runs).
 
     Parameters
     ----------
@@ -77,14 +90,146 @@ def fit_campaign(
         Draw the figures and write ``report.html``.
     progress : callable, optional
         Called with each file name as it is read.
+    after_extraction : callable, optional
+        Called once every file is read (e.g. to stop a progress display).
     name : str, optional
         Name recorded in the datasheet.
+    glob : str, optional
+        Which files of the folder are runs (overrides campaign.toml ``[files] glob``).
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    folder, out = Path(folder), Path(out)
+    _check_out(folder, out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with _lock(out):
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+        mask = os.umask(0)
+        os.umask(mask)
+        staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
+        try:
+            result = _fit(
+                folder,
+                staging,
+                fixed,
+                pressure_law,
+                per_direction,
+                skip_bad,
+                report,
+                progress,
+                after_extraction,
+                name,
+                glob,
+            )
+            _swap_in(staging, out)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+    result.out = out
+    result.files = {k: out / Path(v).relative_to(staging) for k, v in result.files.items()}
+    return result
+
+
+MARKER = ".cylfric-output"
+"""File that marks a folder written by :func:`fit_campaign` (replaced whole by the next)."""
+
+
+def _check_out(folder: Path, out: Path):
+    """Refuse an output folder that would read back as runs or whose files would be lost."""
+    campaign, target = folder.resolve(), out.resolve()
+    if target == campaign or campaign in target.parents:
+        raise ValueError(
+            f"--out {out} is inside the campaign folder {folder}: its files would be read "
+            "back as runs; choose an output folder outside the campaign"
+        )
+    if target in campaign.parents:
+        raise ValueError(
+            f"--out {out} contains the campaign folder {folder}; the output folder is "
+            "replaced whole, so choose one that does not hold the raw files"
+        )
+    if out.exists():
+        if not out.is_dir():
+            raise ValueError(f"--out {out} is a file; expected a folder")
+        ours = (out / MARKER).exists() or (out / "datasheet.json").exists()
+        if not ours and any(out.iterdir()):
+            raise ValueError(
+                f"--out {out} exists and is not a cylfric output folder (no {MARKER} or "
+                "datasheet.json); the output folder is replaced whole, so choose a new or "
+                "empty folder"
+            )
+
+
+@contextlib.contextmanager
+def _lock(out: Path):
+    """Hold ``.OUT.lock`` beside ``out`` (with this process id); refuse a live holder."""
+    lock = out.parent / f".{out.name}.lock"
+    for _ in range(2):
+        try:
+            handle = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            break
+        except FileExistsError:
+            try:
+                holder = int(lock.read_text().strip() or 0)
+            except (OSError, ValueError):
+                holder = 0
+            if holder and _alive(holder):
+                raise ValueError(
+                    f"another cylfric fit (process {holder}) is writing {out}; wait for it or "
+                    f"choose another --out (lock file {lock})"
+                ) from None
+            lock.unlink(missing_ok=True)  # a stale lock of a process that is gone
+    else:  # pragma: no cover - lost a race twice
+        raise ValueError(f"cannot take the lock {lock}")
+    try:
+        os.write(handle, str(os.getpid()).encode())
+        os.close(handle)
+        yield
+    finally:
+        lock.unlink(missing_ok=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _swap_in(staging: Path, out: Path):
+    """Replace ``out`` by ``staging`` (two renames on one file system)."""
+    old = None
+    if out.exists():
+        old = out.parent / f".{out.name}.old-{os.getpid()}"
+        out.rename(old)
+    staging.rename(out)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _fit(
+    folder,
+    out,
+    fixed,
+    pressure_law,
+    per_direction,
+    skip_bad,
+    report,
+    progress,
+    after_extraction,
+    name,
+    glob,
+):
     timings = {}
     t0 = time.perf_counter()
-    extraction = extract_campaign(folder, skip_bad=skip_bad, progress=progress)
+    config = None
+    if glob is not None:
+        config = replace(load_config(folder), glob=glob)
+    try:
+        extraction = extract_campaign(folder, config, skip_bad=skip_bad, progress=progress)
+    finally:
+        if after_extraction is not None:
+            after_extraction()
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     ident = identify(
@@ -104,6 +249,10 @@ def fit_campaign(
     if ident.directions:
         frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
+    atomic_write_text(
+        out / MARKER,
+        "Written by cylfric fit; the next cylfric fit into this folder replaces it whole.\n",
+    )
     timings["datasheet"] = time.perf_counter() - t0
     if report:
         from .report import write_report_folder

@@ -306,7 +306,24 @@ def _point_rows(data, metadata, config, run, options):
     spike_sigma = options.pop("spike_sigma", 5.0)
     velocity_window = options.pop("velocity_window", 0.2)
     file = metadata.get("file", "")
+    if "time [s]" not in data:
+        raise BenchFileError(
+            file,
+            "no time column; expected one named Time/Zeit/Tid (with a unit, e.g. 'Time [s]'), "
+            'or [columns] time = "..." in campaign.toml',
+        )
     time = np.asarray(data["time [s]"])
+    if time.size < 2 or not float(np.median(np.diff(time))) > 0:
+        raise BenchFileError(file, "the time column does not increase; expected time in s rising")
+    for name, values in data.items():
+        values = np.asarray(values)
+        if values.dtype.kind == "f" and not np.all(np.isfinite(values)):
+            row = int(np.flatnonzero(~np.isfinite(values))[0])
+            raise BenchFileError(
+                file,
+                f"column {name!r} holds {values[row]} at data row {row + 1}; expected "
+                "finite numbers",
+            )
     if "velocity [m/s]" in data:
         velocity = config.position_sign * np.asarray(data["velocity [m/s]"])
     elif "position [m]" in data:
@@ -476,7 +493,11 @@ def extract_campaign(
         for info, rows, summary, error in pool.map(one, enumerate(infos)):
             if error is not None:
                 if not skip_bad:
-                    raise error
+                    raise BenchFileError(
+                        error.path,
+                        str(error).split(": ", 1)[-1] + " (to skip such files: --skip-bad)",
+                        error.line,
+                    ) from None
                 skipped.append({"file": str(info.path), "reason": str(error)})
             else:
                 per_run.append(rows)
@@ -485,7 +506,11 @@ def extract_campaign(
             if progress is not None:
                 progress(info.path.name)
     if not per_run:
-        raise BenchFileError(folder, "no run could be read; see the skipped files")
+        reasons = "; ".join(item["reason"] for item in skipped[:3])
+        raise BenchFileError(
+            folder,
+            f"none of the {len(skipped)} run file(s) could be read; the first: {reasons}",
+        )
     run_offsets = [
         rows[0]["offset [N]"] for rows in per_run if rows and not math.isnan(rows[0]["offset [N]"])
     ]

@@ -10,6 +10,7 @@ file, and file-name tokens (``55bar``, ``p55bar``, ``55.5bar``, ``10mms``, ``v10
 from __future__ import annotations
 
 import csv
+import fnmatch
 import math
 import re
 import tomllib
@@ -363,7 +364,7 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
             raise BenchFileError(
                 folder / MANIFEST_NAME, f"lists files that do not exist: {missing[:5]}"
             )
-        candidates = [folder / name for name in manifest]
+        candidates = [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
     for path in candidates:
         pressure = velocity = math.nan
         extra, source = {}, {}
