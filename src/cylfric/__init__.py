@@ -2,9 +2,11 @@
 
 Friction laws (:mod:`cylfric.friction`), bench-file ingestion (:mod:`cylfric.io`),
 steady-state extraction (:mod:`cylfric.steady_state`), identification
-(:mod:`cylfric.identify`), simulation (:mod:`cylfric.simulate`) and the friction datasheet
-(:mod:`cylfric.datasheet`). SI units inside; engineering units at the edges
-(:mod:`cylfric.units`).
+(:mod:`cylfric.identify`), the friction model shared by every part (:mod:`cylfric.model`:
+its uncertainty, guards and serialisation as the friction datasheet, :mod:`cylfric.datasheet`),
+simulation (:mod:`cylfric.simulate`), the report (:mod:`cylfric.report`), the main job as a
+function (:mod:`cylfric.pipeline`) and the command line (:mod:`cylfric.cli`). SI units inside;
+engineering units at the edges (:mod:`cylfric.units`).
 """
 
 from importlib.metadata import PackageNotFoundError, version
@@ -14,6 +16,13 @@ try:
 except PackageNotFoundError:  # pragma: no cover - source tree without install
     __version__ = "0.0.0"
 
-from . import friction, units  # noqa: E402
-
 __all__ = ["friction", "units", "__version__"]
+
+
+def __getattr__(name):
+    """Subpackages on first use (``import cylfric`` stays quick for ``cylfric --version``)."""
+    if name in ("friction", "units"):
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'cylfric' has no attribute {name!r}")

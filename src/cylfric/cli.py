@@ -17,7 +17,6 @@ import traceback
 import warnings
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -433,6 +432,8 @@ def simulate(
     ),
 ):
     """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure."""
+    import numpy as np
+
     from .friction.literature import LITERATURE
     from .io.writers import atomic_write_text
     from .model import FrictionModel

@@ -20,8 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.ndimage import median_filter, uniform_filter1d
-from scipy.signal import savgol_filter
+from scipy.ndimage import convolve1d, median_filter, uniform_filter1d
 
 from .io.campaign import CampaignConfig, discover_runs, load_config, read_run
 from .io.text import BenchFileError
@@ -92,7 +91,12 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     n = min(n, (len(time) - 1) | 1 if len(time) % 2 == 0 else len(time))
     if n < 3:
         return sign * np.gradient(position, time)
-    return sign * savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest")
+    # Savitzky-Golay first derivative, quadratic over n samples: for an odd window its
+    # kernel is the least-squares slope k / (dt sum k^2), k = -m..m; this is what
+    # scipy.signal.savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest") computes
+    # (scipy.signal is not imported: it loads scipy.stats)
+    k = np.arange(n // 2, -(n // 2) - 1, -1, dtype=float)  # reversed: convolution
+    return sign * convolve1d(position, k / (dt * float(k @ k)), mode="nearest")
 
 
 WINDOW_METHODS = ("auto", "fixed-index")

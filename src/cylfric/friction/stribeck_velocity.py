@@ -5,7 +5,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ._checks import check_parameters
 
@@ -37,6 +36,8 @@ def _one(F_c, F_s, v_r, sigma_2, alpha) -> float:
         upper *= 2.0
         if upper > 1e9 * v_r:  # pragma: no cover - unreachable for finite inputs
             return np.nan
+    from scipy.optimize import brentq  # imported here: importing cylfric stays quick
+
     return brentq(_slope, start, upper, args=(dF, v_r, sigma_2, alpha), xtol=1e-14 * v_r)
 
 

@@ -6,8 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.io import loadmat
-from scipy.io.matlab import MatReadError
 
 from .text import BenchFileError
 
@@ -33,6 +31,9 @@ def read_mat(path, *, variables=None, units=None):
     metadata : dict
         ``file``, ``scalars`` (scalar variables such as gains), ``variables``.
     """
+    from scipy.io import loadmat  # only for .mat files: importing cylfric.io stays quick
+    from scipy.io.matlab import MatReadError
+
     path = Path(path)
     try:
         content = loadmat(path, squeeze_me=True)

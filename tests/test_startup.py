@@ -1,0 +1,54 @@
+"""Start-up (issue 11): the core pipeline loads neither matplotlib nor scipy.stats, and
+scipy.io only for .mat files; `cylfric --version` imports no numerical library."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+SCRIPT = """
+import sys, warnings
+warnings.simplefilter("ignore")
+from cylfric.pipeline import fit_campaign
+from cylfric.simulate.bench import BenchSettings, generate_campaign
+generate_campaign(sys.argv[1], BenchSettings(pressures_bar=(0.1, 80.0), speeds_mm_s=(2, 5, 10, 30, 80)))
+fit_campaign(sys.argv[1], sys.argv[2], report=False)
+loaded = [m for m in ("matplotlib", "scipy.stats", "scipy.io") if m in sys.modules]
+print("LOADED", loaded)
+"""
+
+
+def test_fit_without_report_loads_no_plotting_or_statistics(tmp_path):
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT, str(tmp_path / "camp"), str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "LOADED []" in done.stdout, done.stdout
+
+
+def test_version_imports_no_numerical_library():
+    script = (
+        "import sys\nfrom cylfric.cli import app\n"
+        "print([m for m in ('numpy', 'scipy', 'pandas', 'matplotlib') if m in sys.modules])"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
+def test_window_velocity_is_the_savitzky_golay_derivative():
+    import numpy as np
+    from numpy.testing import assert_allclose
+    from scipy.signal import savgol_filter
+
+    from cylfric.steady_state import smoothed_velocity
+
+    rng = np.random.default_rng(0)
+    t = np.arange(700) * 0.01
+    x = np.sin(t) + rng.normal(0, 1e-3, t.size)
+    for window in (0.05, 0.2, 0.5, 1.0):
+        n = max(5, int(round(window / 0.01)) | 1)
+        expected = savgol_filter(x, n, 2, deriv=1, delta=0.01, mode="nearest")
+        assert_allclose(smoothed_velocity(t, x, window=window), expected, rtol=0, atol=1e-10)
