@@ -194,6 +194,7 @@ def run_fit(
     report=True,
     quiet=False,
     glob=None,
+    strict=False,
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
     from .io.campaign import discover_runs, load_config
@@ -222,6 +223,7 @@ def run_fit(
                 progress=lambda _: progress.advance(task),
                 after_extraction=progress.stop,  # its thread ends before figures may fork
                 glob=glob,
+                strict=strict,
             )
         finally:
             progress.stop()
@@ -232,6 +234,11 @@ def run_fit(
             console.print(f"[yellow]{len(skipped)} file(s) skipped[/yellow] (see skipped.csv):")
             for item in skipped[:10]:
                 console.print(f"  {item['reason']}", markup=False)
+        excluded = result.excluded
+        if excluded is not None and len(excluded):
+            console.print(f"[yellow]{len(excluded)} run(s) excluded[/yellow] (see excluded.csv):")
+            for _, item in excluded.head(10).iterrows():
+                console.print(f"  {Path(item['file']).name}: {item['reason']}", markup=False)
         for note in result.identification.notes:
             console.print(f"[yellow]note:[/yellow] {note}")
         console.print(f"outputs in {out}" + (f"; open {out / 'report.html'}" if report else ""))
@@ -260,6 +267,9 @@ def fit(
     glob: str = typer.Option(
         None, "--glob", help="Which files are runs, e.g. '*.txt' (default: campaign.toml)."
     ),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop (exit 2) instead of excluding runs the quality gate flags."
+    ),
 ):
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
@@ -273,6 +283,7 @@ def fit(
         skip_bad=skip_bad,
         report=not no_report,
         glob=glob,
+        strict=strict,
     )
 
 

@@ -20,6 +20,7 @@ from .datasheet import build_datasheet, write_datasheet
 from .identify import identify
 from .io.campaign import load_config
 from .io.writers import atomic_write_text
+from .quality import assess
 from .steady_state import extract_campaign
 
 __all__ = ["fit_campaign", "FitOutputs"]
@@ -29,6 +30,7 @@ __all__ = ["fit_campaign", "FitOutputs"]
 class FitOutputs:
     """What :func:`fit_campaign` wrote and found.
 
+    ``excluded`` lists the runs the data-quality gate left out (:mod:`cylfric.quality`).
     ``files`` maps each output to its path; ``timings`` holds the wall time of each stage
     [s]: ``extract``, ``identify`` (with the sensitivity study), ``datasheet`` (with the
     CSV tables) and, with the report, ``report`` (figures and report.html).
@@ -40,6 +42,7 @@ class FitOutputs:
     extraction: object
     files: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
+    excluded: pd.DataFrame | None = None
 
 
 def _csv(path, frame: pd.DataFrame):
@@ -61,6 +64,7 @@ def fit_campaign(
     after_extraction=None,
     name=None,
     glob=None,
+    strict=False,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -77,7 +81,8 @@ def fit_campaign(
     out : path-like
         Output folder: ``datasheet.json``, ``points.csv``, ``per_pressure.csv``,
         ``sensitivity.csv``, ``law_comparison.csv``, ``skipped.csv`` (when files were
-        skipped), and with ``report`` the figures (PNG, SVG) and ``report.html``.
+        skipped), ``excluded.csv`` (when the data-quality gate left runs out), and with
+        ``report`` the figures (PNG, SVG) and ``report.html``.
     fixed : dict, optional
         Parameters held fixed (SI), e.g. ``{"alpha": 1.0, "v_r": 0.010}``.
     pressure_law : str
@@ -96,6 +101,9 @@ def fit_campaign(
         Name recorded in the datasheet.
     glob : str, optional
         Which files of the folder are runs (overrides campaign.toml ``[files] glob``).
+    strict : bool
+        Raise (ValueError) instead of leaving out runs the data-quality gate flags
+        (:func:`cylfric.quality.assess`); by default they are listed in ``excluded.csv``.
     """
     folder, out = Path(folder), Path(out)
     _check_out(folder, out)
@@ -118,6 +126,7 @@ def fit_campaign(
                 after_extraction,
                 name,
                 glob,
+                strict,
             )
             _swap_in(staging, out)
         except BaseException:
@@ -219,6 +228,7 @@ def _fit(
     after_extraction,
     name,
     glob,
+    strict,
 ):
     timings = {}
     t0 = time.perf_counter()
@@ -230,11 +240,20 @@ def _fit(
     finally:
         if after_extraction is not None:
             after_extraction()
+    quality = assess(extraction)
+    if strict and not quality.excluded.empty:
+        first = quality.excluded.iloc[0]
+        raise ValueError(
+            f"{first['file']}: {first['reason']} ({quality.summary()}; --strict turns every "
+            "exclusion into an error)"
+        )
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     ident = identify(
-        extraction.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
+        quality.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
     )
+    if not quality.excluded.empty:
+        ident.notes.insert(0, quality.summary())
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
@@ -246,6 +265,8 @@ def _fit(
         files["sensitivity"] = _csv(out / "sensitivity.csv", ident.sensitivity)
     if extraction.skipped:
         files["skipped"] = _csv(out / "skipped.csv", pd.DataFrame(extraction.skipped))
+    if not quality.excluded.empty:
+        files["excluded"] = _csv(out / "excluded.csv", quality.excluded)
     if ident.directions:
         frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
@@ -258,6 +279,6 @@ def _fit(
         from .report import write_report_folder
 
         t0 = time.perf_counter()
-        files.update(write_report_folder(out, sheet, ident, extraction))
+        files.update(write_report_folder(out, sheet, ident, extraction, quality.excluded))
         timings["report"] = time.perf_counter() - t0
-    return FitOutputs(out, sheet, ident, extraction, files, timings)
+    return FitOutputs(out, sheet, ident, extraction, files, timings, quality.excluded)

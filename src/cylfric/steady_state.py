@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.ndimage import convolve1d, median_filter, uniform_filter1d
 
-from .io.campaign import CampaignConfig, discover_runs, load_config, read_run
+from .io.campaign import CampaignConfig, discover_runs, load_config, read_run, unlisted_files
 from .io.text import BenchFileError
 
 __all__ = [
@@ -433,7 +433,10 @@ class Extraction:
     offset_std : float
         Spread (standard deviation) of the run offsets [N].
     runs : list of dict
-        Per run: file, rows, segments, pressure/velocity sources, events.
+        Per run: ``file``, ``run`` (index in the points table), nominal ``pressure [Pa]``
+        and ``velocity [m/s]`` (NaN when unknown), rows, segments, sources, events.
+    unlisted : list of str
+        Files of the folder that ``manifest.csv`` does not list (not read).
     bytes_read : int
         Size of the files read [bytes].
     """
@@ -444,6 +447,7 @@ class Extraction:
     offset_std: float = math.nan
     runs: list = field(default_factory=list)
     bytes_read: int = 0
+    unlisted: list = field(default_factory=list)
 
     @property
     def usable(self) -> pd.DataFrame:
@@ -484,6 +488,9 @@ def extract_campaign(
             return info, None, None, exc
         summary = {
             "file": str(info.path),
+            "run": index,
+            "pressure [Pa]": metadata["pressure"],
+            "velocity [m/s]": metadata["velocity"],
             "rows": metadata["rows"],
             "segments": metadata.get("segments", 1),
             "source": metadata["source"],
@@ -530,4 +537,6 @@ def extract_campaign(
     points = (
         pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)
     )
-    return Extraction(points, skipped, offset, offset_std, runs, total)
+    return Extraction(
+        points, skipped, offset, offset_std, runs, total, unlisted_files(folder, config)
+    )

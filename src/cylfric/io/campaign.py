@@ -390,6 +390,23 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
     return runs
 
 
+def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
+    """Names of files matching the glob that ``manifest.csv`` does not list (not read)."""
+    folder = Path(folder)
+    manifest = _read_manifest(folder)
+    if not manifest:
+        return []
+    config = config or load_config(folder)
+    return sorted(
+        p.name
+        for p in folder.glob(config.glob)
+        if p.is_file()
+        and p.name not in manifest
+        and p.name not in _SKIP_NAMES
+        and not p.name.startswith(".")
+    )
+
+
 def read_run(info: RunInfo, config: CampaignConfig):
     """Read one run and complete its nominal metadata from header lines and the file name.
 

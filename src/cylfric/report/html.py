@@ -41,7 +41,9 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
     return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
 
 
-def render_report(sheet, ident, extraction, figures, *, title="cylfric friction report") -> str:
+def render_report(
+    sheet, ident, extraction, figures, *, title="cylfric friction report", excluded=None
+) -> str:
     """HTML text of the report: datasheet summary, figures, tables, data quality."""
     parts = [
         f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
@@ -111,6 +113,14 @@ def render_report(sheet, ident, extraction, figures, *, title="cylfric friction 
             f"v_r = {rec['v_r'] * 1e3:.3g} mm/s, RMSE {rec['rmse']:.3f} N.</p>"
         )
     parts.append("<h2>Data quality</h2>")
+    if excluded is not None and len(excluded):
+        parts.append(
+            f"<p class='note'>The data-quality gate left {len(excluded)} run(s) out of the fit "
+            "(also in excluded.csv):</p>"
+        )
+        parts.append(_table(excluded.assign(file=excluded["file"].map(lambda f: f.split("/")[-1]))))
+    else:
+        parts.append("<p>The data-quality gate left no run out.</p>")
     parts.append(_quality(extraction))
     parts.append("</body></html>")
     return "\n".join(parts)
@@ -169,7 +179,7 @@ def write_report(path, text: str):
     return atomic_write_text(path, text)
 
 
-def write_report_folder(out, sheet, ident, extraction, *, workers=2) -> dict:
+def write_report_folder(out, sheet, ident, extraction, excluded=None, *, workers=2) -> dict:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
     Returns {output name: path}. ``workers=2`` draws on two cores (see

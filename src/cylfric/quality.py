@@ -1,0 +1,256 @@
+"""The data-quality gate between extraction and identification (runs left out, with reasons).
+
+:func:`assess` looks at every run of an :class:`~cylfric.steady_state.Extraction` and flags
+those that would mislead the fit:
+
+- ``speed``: the measured window speed differs from the run's nominal speed by more than
+  ``speed_tolerance`` (a position column in m instead of mm reads 1000x off);
+- ``scale``: the run's friction differs from the other runs at its pressure level by a
+  factor of more than ``scale_factor`` (a force column in N instead of kN);
+- ``outlier``: the run's friction is far from what its neighbours in speed at the same
+  pressure level say (interpolated in log speed), beyond ``outlier_sigma`` robust sigmas of
+  all such residuals (a run typed as 0 bar in manifest.csv while measured at 80 bar);
+- ``motion``: the run gave no usable constant-velocity window (no motion, too short).
+
+Flagged runs are kept in the points table with the flag ``"excluded: <check>"``, so that
+:func:`cylfric.identify.identify` leaves them out, and listed in :attr:`QualityReport.excluded`
+(written as ``excluded.csv``). Files that ``manifest.csv`` does not list are listed too.
+Nothing is dropped silently.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["assess", "QualityReport", "CHECKS"]
+
+CHECKS = ("speed", "scale", "outlier", "motion", "unlisted")
+"""Names of the checks, as they appear in ``excluded.csv``."""
+
+
+@dataclass(frozen=True)
+class QualityReport:
+    """Result of :func:`assess`.
+
+    Attributes
+    ----------
+    points : pandas.DataFrame
+        The points table with the flags of excluded runs set to ``"excluded: <check>"``.
+    excluded : pandas.DataFrame
+        One row per excluded run or unlisted file: ``file``, ``run``, ``check``, ``reason``.
+    """
+
+    points: pd.DataFrame
+    excluded: pd.DataFrame
+
+    def summary(self) -> str:
+        """One line: how many runs each check excluded."""
+        if self.excluded.empty:
+            return "data-quality gate: no run excluded"
+        counts = self.excluded["check"].value_counts()
+        parts = ", ".join(f"{n} by {check}" for check, n in counts.items())
+        return f"data-quality gate: {len(self.excluded)} excluded ({parts}); see excluded.csv"
+
+
+def _runs_table(extraction):
+    """Per run: file, nominal and measured speed [m/s], pressure [Pa], friction [N]."""
+    ok = extraction.points[extraction.points["flag"].eq("ok")]
+    measured = ok.groupby("run").agg(
+        speed=("velocity [m/s]", lambda v: float(np.median(np.abs(v)))),
+        friction=("friction [N]", "median"),
+        pressure=("pressure [Pa]", "median"),
+    )
+    extra = [
+        c
+        for c in extraction.points.columns
+        if c not in _POINT_NAMES and extraction.points[c].dtype == object and c != "flag"
+    ]
+    groups = ok.groupby("run")[extra].first() if extra else None
+    rows = []
+    for info in extraction.runs:
+        run = info.get("run")
+        row = {
+            "run": run,
+            "file": info["file"],
+            "nominal_speed": abs(info.get("velocity [m/s]", math.nan)),
+        }
+        if run in measured.index:
+            row.update(measured.loc[run].to_dict())
+            if groups is not None:
+                row["group"] = tuple(groups.loc[run])
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+_POINT_NAMES = {
+    "run",
+    "file",
+    "stroke",
+    "direction [-]",
+    "pressure [Pa]",
+    "pressure_std [Pa]",
+    "velocity [m/s]",
+    "velocity_std [m/s]",
+    "force [N]",
+    "friction [N]",
+    "friction_std [N]",
+    "n [-]",
+    "window_start [s]",
+    "window_end [s]",
+    "spikes [-]",
+    "offset [N]",
+    "flag",
+}
+
+
+def _levels(pressure, gap=1e5, relative=0.05):
+    p = np.asarray(pressure, dtype=float)
+    order = np.argsort(p)
+    jumps = np.diff(p[order]) > np.maximum(gap, relative * np.abs(p[order][1:]))
+    labels = np.empty(p.size, dtype=int)
+    labels[order] = np.concatenate(([0], np.cumsum(jumps)))
+    return labels
+
+
+def _outliers(table, outlier_sigma, min_speeds):
+    """(run, residual, sigma) of runs far from their neighbours' interpolation in log speed."""
+    residuals = {}
+    for _, group in table.groupby(["level", "group"], dropna=False):
+        group = group.sort_values("speed")
+        if group["speed"].nunique() < min_speeds:
+            continue
+        x = np.log(group["speed"].to_numpy())
+        y = group["friction"].to_numpy()
+        for i, run in enumerate(group["run"]):
+            others = np.delete(np.arange(x.size), i)
+            xo, yo = x[others], y[others]
+            below, above = xo[xo <= x[i]], xo[xo >= x[i]]
+            end = not (below.size and above.size)
+            if not end:  # between neighbours: interpolate
+                prediction = float(np.interp(x[i], xo, yo))
+            else:  # at an end: the two nearest, extrapolated
+                near = np.argsort(np.abs(xo - x[i]))[:2]
+                a, b = near
+                if xo[a] == xo[b]:
+                    prediction = float(yo[near].mean())
+                else:
+                    slope = (yo[b] - yo[a]) / (xo[b] - xo[a])
+                    prediction = float(yo[a] + slope * (x[i] - xo[a]))
+            residuals[run] = (y[i] - prediction, end)
+    out = []
+    for end in (False, True):  # extrapolation at the ends of the speed range errs more
+        part = {run: r for run, (r, e) in residuals.items() if e == end}
+        if len(part) < 5:
+            continue
+        values = np.array(list(part.values()))
+        sigma = max(1.4826 * float(np.median(np.abs(values - np.median(values)))), 1e-9)
+        out += [(run, r, sigma) for run, r in part.items() if abs(r) > outlier_sigma * sigma]
+    return out
+
+
+def assess(
+    extraction,
+    *,
+    speed_tolerance=0.20,
+    scale_factor=30.0,
+    outlier_sigma=8.0,
+    min_speeds=4,
+) -> QualityReport:
+    """Flag the runs that would mislead the fit; see the module docstring for the checks.
+
+    Parameters
+    ----------
+    extraction : Extraction
+        From :func:`cylfric.steady_state.extract_campaign`.
+    speed_tolerance : float
+        Largest relative difference between measured and nominal speed [-] (0.20: 20 %).
+    scale_factor : float
+        Largest factor between a run's friction and the median of its pressure level [-];
+        a unit slip is a factor of 1000, a real level spread a factor below 3.
+    outlier_sigma : float
+        Robust sigmas (1.4826 MAD of all runs' residuals against their neighbours'
+        interpolation) beyond which a run is an outlier [-]. 8 keeps every run of clean
+        virtual campaigns (the thesis' 270 runs and other seeds), whose worst run sits near
+        5 sigma, while a run mislabelled by 80 bar sits hundreds of sigmas out.
+    min_speeds : int
+        Fewest distinct speeds at a pressure level (within one group of runs, e.g. a seal)
+        for the outlier check [-].
+
+    Returns
+    -------
+    QualityReport
+    """
+    table = _runs_table(extraction)
+    excluded = []
+
+    def exclude(row, check, reason):
+        excluded.append({"file": row["file"], "run": row["run"], "check": check, "reason": reason})
+
+    usable = table.dropna(subset=["friction"]) if "friction" in table else table.iloc[:0]
+    for _, row in table.iterrows():
+        if "friction" not in table or pd.isna(row.get("friction")):
+            exclude(row, "motion", "no usable constant-velocity window (no motion, or too short)")
+    for _, row in usable.iterrows():
+        nominal = row["nominal_speed"]
+        if nominal > 0 and abs(row["speed"] / nominal - 1) > speed_tolerance:
+            exclude(
+                row,
+                "speed",
+                f"measured speed {row['speed'] * 1e3:.4g} mm/s against nominal "
+                f"{nominal * 1e3:.4g} mm/s (a position unit, m or mm?)",
+            )
+    flagged = {e["run"] for e in excluded}
+    rest = usable[~usable["run"].isin(flagged)].copy()
+    if len(rest):
+        rest["level"] = _levels(rest["pressure"])
+        if "group" not in rest:
+            rest["group"] = 0
+        for _, level in rest.groupby(["level", "group"], dropna=False):
+            median = float(np.median(level["friction"]))
+            for _, row in level.iterrows():
+                ratio = abs(row["friction"]) / max(abs(median), 1e-12)
+                if len(level) >= 3 and (ratio > scale_factor or ratio < 1 / scale_factor):
+                    exclude(
+                        row,
+                        "scale",
+                        f"friction {row['friction']:.4g} N against {median:.4g} N for the "
+                        f"runs at {row['pressure'] / 1e5:.3g} bar (a force unit, N or kN?)",
+                    )
+        flagged = {e["run"] for e in excluded}
+        rest = rest[~rest["run"].isin(flagged)]
+        while True:  # the worst first: a bad run also pulls its neighbours' interpolation
+            found = _outliers(rest, outlier_sigma, min_speeds)
+            if not found:
+                break
+            run, residual, sigma = max(found, key=lambda item: abs(item[1]) / item[2])
+            row = rest[rest["run"] == run].iloc[0]
+            rest = rest[rest["run"] != run]
+            exclude(
+                row,
+                "outlier",
+                f"friction {row['friction']:.4g} N is {residual:+.3g} N "
+                f"({abs(residual) / sigma:.0f} robust sigmas) from its neighbours in speed at "
+                f"{row['pressure'] / 1e5:.3g} bar (pressure metadata wrong?)",
+            )
+    for name in getattr(extraction, "unlisted", []):
+        excluded.append(
+            {
+                "file": name,
+                "run": -1,
+                "check": "unlisted",
+                "reason": "in the folder but not in manifest.csv: not read",
+            }
+        )
+    frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
+    points = extraction.points
+    runs = frame[frame["run"] >= 0]
+    if len(runs):
+        checks = dict(zip(runs["run"], runs["check"], strict=True))
+        mask = points["run"].isin(checks) & points["flag"].eq("ok")
+        points = points.copy()
+        points.loc[mask, "flag"] = "excluded: " + points.loc[mask, "run"].map(checks)
+    return QualityReport(points, frame)

@@ -1,0 +1,128 @@
+"""The data-quality gate (issue 11): faults that real campaigns have are excluded, listed
+and explained; clean campaigns lose nothing; --strict stops instead."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from cylfric.cli import app
+from cylfric.quality import assess
+from cylfric.simulate.bench import BenchSettings, generate_campaign
+from cylfric.steady_state import extract_campaign
+
+runner = CliRunner()
+SETTINGS = BenchSettings(
+    pressures_bar=(0.1, 55.0, 103.0, 159.0), speeds_mm_s=(1, 2, 4, 7, 10, 15, 25, 40, 70, 135)
+)
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.fixture(scope="module")
+def clean(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("clean")
+    generate_campaign(folder, SETTINGS)
+    return folder
+
+
+def _copy(clean, tmp_path):
+    folder = tmp_path / "campaign"
+    shutil.copytree(clean, folder)
+    return folder
+
+
+def _edit(path, old, new):
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+
+
+def _fit(folder, tmp_path, *extra):
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["fit", str(folder), "--out", str(out), "--no-report", *extra])
+    return result, out
+
+
+def _excluded(out):
+    path = out / "excluded.csv"
+    return pd.read_csv(path) if path.exists() else pd.DataFrame(columns=["file", "check"])
+
+
+def _within_tolerance(out):
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert abs(sheet["parameters"]["F_c"]["intercept"] / 70.2 - 1) < 0.02
+    assert abs(sheet["parameters"]["F_s"]["intercept"] / 112.9 - 1) < 0.02
+
+
+def test_a_clean_campaign_loses_no_run(clean):
+    assert assess(extract_campaign(clean)).excluded.empty
+
+
+@pytest.mark.parametrize(
+    "name, old, new, check",
+    [
+        ("run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN", "speed"),  # position in m
+        ("run_013_p55bar_v7mms.txt", "s\tmm\tkN", "s\tmm\tN", "scale"),  # force in N
+    ],
+)
+def test_a_unit_slip_in_one_run_is_excluded(clean, tmp_path, name, old, new, check):
+    folder = _copy(clean, tmp_path)
+    _edit(folder / name, old, new)
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    assert list(excluded["check"]) == [check]
+    assert excluded["file"].iloc[0].endswith(name)
+    assert "1 run(s) excluded" in result.output and name in result.output
+    _within_tolerance(out)
+
+
+def test_a_run_typed_as_0_bar_while_measured_at_103_bar_is_excluded(clean, tmp_path):
+    folder = _copy(clean, tmp_path)
+    name = "run_024_p103bar_v10mms.txt"
+    _edit(folder / "manifest.csv", f"{name},103,10", f"{name},0,10")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    assert list(excluded["check"]) == ["outlier"] and excluded["file"].iloc[0].endswith(name)
+    _within_tolerance(out)
+
+
+def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):
+    folder = _copy(clean, tmp_path)
+    path = folder / "run_011_p55bar_v2mms.txt"
+    lines = path.read_text().splitlines()
+    frozen = [
+        "\t".join([cells[0], "100.0", cells[2]])
+        if (cells := line.split("\t"))[0][:1].isdigit()
+        else line
+        for line in lines
+    ]
+    path.write_text("\n".join(frozen) + "\n")
+    shutil.copy(folder / "run_012_p55bar_v4mms.txt", folder / "extra_p55bar_v4mms.txt")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out).set_index("check")
+    assert excluded.loc["motion", "file"].endswith("run_011_p55bar_v2mms.txt")
+    assert excluded.loc["unlisted", "file"] == "extra_p55bar_v4mms.txt"
+
+
+def test_strict_turns_an_exclusion_into_exit_2_naming_the_file(clean, tmp_path):
+    folder = _copy(clean, tmp_path)
+    _edit(folder / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
+    result, out = _fit(folder, tmp_path, "--strict")
+    assert result.exit_code == 2
+    assert "run_012_p55bar_v4mms.txt: measured speed" in result.output
+    assert "--strict" in result.output and not out.exists()
+
+
+def test_real_zillen_runs_are_all_kept(shared_data, tmp_path):
+    folder = tmp_path / "zillen"
+    shutil.copytree(shared_data / "zillen2021-pneumatic-seals", folder)
+    shutil.copy(EXAMPLES / "zillen2021" / "campaign.toml", folder / "campaign.toml")
+    assert assess(extract_campaign(folder)).excluded.empty
