@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..friction import get_law, law_params, lugre_force, lugre_g, lugre_unchecked
+from ..friction import get_law, law_params, lugre_force, lugre_unchecked
 
 
 def solve_reference(
@@ -130,8 +130,8 @@ def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
         v = velocity[i] * (1 - w) + velocity[i + 1] * w
         fc = F_c[i] * (1 - w) + F_c[i + 1] * w
         fs = F_s[i] * (1 - w) + F_s[i + 1] * w
-        g = lugre_g(v, fc, fs, v_r, alpha=alpha)  # eq. 2.5
-        return v, s0 * abs(v) / g
+        # decay rate s0 |v| / g(v) of eq. 2.5 = v - dz/dt at z = 1 (the unchecked core)
+        return v, v - lugre_unchecked(v, 1.0, s0, 0.0, 0.0, fc, fs, v_r, alpha)[1]
 
     def rhs(t, y):
         v, lam = decay(t)
