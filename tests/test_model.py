@@ -320,3 +320,17 @@ def test_pressure_only_check_for_simulations(fitted):
         assert model.check(None, np.array([1e5, 159e5])).all()
     with pytest.raises(ValueError, match="1 of 2 point"):
         model.check(None, np.array([1e5, 300e5]), strict=True)
+
+
+def test_simulate_warns_outside_the_validity_pressures(fitted):
+    from cylfric.simulate import Cylinder, SpringPull, simulate
+
+    model = fitted.model
+    with pytest.warns(ValidityWarning, match="outside the validity ranges"):
+        simulate(Cylinder(10.0), model, SpringPull(2e4, 5e-3), 0.01, pressure_a=300e5)
+    with pytest.warns(ValidityWarning, match="pressures are in Pa"):
+        simulate(Cylinder(10.0), FrictionModel(), SpringPull(2e4, 5e-3), 0.01, pressure_a=50.0)
+    with pytest.raises(ValueError, match="outside the validity ranges"):
+        simulate(
+            Cylinder(10.0), model, SpringPull(2e4, 5e-3), 0.01, pressure_a=300e5, strict=True
+        )

@@ -200,6 +200,7 @@ def simulate(
     x0: float = 0.0,
     v0: float = 0.0,
     z0: float = 0.0,
+    strict: bool = False,
 ) -> SimulationResult:
     """Simulate the cylinder over ``duration`` [s], with outputs every ``dt`` [s].
 
@@ -228,6 +229,9 @@ def simulate(
         Relative tolerance of ``"dopri"`` (default 1e-6) and ``"scipy"`` (default 1e-9).
     x0, v0, z0 : float
         Initial position [m], velocity [m/s], bristle deflection [m].
+    strict : bool
+        Raise instead of warning (:class:`cylfric.model.ValidityWarning`) when the pressures
+        leave the model's validity range or look like bar given as Pa.
 
     Returns
     -------
@@ -243,6 +247,8 @@ def simulate(
     time = np.arange(n) * dt
     pa = _on_grid(pressure_a, time, "pressure_a")
     pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
+    # warns outside the model's validity pressures, or for pressures that look like bar
+    friction.check(None, friction.operating_pressure(pa, pb), strict=strict)
     if (
         np.ndim(pressure_a) == 0
         and (pressure_b is None or np.ndim(pressure_b) == 0)
