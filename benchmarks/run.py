@@ -1,7 +1,8 @@
 """cylfric benchmarks: timing goals as ratios measured in one run (``make bench``).
 
 Writes one JSON file per benchmark to ``benchmarks/results/`` and prints a summary.
-Sections (all by default, or name some): simulate, batch, bench, parse, memory, pipeline.
+Sections (all by default, or name some): simulate, batch, bench, parse, memory, pipeline,
+fit_vs_script.
 
 Goals (issues "Simulation", "Ingestion", "The main job"):
 - case A (stick-slip, RMS(F - F_ref)/F_c <= 1e-4): >= 60x LSODA, >= 100x RK45 at matched
@@ -11,7 +12,9 @@ Goals (issues "Simulation", "Ingestion", "The main job"):
 - virtual bench: the default 270-file campaign at >= 2e7 simulated steps/s;
 - parse: messy testing-machine files at least as fast as pandas.read_csv on clean CSV;
   peak memory flat in the number of files;
-- pipeline: core (read, extract, identify, datasheet) >= 30 MB/s; report <= core time.
+- pipeline: core (read, extract, identify, datasheet) >= 30 MB/s; report <= core time;
+- fit_vs_script: ``cylfric fit --no-report`` as a process <= 1.0x a plain numpy/scipy script
+  (benchmarks/plain_fit.py) on 144 files, <= 0.5x on 480 files (about 44 MB).
 """
 
 from __future__ import annotations
@@ -547,6 +550,76 @@ def bench_pipeline():
     )
 
 
+FIT_VS_SCRIPT_CAMPAIGNS = {
+    # name: (pressures [bar], speeds [mm/s]); 8 x 18 = 144 and 24 x 20 = 480 files
+    "144_files": (
+        (0.1, 20, 40, 60, 80, 100, 130, 159),
+        (1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 70, 100, 135),
+    ),
+    "480_files": (
+        (0.1, *range(7, 162, 7))[:24],
+        tuple(range(1, 21)),
+    ),
+}
+FIT_VS_SCRIPT_GOALS = {"144_files": 1.0, "480_files": 0.5}
+
+
+def _process_seconds(command, repeat=3):
+    """Best wall time of ``command`` run as a fresh process (imports included) [s]."""
+    best = math.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def bench_fit_vs_script():
+    """End-to-end ``cylfric fit --no-report`` against benchmarks/plain_fit.py (processes)."""
+    from cylfric.pipeline import fit_campaign
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    cylfric = str(Path(sys.executable).with_name("cylfric"))
+    script = str(HERE / "plain_fit.py")
+    t_import = _process_seconds([sys.executable, "-c", "import cylfric.cli, cylfric.pipeline"])
+    cases = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, (pressures, speeds) in FIT_VS_SCRIPT_CAMPAIGNS.items():
+            campaign = Path(tmp) / name
+            info = generate_campaign(
+                campaign, BenchSettings(pressures_bar=pressures, speeds_mm_s=speeds)
+            )
+            size = sum(f.stat().st_size for f in info["files"])
+            fit = [cylfric, "fit", str(campaign), "--out", str(Path(tmp) / "out"), "--no-report"]
+            plain = [sys.executable, script, str(campaign), str(Path(tmp) / "plain.json")]
+            _process_seconds(fit, 1), _process_seconds(plain, 1)  # warm the file cache
+            t_fit, t_plain = _process_seconds(fit), _process_seconds(plain)
+            ratio = t_fit / t_plain
+            goal = FIT_VS_SCRIPT_GOALS[name]
+            stages = fit_campaign(campaign, Path(tmp) / "stages", report=False).timings
+            cases[name] = {
+                "files": len(info["files"]),
+                "bytes": size,
+                "cylfric_fit_seconds": t_fit,
+                "plain_script_seconds": t_plain,
+                "ratio_fit_over_script": ratio,
+                "goal_ratio": goal,
+                "met": ratio <= goal,
+                "cylfric_stage_seconds_in_process": stages,
+                "cylfric_import_seconds": t_import,
+            }
+    return _save(
+        "fit_vs_script",
+        {
+            "what": "best of 3 process wall times, imports included; cylfric fit --no-report "
+            "(quality gate, global surface fit, sensitivity study, datasheet, tables) vs "
+            "benchmarks/plain_fit.py (numpy.loadtxt, middle half of each stroke, curve_fit "
+            "per pressure)",
+            **cases,
+        },
+    )
+
+
 SECTIONS = {
     "simulate": bench_simulate,
     "batch": bench_batch,
@@ -554,6 +627,7 @@ SECTIONS = {
     "parse": bench_parse,
     "memory": bench_memory,
     "pipeline": bench_pipeline,
+    "fit_vs_script": bench_fit_vs_script,
 }
 
 

@@ -70,9 +70,29 @@ def table() -> str:
             f"<= 1x ({met})",
         ),
     ]
+    rows += _fit_vs_script_rows()
     lines = ["| benchmark | measured | goal |", "|---|---|---|"]
     lines += [f"| {name} | {value} | {goal} |" for name, value, goal in rows]
     return "\n".join(lines)
+
+
+def _fit_vs_script_rows():
+    if not (RESULTS / "fit_vs_script.json").is_file():
+        return []
+    f = load("fit_vs_script")
+    rows = []
+    for name in ("144_files", "480_files"):
+        c = f[name]
+        rows.append(
+            (
+                f"`cylfric fit --no-report` process vs a plain numpy/scipy script "
+                f"(benchmarks/plain_fit.py), {c['files']} files ({c['bytes'] / 1e6:.0f} MB)",
+                f"{c['cylfric_fit_seconds']:.2f} s vs {c['plain_script_seconds']:.2f} s: "
+                f"{c['ratio_fit_over_script']:.2f}x",
+                f"<= {c['goal_ratio']:g}x ({'met' if c['met'] else 'not met'})",
+            )
+        )
+    return rows
 
 
 if __name__ == "__main__":
