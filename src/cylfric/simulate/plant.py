@@ -61,9 +61,11 @@ class Cylinder:
     stroke: float = math.inf
 
     def __post_init__(self):
-        if not self.mass > 0:
-            raise ValueError(f"Cylinder mass = {self.mass} is out of range; expected > 0 kg")
-        if self.area_a < 0 or self.area_b < 0:
+        if not (self.mass > 0 and math.isfinite(self.mass)):
+            raise ValueError(
+                f"Cylinder mass = {self.mass} is out of range; expected a finite mass > 0 kg"
+            )
+        if not (self.area_a >= 0 and self.area_b >= 0):
             raise ValueError("Cylinder areas must be >= 0 m^2")
 
     @classmethod
@@ -132,9 +134,15 @@ class SpringPull:
     damping: float = 0.0
 
     def __post_init__(self):
-        if self.stiffness <= 0:
+        if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
             raise ValueError(
-                f"SpringPull stiffness = {self.stiffness} is out of range; expected > 0 N/m"
+                f"SpringPull stiffness = {self.stiffness} is out of range; expected a finite "
+                "stiffness > 0 N/m"
+            )
+        if not (math.isfinite(self.speed) and self.damping >= 0):
+            raise ValueError(
+                f"SpringPull speed = {self.speed} m/s and damping = {self.damping} N*s/m: "
+                "expected a finite speed and a damping >= 0"
             )
 
 
@@ -241,12 +249,19 @@ def simulate(
         raise ValueError(f"unknown method {method!r}; valid: {list(METHODS)}")
     if rtol is None:
         rtol = 1e-9 if method == "scipy" else DEFAULT_RTOL
-    if not (duration > 0 and dt > 0 and dt <= duration):
-        raise ValueError(f"need 0 < dt <= duration; got dt = {dt} s, duration = {duration} s")
+    if not (0 < dt <= duration < math.inf):
+        raise ValueError(f"need 0 < dt <= duration < inf; got dt = {dt} s, duration = {duration} s")
+    if method == "fixed" and not (0 < step < math.inf):
+        raise ValueError(f"step = {step} s is out of range; expected a finite step > 0 s")
     n = int(round(duration / dt)) + 1
     time = np.arange(n) * dt
     pa = _on_grid(pressure_a, time, "pressure_a")
     pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
+    for name, values in (("pressure_a", pa), ("pressure_b", pb)):
+        if values.min() < 0:
+            raise ValueError(
+                f"{name} goes down to {values.min():.4g} Pa; expected pressures >= 0 Pa"
+            )
     # warns outside the model's validity pressures, or for pressures that look like bar
     friction.check(None, friction.operating_pressure(pa, pb), strict=strict)
     if (
@@ -258,6 +273,7 @@ def simulate(
         params = _friction_params(friction, float(pa[0]), float(pb[0]))  # constant pressures
     else:
         params = _friction_params(friction, pa, pb)
+    _check_friction(friction, params)
     f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
     info = {"method": method, "dt": dt}
 
@@ -392,6 +408,24 @@ def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_re
     )
 
 
+def _check_friction(friction, params):
+    """Clear errors for friction parameters the integrators cannot use (checked once)."""
+    if friction.simulation_law != "lugre":
+        return
+    from ..friction import lugre_force
+
+    shape = {name: np.asarray(params[name], dtype=float) for name in params}
+    try:
+        lugre_force(
+            0.0,
+            0.0,
+            *(shape[n] for n in ("sigma_0", "sigma_1", "sigma_2", "F_c", "F_s", "v_r")),
+            alpha=shape["alpha"],
+        )
+    except ValueError as exc:
+        raise ValueError(f"the friction model cannot be simulated: {exc}") from None
+
+
 def _arr(value, n):
     return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), (n,)))
 
@@ -493,6 +527,7 @@ def simulate_batch(
     }
     for i, (model, p) in enumerate(zip(models, pressures, strict=True)):
         params = _friction_params(model, p)
+        _check_friction(model, params)
         for name in table:
             table[name][i] = float(params[name])
     positions, frictions, reached = kernels.dopri_batch(

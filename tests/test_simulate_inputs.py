@@ -1,0 +1,75 @@
+"""Bad simulation inputs give a clear ValueError (issue 12), and literature sets keep their
+dynamic parameters."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from cylfric.friction.literature import CANUDAS_DE_WIT_1995
+from cylfric.model import FrictionModel
+from cylfric.simulate import Cylinder, SpringPull, simulate, simulate_batch
+
+
+def _canudas(**changes):
+    return FrictionModel({**dict(CANUDAS_DE_WIT_1995.params), **changes}, pressure_law="constant")
+
+
+def test_canudas_set_keeps_its_bristle_parameters():
+    params = _canudas().params_at(0.0)
+    assert params["sigma_0"] == 1e5 and params["sigma_1"] == pytest.approx(math.sqrt(1e5))
+
+
+@pytest.mark.parametrize(
+    "run, message",
+    [
+        (lambda: _canudas(F_c=math.nan), r"parameter F_c = nan is not finite"),
+        (lambda: SpringPull(math.nan, 0.1), r"SpringPull stiffness = nan .* finite stiffness"),
+        (lambda: Cylinder(math.inf), r"Cylinder mass = inf .* finite mass > 0 kg"),
+        (
+            lambda: simulate(Cylinder(1.0), _canudas(F_c=0.0, F_s=0.0), SpringPull(2, 0.1), 1.0),
+            r"cannot be simulated: parameters F_c and F_s must both be > 0 N",
+        ),
+        (
+            lambda: simulate(Cylinder(1.0), _canudas(v_r=0.0), SpringPull(2, 0.1), 1.0),
+            r"cannot be simulated: parameter v_r = 0.0 is out of range; expected > 0 m/s",
+        ),
+        (
+            lambda: simulate(Cylinder(1.0), _canudas(F_c=-1.0), SpringPull(2, 0.1), 1.0),
+            r"cannot be simulated: parameter F_c = -1.0 is out of range",
+        ),
+        (
+            lambda: simulate(
+                Cylinder(1.0), _canudas(), SpringPull(2, 0.1), 1.0, method="fixed", step=0.0
+            ),
+            r"step = 0.0 s is out of range; expected a finite step > 0 s",
+        ),
+        (
+            lambda: simulate(Cylinder(1.0), _canudas(), SpringPull(2, 0.1), math.inf),
+            r"need 0 < dt <= duration < inf; got dt = 0.001 s, duration = inf s",
+        ),
+        (
+            lambda: simulate(
+                Cylinder(1.0), FrictionModel(), SpringPull(2, 0.1), 1.0, pressure_a=-5e5
+            ),
+            r"pressure_a goes down to -5e\+05 Pa; expected pressures >= 0 Pa",
+        ),
+        (
+            lambda: FrictionModel(
+                {k: v for k, v in CANUDAS_DE_WIT_1995.params.items() if k != "alpha"},
+                pressure_law="constant",
+            ),
+            r"the stribeck law needs alpha",
+        ),
+        (
+            lambda: simulate_batch(
+                Cylinder(1.0), [_canudas(v_r=0.0)], SpringPull(2, 0.1), 1.0, pressures=[0.0]
+            ),
+            r"cannot be simulated: parameter v_r = 0.0",
+        ),
+    ],
+)
+def test_bad_inputs_give_a_clear_value_error(run, message):
+    with pytest.raises(ValueError, match=message):
+        run()
