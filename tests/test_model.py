@@ -331,6 +331,4 @@ def test_simulate_warns_outside_the_validity_pressures(fitted):
     with pytest.warns(ValidityWarning, match="pressures are in Pa"):
         simulate(Cylinder(10.0), FrictionModel(), SpringPull(2e4, 5e-3), 0.01, pressure_a=50.0)
     with pytest.raises(ValueError, match="outside the validity ranges"):
-        simulate(
-            Cylinder(10.0), model, SpringPull(2e4, 5e-3), 0.01, pressure_a=300e5, strict=True
-        )
+        simulate(Cylinder(10.0), model, SpringPull(2e4, 5e-3), 0.01, pressure_a=300e5, strict=True)

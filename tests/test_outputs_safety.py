@@ -4,6 +4,7 @@ the campaign, never over a folder that is not cylfric's; generate never overwrit
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
@@ -112,3 +113,27 @@ def test_fix_accepts_a_comma_separated_list_and_glob_selects_runs(campaign, tmp_
     sheet = json.loads((out / "datasheet.json").read_text())
     assert sheet["fit"]["fixed"] == {"v_r": 0.01, "alpha": 1.0}
     assert len(sheet["fit"]["source"]["files"]) == 10  # run_000 ... run_009 of 21
+
+
+def test_leftovers_of_a_killed_fit_are_removed_and_a_failed_swap_restores(campaign, tmp_path):
+    import cylfric.pipeline as pipeline
+
+    out = tmp_path / "out"
+    (tmp_path / ".out.staging-killed").mkdir()
+    fit_campaign(campaign, out, report=False)
+    assert not (tmp_path / ".out.staging-killed").exists()
+    before = (out / "datasheet.json").read_bytes()
+    staging = tmp_path / ".out.staging-x"
+    staging.mkdir()
+    real_rename = Path.rename
+
+    def failing(self, target):
+        if self == staging:
+            raise OSError("disk full")
+        return real_rename(self, target)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Path, "rename", failing)
+        with pytest.raises(OSError, match="disk full"):
+            pipeline._swap_in(staging, out)
+    assert (out / "datasheet.json").read_bytes() == before

@@ -109,6 +109,7 @@ def fit_campaign(
     _check_out(folder, out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with _lock(out):
+        _remove_leftovers(out)
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
         mask = os.umask(0)
         os.umask(mask)
@@ -206,14 +207,27 @@ def _alive(pid: int) -> bool:
 
 
 def _swap_in(staging: Path, out: Path):
-    """Replace ``out`` by ``staging`` (two renames on one file system)."""
+    """Replace ``out`` by ``staging`` (two renames on one file system); on a failed second
+    rename the previous ``out`` is put back."""
     old = None
     if out.exists():
         old = out.parent / f".{out.name}.old-{os.getpid()}"
         out.rename(old)
-    staging.rename(out)
+    try:
+        staging.rename(out)
+    except OSError:
+        if old is not None:
+            old.rename(out)
+        raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+
+
+def _remove_leftovers(out: Path):
+    """Staging and old folders of fits into ``out`` that were killed (called under the lock)."""
+    for pattern in (f".{out.name}.staging-*", f".{out.name}.old-*"):
+        for path in out.parent.glob(pattern):
+            shutil.rmtree(path, ignore_errors=True)
 
 
 def _fit(
