@@ -631,7 +631,22 @@ SECTIONS = {
 }
 
 
+def _discover_sections():
+    """Sections of ``benchmarks/bench_*.py`` modules (each defines a ``SECTIONS`` dict)."""
+    import importlib.util
+
+    for path in sorted(HERE.glob("bench_*.py")):
+        spec = importlib.util.spec_from_file_location(path.stem, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        for name, fn in module.SECTIONS.items():
+            if name in SECTIONS:
+                raise SystemExit(f"{path.name}: benchmark section {name!r} defined twice")
+            SECTIONS[name] = fn
+
+
 def main(argv):
+    _discover_sections()
     chosen = argv or list(SECTIONS)
     unknown = set(chosen) - set(SECTIONS)
     if unknown:

@@ -505,6 +505,21 @@ def simulate(
     )
 
 
+# public names for the command modules in cylfric/commands/
+progress_bar = _progress
+numbers = _numbers
+fixed_parameters = _fixed
+
+
+def _register_commands() -> None:
+    from .commands import register_all
+
+    register_all(app)
+
+
+_register_commands()
+
+
 def main() -> None:
     """Console-script entry point."""
     try:
