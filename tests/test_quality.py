@@ -126,3 +126,21 @@ def test_real_zillen_runs_are_all_kept(shared_data, tmp_path):
     shutil.copytree(shared_data / "zillen2021-pneumatic-seals", folder)
     shutil.copy(EXAMPLES / "zillen2021" / "campaign.toml", folder / "campaign.toml")
     assert assess(extract_campaign(folder)).excluded.empty
+
+
+def test_fine_grids_lose_no_run_and_close_pressure_levels_stay_apart(tmp_path):
+    """7 bar steps near 160 bar and 1 mm/s steps (the 480-file benchmark campaign's grid).
+
+    Regression: a 5 % level rule chained 147, 154 and 161 bar into one level, and on data
+    this clean the bend of the Stribeck curve between 1 mm/s steps (about 1 N) was taken
+    for outliers: 290 of 480 clean runs were excluded.
+    """
+    from cylfric.identify import pressure_levels
+
+    labels, levels = pressure_levels([140e5, 147e5, 147.4e5, 154e5, 161e5])
+    assert list(labels) == [0, 1, 1, 2, 3]
+    folder = tmp_path / "fine"
+    generate_campaign(
+        folder, BenchSettings(pressures_bar=(140, 147, 154, 161), speeds_mm_s=tuple(range(1, 11)))
+    )
+    assert assess(extract_campaign(folder)).excluded.empty

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .identify import pressure_levels
+
 __all__ = ["assess", "QualityReport", "CHECKS"]
 
 CHECKS = ("speed", "scale", "outlier", "motion", "unlisted")
@@ -107,48 +109,45 @@ _POINT_NAMES = {
 }
 
 
-def _levels(pressure, gap=1e5, relative=0.05):
-    p = np.asarray(pressure, dtype=float)
-    order = np.argsort(p)
-    jumps = np.diff(p[order]) > np.maximum(gap, relative * np.abs(p[order][1:]))
-    labels = np.empty(p.size, dtype=int)
-    labels[order] = np.concatenate(([0], np.cumsum(jumps)))
-    return labels
+def _prediction(x, y, i):
+    """Friction at ``x[i]`` predicted from the other runs (log speed ``x`` sorted) [N].
+
+    Between neighbours: the line through the nearest run on each side; at an end of the
+    speed range: the line through the nearest two, extrapolated. Returns (prediction,
+    at_end). (A parabola through two runs on each side was tried: it overshoots the
+    Stribeck minimum by 15 N on log-spaced speeds.)
+    """
+    left = [j for j in (i - 2, i - 1) if j >= 0]
+    right = [j for j in (i + 1, i + 2) if j < x.size]
+    end = not (left and right)
+    a, b = (left[-1], right[0]) if not end else (left[-2:] if left else right[:2])
+    if x[a] == x[b]:
+        return float((y[a] + y[b]) / 2), end
+    slope = (y[b] - y[a]) / (x[b] - x[a])
+    return float(y[a] + slope * (x[i] - x[a])), end
 
 
-def _outliers(table, outlier_sigma, min_speeds):
-    """(run, residual, sigma) of runs far from their neighbours' interpolation in log speed."""
-    residuals = {}
-    for _, group in table.groupby(["level", "group"], dropna=False):
-        group = group.sort_values("speed")
-        if group["speed"].nunique() < min_speeds:
+def _outliers(groups, outlier_sigma, min_speeds, floor):
+    """(run, residual, sigma) of runs far from their neighbours' prediction in log speed.
+
+    ``groups`` is a list of (runs, log speed, friction) arrays sorted by speed, one per
+    pressure level (and group of runs); ``floor`` [N] is the smallest robust sigma.
+    """
+    residuals = {False: [], True: []}
+    for runs, x, y in groups:
+        if np.unique(np.round(x, 6)).size < min_speeds:
             continue
-        x = np.log(group["speed"].to_numpy())
-        y = group["friction"].to_numpy()
-        for i, run in enumerate(group["run"]):
-            others = np.delete(np.arange(x.size), i)
-            xo, yo = x[others], y[others]
-            below, above = xo[xo <= x[i]], xo[xo >= x[i]]
-            end = not (below.size and above.size)
-            if not end:  # between neighbours: interpolate
-                prediction = float(np.interp(x[i], xo, yo))
-            else:  # at an end: the two nearest, extrapolated
-                near = np.argsort(np.abs(xo - x[i]))[:2]
-                a, b = near
-                if xo[a] == xo[b]:
-                    prediction = float(yo[near].mean())
-                else:
-                    slope = (yo[b] - yo[a]) / (xo[b] - xo[a])
-                    prediction = float(yo[a] + slope * (x[i] - xo[a]))
-            residuals[run] = (y[i] - prediction, end)
+        for i, run in enumerate(runs):
+            prediction, end = _prediction(x, y, i)
+            residuals[end].append((run, y[i] - prediction))
     out = []
-    for end in (False, True):  # extrapolation at the ends of the speed range errs more
-        part = {run: r for run, (r, e) in residuals.items() if e == end}
+    for part in residuals.values():  # extrapolation at the ends of the speed range errs more
         if len(part) < 5:
             continue
-        values = np.array(list(part.values()))
-        sigma = max(1.4826 * float(np.median(np.abs(values - np.median(values)))), 1e-9)
-        out += [(run, r, sigma) for run, r in part.items() if abs(r) > outlier_sigma * sigma]
+        values = np.array([r for _, r in part])
+        mad = float(np.median(np.abs(values - np.median(values))))
+        sigma = max(1.4826 * mad, floor, 1e-9)
+        out += [(run, r, sigma) for run, r in part if abs(r) > outlier_sigma * sigma]
     return out
 
 
@@ -159,6 +158,7 @@ def assess(
     scale_factor=30.0,
     outlier_sigma=8.0,
     min_speeds=4,
+    noise_floor=0.005,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -173,9 +173,13 @@ def assess(
         a unit slip is a factor of 1000, a real level spread a factor below 3.
     outlier_sigma : float
         Robust sigmas (1.4826 MAD of all runs' residuals against their neighbours'
-        interpolation) beyond which a run is an outlier [-]. 8 keeps every run of clean
-        virtual campaigns (the thesis' 270 runs and other seeds), whose worst run sits near
-        5 sigma, while a run mislabelled by 80 bar sits hundreds of sigmas out.
+        prediction, at least ``noise_floor``) beyond which a run is an outlier [-]. 8 keeps
+        every run of clean virtual campaigns (the thesis' 270 runs, 144- and 480-run grids
+        with 1 mm/s and 7 bar steps), while a run mislabelled by 80 bar sits far out.
+    noise_floor : float
+        Smallest robust sigma as a fraction of the campaign's median friction [-] (0.005:
+        1 N at 200 N). Very clean data would otherwise make a tiny sigma of every bend of the
+        Stribeck curve; a pressure typed 20 bar off still moves friction by about 10 N.
     min_speeds : int
         Fewest distinct speeds at a pressure level (within one group of runs, e.g. a seal)
         for the outlier check [-].
@@ -206,7 +210,7 @@ def assess(
     flagged = {e["run"] for e in excluded}
     rest = usable[~usable["run"].isin(flagged)].copy()
     if len(rest):
-        rest["level"] = _levels(rest["pressure"])
+        rest["level"] = pressure_levels(rest["pressure"].to_numpy())[0]
         if "group" not in rest:
             rest["group"] = 0
         for _, level in rest.groupby(["level", "group"], dropna=False):
@@ -222,13 +226,20 @@ def assess(
                     )
         flagged = {e["run"] for e in excluded}
         rest = rest[~rest["run"].isin(flagged)]
-        while True:  # the worst first: a bad run also pulls its neighbours' interpolation
-            found = _outliers(rest, outlier_sigma, min_speeds)
+        groups = [
+            (g["run"].to_numpy(), np.log(g["speed"].to_numpy()), g["friction"].to_numpy())
+            for _, g in rest.sort_values("speed").groupby(["level", "group"], dropna=False)
+        ]
+        # measurement noise of real rigs is at least a few per mille of the friction level
+        floor = noise_floor * float(np.median(np.abs(rest["friction"]))) if len(rest) else 0.0
+        rows = rest.set_index("run")
+        while True:  # the worst first: a bad run also pulls its neighbours' prediction
+            found = _outliers(groups, outlier_sigma, min_speeds, floor)
             if not found:
                 break
             run, residual, sigma = max(found, key=lambda item: abs(item[1]) / item[2])
-            row = rest[rest["run"] == run].iloc[0]
-            rest = rest[rest["run"] != run]
+            groups = [(r[r != run], x[r != run], y[r != run]) for r, x, y in groups]
+            row = rows.loc[run].to_dict() | {"run": run}
             exclude(
                 row,
                 "outlier",

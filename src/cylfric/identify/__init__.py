@@ -62,11 +62,13 @@ __all__ = [
 LAWS_COMPARED = FITTED_LAWS
 
 
-def pressure_levels(pressure, *, gap=1e5, relative=0.05):
+def pressure_levels(pressure, *, gap=0.5e5, relative=0.02):
     """Group measured pressures [Pa] into levels; returns (level index per point, level means).
 
-    A new level starts where sorted pressures jump by more than max(gap [Pa],
-    relative * pressure).
+    A new level starts where sorted pressures jump by more than max(``gap`` [Pa],
+    ``relative`` * pressure [-]). The defaults (0.5 bar, 2 %) keep campaigns with 7 bar steps
+    up to 160 bar apart (5 % chained 147, 154 and 161 bar into one level) while the runs of
+    one hand-pumped level, which scatter by well under 2 %, stay together.
     """
     p = np.asarray(pressure, dtype=float)
     order = np.argsort(p)
