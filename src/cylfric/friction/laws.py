@@ -28,6 +28,7 @@ __all__ = [
     "stribeck",
     "stribeck_unchecked",
     "stribeck_shape",
+    "stribeck_jacobian",
     "dahl_derivative",
     "lugre_g",
     "lugre_state_derivative",
@@ -181,6 +182,31 @@ def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     speed = np.abs(v)
     g = F_c + (F_s - F_c) * stribeck_shape(speed, v_r, alpha)  # eq. 2.5, g(v)
     return np.sign(v) * (g + sigma_2 * speed)  # eq. 2.7
+
+
+def stribeck_jacobian(speed, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+    """Partial derivatives of the friction magnitude of eq. 2.7 at ``speed`` >= 0 [m/s].
+
+    Returns a dict of arrays d|F|/d(parameter): ``F_c`` and ``F_s`` [-], ``v_r`` [N*s/m],
+    ``sigma_2`` [m/s], ``alpha`` [N]. For least-squares fits; no parameter checks.
+    With ``e`` = :func:`stribeck_shape` and ``r = (speed / v_r) ** alpha``:
+    dF/dF_c = 1 - e, dF/dF_s = e, dF/dv_r = (F_s - F_c) e r alpha / v_r,
+    dF/dsigma_2 = speed, dF/dalpha = -(F_s - F_c) e r ln(speed / v_r).
+    """
+    speed = np.abs(np.asarray(speed, dtype=float))
+    ratio = speed / v_r
+    r = ratio**alpha
+    e = np.exp(-r)
+    amplitude = (F_s - F_c) * e * r
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_ratio = np.where(speed > 0, np.log(np.where(speed > 0, ratio, 1.0)), 0.0)
+    return {
+        "F_c": 1.0 - e,
+        "F_s": e,
+        "v_r": amplitude * alpha / v_r,
+        "sigma_2": speed,
+        "alpha": -amplitude * log_ratio,
+    }
 
 
 def dahl_derivative(velocity, force, F_c, sigma, *, exponent=1.0):

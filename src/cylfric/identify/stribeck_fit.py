@@ -15,7 +15,13 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.special import stdtrit
 
-from ..friction import NoStribeckMinimumWarning, stribeck, stribeck_shape, stribeck_velocity
+from ..friction import (
+    NoStribeckMinimumWarning,
+    stribeck_jacobian,
+    stribeck_shape,
+    stribeck_unchecked,
+    stribeck_velocity,
+)
 from ..model import PARAMETER_BOUNDS, STEADY_PARAMETERS
 
 __all__ = [
@@ -53,19 +59,25 @@ def design_columns(speed, pressure, v_r, alpha):
     return np.column_stack([1 - e, pressure * (1 - e), e, pressure * e, speed, pressure * speed])
 
 
-def robust_least_squares(residuals, x0, bounds, loss="soft_l1"):
+def robust_least_squares(residuals, x0, bounds, loss="soft_l1", jac="2-point"):
     """Bounded least squares; a robust ``loss`` refit scaled by the first fit's residual spread.
 
     A plain fit finds the residual spread (1.4826 MAD); the robust refit from there uses it
     as ``f_scale``, so outliers beyond a few sigma lose their pull. Returns the
     :func:`scipy.optimize.least_squares` result.
     """
-    first = least_squares(residuals, x0, bounds=bounds, x_scale="jac")
+    first = least_squares(residuals, x0, jac=jac, bounds=bounds, x_scale="jac")
     if loss == "linear":
         return first
     scale = 1.4826 * float(np.median(np.abs(first.fun - np.median(first.fun))))
     return least_squares(
-        residuals, first.x, bounds=bounds, x_scale="jac", loss=loss, f_scale=max(scale, 1e-6)
+        residuals,
+        first.x,
+        jac=jac,
+        bounds=bounds,
+        x_scale="jac",
+        loss=loss,
+        f_scale=max(scale, 1e-6),
     )
 
 
@@ -232,9 +244,15 @@ def fit_stribeck(velocity, friction, *, fixed=None, loss="soft_l1", start=None):
         return params
 
     def residuals(x):
-        return stribeck(speed, **unpack(x)) - force
+        return stribeck_unchecked(speed, **unpack(x)) - force
 
-    result = robust_least_squares(residuals, x0, (lower, upper), loss)
+    def jacobian(x):  # analytic: 4x fewer model evaluations than finite differences
+        partial = stribeck_jacobian(speed, **unpack(x))
+        if amplitude:  # F_s = F_c + amplitude
+            partial["F_c"] = partial["F_c"] + partial["F_s"]
+        return np.column_stack([partial[p] for p in free])
+
+    result = robust_least_squares(residuals, x0, (lower, upper), loss, jac=jacobian)
     params = unpack(result.x)
     res = -result.fun  # data minus model
     dof = max(speed.size - len(free), 1)
