@@ -193,3 +193,73 @@ def test_unknown_window_method_lists_valid():
     t = np.arange(0, 1, 0.01)
     with pytest.raises(ValueError, match=r"unknown window method 'thesis'; valid: \['auto'"):
         find_windows(t, np.ones_like(t), np.zeros_like(t), method="thesis")
+
+
+@pytest.fixture(scope="module")
+def campaign_of_20(tmp_path_factory):
+    """20 files: enough for extract_campaign to fork a second process (PARALLEL_MIN_FILES)."""
+    folder = tmp_path_factory.mktemp("twenty")
+    generate_campaign(
+        folder, replace(SMALL, pressures_bar=(0.1, 83.0), speeds_mm_s=tuple(range(2, 22, 2)))
+    )
+    return folder
+
+
+def _forks(monkeypatch):
+    import cylfric.steady_state as ss
+
+    if not ss._can_fork():
+        pytest.skip("this platform or process cannot fork an extraction worker")
+    return ss
+
+
+def test_two_core_extraction_equals_the_serial_one(campaign_of_20, monkeypatch):
+    import os
+
+    import pandas as pd
+
+    ss = _forks(monkeypatch)
+    pids, original = [], ss._point_rows
+    monkeypatch.setattr(
+        ss, "_point_rows", lambda *a, **k: pids.append(os.getpid()) or original(*a, **k)
+    )
+    names = []
+    serial = extract_campaign(campaign_of_20, workers=1)
+    pids.clear()
+    parallel = extract_campaign(campaign_of_20, progress=names.append)
+    assert len(pids) == 10  # this process read every other file; the child the rest
+    assert sorted(names) == sorted(Path(r["file"]).name for r in serial.runs)
+    pd.testing.assert_frame_equal(parallel.points, serial.points)
+    assert parallel.runs == serial.runs and parallel.bytes_read == serial.bytes_read
+
+
+def test_files_of_a_dead_child_are_extracted_here(campaign_of_20, monkeypatch):
+    import os
+
+    import pandas as pd
+
+    ss = _forks(monkeypatch)
+    parent, original = os.getpid(), ss._point_rows
+
+    def dies_in_the_child(*args, **kwargs):
+        if os.getpid() != parent:
+            os._exit(3)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(ss, "_point_rows", dies_in_the_child)
+    parallel = extract_campaign(campaign_of_20)
+    pd.testing.assert_frame_equal(
+        parallel.points, extract_campaign(campaign_of_20, workers=1).points
+    )
+
+
+def test_a_bad_file_read_by_the_child_is_named_and_skippable(campaign_of_20, tmp_path, monkeypatch):
+    _forks(monkeypatch)
+    folder = tmp_path / "c"
+    shutil.copytree(campaign_of_20, folder)
+    bad = sorted(folder.glob("run_*.txt"))[1]  # odd index: the child's share
+    bad.write_text(bad.read_text().replace("\t", "\tx", 40))
+    with pytest.raises(BenchFileError, match=bad.name):
+        extract_campaign(folder)
+    result = extract_campaign(folder, skip_bad=True)
+    assert [Path(s["file"]).name for s in result.skipped] == [bad.name]

@@ -130,14 +130,30 @@ def _fixed(options: list[str]) -> dict:
     return out
 
 
+class _ThreadlessProgress(Progress):
+    """A rich progress bar redrawn by ``advance`` (at most 10 times a second), not by a thread.
+
+    rich's own refresh thread would keep the process from forking its second extraction
+    worker and its figure worker (they fork only in a single-threaded process).
+    """
+
+    def advance(self, task_id, advance=1):
+        super().advance(task_id, advance)
+        now = self.get_time()
+        if now - getattr(self, "_drawn", 0.0) >= 0.1 or self.finished:
+            self._drawn = now
+            self.refresh()
+
+
 def _progress():
-    return Progress(
+    return _ThreadlessProgress(
         TextColumn("{task.description}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
         console=err_console,
         transient=True,
+        auto_refresh=False,
         disable=not err_console.is_terminal,
     )
 
@@ -221,7 +237,7 @@ def run_fit(
                 skip_bad=skip_bad,
                 report=report,
                 progress=lambda _: progress.advance(task),
-                after_extraction=progress.stop,  # its thread ends before figures may fork
+                after_extraction=progress.stop,
                 glob=glob,
                 strict=strict,
             )

@@ -43,8 +43,12 @@ class BenchFileError(ValueError):
     def __init__(self, path, message, line=None):
         self.path = str(path)
         self.line = line
+        self.message = message
         where = f"{self.path}" + (f", line {line}" if line is not None else "")
         super().__init__(f"{where}: {message}")
+
+    def __reduce__(self):  # pickled whole (extraction sends errors between processes)
+        return (type(self), (self.path, self.message, self.line))
 
 
 # Canonical quantity -> keywords found in column names (English, German, Swedish).
