@@ -223,11 +223,16 @@ def test_two_core_extraction_equals_the_serial_one(campaign_of_20, monkeypatch):
     monkeypatch.setattr(
         ss, "_point_rows", lambda *a, **k: pids.append(os.getpid()) or original(*a, **k)
     )
-    names = []
+    received, receive = [], ss._receive
+    monkeypatch.setattr(ss, "_receive", lambda pipe: received.append(receive(pipe)) or received[-1])
+    names, imported = [], []
     serial = extract_campaign(campaign_of_20, workers=1)
     pids.clear()
-    parallel = extract_campaign(campaign_of_20, progress=names.append)
-    assert len(pids) == 10  # this process read every other file; the child the rest
+    parallel = extract_campaign(
+        campaign_of_20, progress=names.append, meanwhile=lambda: imported.append(True)
+    )
+    assert imported == [True]
+    assert received and len(pids) + len(received) == 20  # the child took some files
     assert sorted(names) == sorted(Path(r["file"]).name for r in serial.runs)
     pd.testing.assert_frame_equal(parallel.points, serial.points)
     assert parallel.runs == serial.runs and parallel.bytes_read == serial.bytes_read

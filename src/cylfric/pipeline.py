@@ -16,8 +16,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from .datasheet import build_datasheet, write_datasheet
-from .identify import identify
 from .io.campaign import load_config
 from .io.writers import atomic_write_text
 from .quality import assess
@@ -230,6 +228,12 @@ def _remove_leftovers(out: Path):
             shutil.rmtree(path, ignore_errors=True)
 
 
+def _import_next_stages():
+    """Import the identification and the datasheet (scipy.optimize, jsonschema: about 0.4 s)
+    while the second extraction worker already reads files."""
+    from . import datasheet, identify  # noqa: F401
+
+
 def _fit(
     folder,
     out,
@@ -250,7 +254,9 @@ def _fit(
     if glob is not None:
         config = replace(load_config(folder), glob=glob)
     try:
-        extraction = extract_campaign(folder, config, skip_bad=skip_bad, progress=progress)
+        extraction = extract_campaign(
+            folder, config, skip_bad=skip_bad, progress=progress, meanwhile=_import_next_stages
+        )
     finally:
         if after_extraction is not None:
             after_extraction()
@@ -263,6 +269,9 @@ def _fit(
         )
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    from .datasheet import build_datasheet, write_datasheet
+    from .identify import identify
+
     ident = identify(
         quality.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
     )

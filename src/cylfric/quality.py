@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .identify import pressure_levels
+from .levels import pressure_levels
 
 __all__ = ["assess", "QualityReport", "CHECKS"]
 

@@ -14,10 +14,12 @@ unit, and :func:`find_windows` can return its intermediate components.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import pickle
 import select
+import signal
 import struct
 import sys
 import threading
@@ -486,54 +488,72 @@ def _receive(pipe):
     return pickle.loads(data)
 
 
-def _extract_all(one, n, workers, report):
-    """``[one(i) for i in range(n)]``, on two cores when allowed (see extract_campaign)."""
+def _extract_all(one, n, workers, report, meanwhile=None):
+    """``[one(i) for i in range(n)]``, on two cores when allowed (see extract_campaign).
+
+    The two processes take files from a shared queue (a pipe of file indices: a read of 4
+    bytes is atomic), so this process may first run ``meanwhile`` (e.g. imports for the
+    next stage) while the child already extracts.
+    """
     workers = (2 if sys.platform.startswith("linux") else 1) if workers is None else workers
     results = [None] * n
-    if workers < 2 or n < PARALLEL_MIN_FILES or not _can_fork():
+    if workers < 2 or not PARALLEL_MIN_FILES <= n <= 16_000 or not _can_fork():
+        if meanwhile is not None:
+            meanwhile()
         for index in range(n):
             results[index] = one(index)
             report(index)
         return results
-    mine, theirs = list(range(0, n, 2)), list(range(1, n, 2))
+    queue_read, queue_write = os.pipe()
+    os.write(queue_write, struct.pack(f"<{n}i", *range(n)))  # 64 KiB pipe: 16,384 indices
+    os.close(queue_write)
     read_end, write_end = os.pipe()
     pid = os.fork()
-    if pid == 0:  # the child: extract its share, send each result, leave without cleanup
+    if pid == 0:  # the child: take files from the queue, send each result, leave quietly
         status = 1
         try:
             os.close(read_end)
             with os.fdopen(write_end, "wb") as pipe:
-                for index in theirs:
+                while len(token := os.read(queue_read, 4)) == 4:
+                    index = struct.unpack("<i", token)[0]
                     _send(pipe, (index, one(index)))
             status = 0
         finally:
             os._exit(status)
     os.close(write_end)
-    with os.fdopen(read_end, "rb") as pipe:
+    try:
+        with os.fdopen(read_end, "rb") as pipe:
 
-        def collect(block):
-            while True:  # each message is written whole: a readable pipe holds one
-                ready = select.select([pipe], [], [], None if block else 0)[0]
-                if not ready:
-                    return True
-                try:
-                    index, result = _receive(pipe)
-                except Exception:  # noqa: BLE001 - a dead child: its files are read here
-                    return False
-                results[index] = result
+            def collect(block):
+                """Read the child's finished results; False once it is gone."""
+                while select.select([pipe], [], [], None if block else 0)[0]:
+                    try:  # each message is written whole: a readable pipe holds one
+                        index, result = _receive(pipe)
+                    except Exception:  # noqa: BLE001 - a dead child: its files are read here
+                        return False
+                    results[index] = result
+                    report(index)
+                    if block:
+                        return True
+                return True
+
+            if meanwhile is not None:
+                meanwhile()
+            alive = True
+            while len(token := os.read(queue_read, 4)) == 4:
+                index = struct.unpack("<i", token)[0]
+                results[index] = one(index)
                 report(index)
-                if block:
-                    return True
-
-        alive = True
-        for index in mine:
-            results[index] = one(index)
-            report(index)
-            alive = alive and collect(block=False)
-        while alive and any(results[i] is None for i in theirs):
-            alive = collect(block=True)
-    _, status = os.waitpid(pid, 0)
-    for index in theirs:  # the child died or failed: its remaining files are read here
+                alive = alive and collect(block=False)
+            while alive and any(result is None for result in results):
+                alive = collect(block=True)
+    finally:
+        os.close(queue_read)
+        if any(result is None for result in results):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGTERM)
+        os.waitpid(pid, 0)
+    for index in range(n):  # the child died: the file it had taken is read here
         if results[index] is None:
             results[index] = one(index)
             report(index)
@@ -547,6 +567,7 @@ def extract_campaign(
     skip_bad=False,
     progress=None,
     workers=None,
+    meanwhile=None,
     **options,
 ) -> Extraction:
     """Read every run of a campaign folder and extract its friction points.
@@ -556,11 +577,12 @@ def extract_campaign(
     :class:`~cylfric.io.BenchFileError`; with ``skip_bad`` it is listed in
     ``Extraction.skipped`` with the reason and the rest goes on. ``progress`` is called with
     each file name. ``workers`` (default 2 on Linux, else 1): with 2, and at least
-    ``PARALLEL_MIN_FILES`` files, in a process without other threads, one forked child
-    extracts every other file while this process extracts the rest (the per-file work is
-    small numpy calls that hold the GIL, so threads would not help); the result is the
-    same either way, and if the child dies its files are extracted here. Input files are
-    never modified.
+    ``PARALLEL_MIN_FILES`` files, in a process without other threads, a forked child and
+    this process take files from a shared queue (the per-file work is small numpy calls
+    that hold the GIL, so threads would not help); the result is the same either way, and
+    files of a child that died are extracted here. ``meanwhile`` (a callable) runs in this
+    process once the child has started, before it takes files (the pipeline imports the
+    identification there). Input files are never modified.
     """
     config = config or load_config(folder)
     options = extraction_options(config, options)
@@ -591,7 +613,7 @@ def extract_campaign(
         if progress is not None:
             progress(infos[index].path.name)
 
-    results = _extract_all(one, len(infos), workers, report)
+    results = _extract_all(one, len(infos), workers, report, meanwhile)
     for index, info in enumerate(infos):
         rows, summary, error = results[index]
         if error is not None:

@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
+from ..levels import pressure_levels
 from ..model import FrictionModel
 from .linear_fit import fit_linear_surface
 from .pressure_fit import (
@@ -60,25 +61,6 @@ __all__ = [
 ]
 
 LAWS_COMPARED = FITTED_LAWS
-
-
-def pressure_levels(pressure, *, gap=0.5e5, relative=0.02):
-    """Group measured pressures [Pa] into levels; returns (level index per point, level means).
-
-    A new level starts where sorted pressures jump by more than max(``gap`` [Pa],
-    ``relative`` * pressure [-]). The defaults (0.5 bar, 2 %) keep campaigns with 7 bar steps
-    up to 160 bar apart (5 % chained 147, 154 and 161 bar into one level) while the runs of
-    one hand-pumped level, which scatter by well under 2 %, stay together.
-    """
-    p = np.asarray(pressure, dtype=float)
-    order = np.argsort(p)
-    sorted_p = p[order]
-    jumps = np.diff(sorted_p) > np.maximum(gap, relative * np.abs(sorted_p[1:]))
-    labels_sorted = np.concatenate(([0], np.cumsum(jumps)))
-    labels = np.empty_like(labels_sorted)
-    labels[order] = labels_sorted
-    means = np.array([p[labels == k].mean() for k in range(labels_sorted[-1] + 1)])
-    return labels, means
 
 
 def _distinct_speeds(speed, relative=0.1):
