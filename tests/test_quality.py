@@ -144,3 +144,15 @@ def test_fine_grids_lose_no_run_and_close_pressure_levels_stay_apart(tmp_path):
         folder, BenchSettings(pressures_bar=(140, 147, 154, 161), speeds_mm_s=tuple(range(1, 11)))
     )
     assert assess(extract_campaign(folder)).excluded.empty
+
+
+def test_a_flipped_load_cell_sign_exits_2_naming_the_key_and_its_line(clean, tmp_path):
+    folder = _copy(clean, tmp_path)
+    (folder / "campaign.toml").write_text(
+        '[files]\nglob = "*.txt"\n\n[force_balance]\nload_cell_sign = -1\n'
+    )
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 2, result.output
+    assert "friction level is pushed to 0 N" in result.output
+    assert "campaign.toml, line 5: load_cell_sign" in result.output
+    assert not (out / "datasheet.json").exists()

@@ -228,6 +228,21 @@ def _remove_leftovers(out: Path):
             shutil.rmtree(path, ignore_errors=True)
 
 
+def _sign_settings(folder) -> str:
+    """Where campaign.toml sets the force-balance signs, for an unphysical-friction error."""
+    from .io.campaign import CONFIG_NAME, _line_of
+
+    path = Path(folder) / CONFIG_NAME
+    if not path.is_file():
+        return "; no campaign.toml: the signs are the defaults (load_cell_sign = 1)"
+    found = [
+        f"{path}, line {line}: {key}"
+        for key in ("load_cell_sign", "position_sign")
+        if (line := _line_of(path, key)) is not None
+    ]
+    return f"; set in {'; '.join(found)}" if found else f"; {path} keeps the default signs"
+
+
 def _import_next_stages():
     """Import the identification and the datasheet (scipy.optimize, jsonschema: about 0.4 s)
     while the second extraction worker already reads files."""
@@ -270,11 +285,14 @@ def _fit(
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     from .datasheet import build_datasheet, write_datasheet
-    from .identify import identify
+    from .identify import UnphysicalFrictionError, identify
 
-    ident = identify(
-        quality.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
-    )
+    try:
+        ident = identify(
+            quality.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
+        )
+    except UnphysicalFrictionError as exc:
+        raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder)}") from None
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
     timings["identify"] = time.perf_counter() - t0

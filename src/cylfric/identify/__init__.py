@@ -52,6 +52,7 @@ __all__ = [
     "sensitivity_grid",
     "thesis_tables",
     "pressure_levels",
+    "UnphysicalFrictionError",
     "validity_of",
     "point_errors",
     "unphysical",
@@ -77,6 +78,10 @@ def validity_of(points) -> dict:
         "velocity_min": float(speed.min()),
         "velocity_max": float(speed.max()),
     }
+
+
+class UnphysicalFrictionError(ValueError):
+    """The data push the friction level to 0 N: a force-balance sign or a unit is wrong."""
 
 
 @dataclass
@@ -303,7 +308,7 @@ def _linear_model(args, fixed, weights, notes):
         chosen = stribeck
     level = [b for b in chosen.at_bounds if b.startswith("F_c")]
     if level:
-        raise ValueError(
+        raise UnphysicalFrictionError(
             f"the friction level is pushed to 0 N ({', '.join(level)}): the data contradict a "
             "positive friction force; check the force-balance signs (load_cell_sign, "
             "position_sign), the offset and the force and position units"
