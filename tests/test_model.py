@@ -117,6 +117,47 @@ def test_standard_error_is_the_first_order_propagation_of_the_covariance():
     assert_allclose((upper - lower) / 2, 1.9623 * expected, rtol=1e-4)  # t(0.975, 1000)
 
 
+def test_effective_dof_counts_the_runs_that_carry_the_friction():
+    """Satterthwaite's (sum a_g)^2 / sum a_g^2 over the runs' shares of the variance."""
+    coefficients = {"F_c": 70.0, "F_s": 110.0, "sigma_2": 300.0, "v_r": 0.01, "alpha": 1.0}
+    names = ["F_c", "F_s"]
+
+    def model_with(influence):
+        influence = np.asarray(influence, dtype=float)
+        return FrictionModel(
+            coefficients,
+            pressure_law="constant",
+            covariance=(names, influence.T @ influence),
+            influence=(names, influence),
+            statistics={"dof": 30},
+        )
+
+    one_run = model_with([[0.5, 0.2]] + [[0.0, 0.0]] * 9)
+    assert_allclose(one_run.effective_dof([0.002, 0.05], 0.0), 1.0)
+    equal = model_with([[0.3, 0.1], [-0.3, -0.1]] * 5)
+    assert_allclose(equal.effective_dof([0.002, 0.05], 0.0), 10.0)
+    # a band from one run is wider than one the same width of variance shared by ten runs
+    lo1, up1 = one_run.band(0.002, 0.0)
+    se1, se10 = one_run.standard_error(0.002, 0.0), equal.standard_error(0.002, 0.0)
+    lo10, up10 = equal.band(0.002, 0.0)
+    assert (up1 - lo1) / se1 == pytest.approx(2 * 12.706, rel=1e-3)  # t(0.975, 1)
+    assert (up10 - lo10) / se10 == pytest.approx(2 * 2.228, rel=1e-3)  # t(0.975, 10)
+    with pytest.raises(ValueError, match="influence needs a covariance"):
+        FrictionModel(coefficients, pressure_law="constant", influence=(names, [[1.0, 0.0]]))
+
+
+def test_fitted_influence_is_the_jackknife_behind_the_covariance():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = identify(_campaign_points(0, FrictionModel()), sensitivity=False).model
+    names, influence = model.influence
+    assert names == model.covariance[0]
+    assert_allclose(influence.T @ influence, model.covariance[1], rtol=1e-10, atol=1e-30)
+    dof = model.effective_dof(np.array([0.002, 0.13]), np.array([80e5, 159e5]))
+    assert np.all((dof >= 1) & (dof <= model.statistics["dof"]))
+    assert model.replace(coefficients=model.coefficients()).influence is None
+
+
 def test_guards_warn_outside_validity_and_on_pressures_in_bar(fitted):
     model = fitted.model
     with pytest.warns(ValidityWarning, match="pressures are in Pa"):

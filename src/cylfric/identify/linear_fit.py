@@ -141,7 +141,7 @@ def fit_linear_surface(
     n_free = result.x.size
     rss = float(res @ res)
     dof = max(force.size - n_free, 1)
-    cov_x, dof = _covariance(residuals, result.x, groups, dof)
+    cov_x, dof, influence = _covariance(residuals, result.x, groups, dof)
     names, transform, coefficients = _to_model(
         result.x, blocks, shape, fixed, friction_law, p_lo, span
     )
@@ -156,6 +156,7 @@ def fit_linear_surface(
         stderr=stderr,
         fixed=tuple(fixed),
         covariance=(names, covariance),
+        influence=None if influence is None else (names, influence @ transform.T),
         statistics={
             "n_points": int(force.size),
             "n_variables": int(n_free),

@@ -298,7 +298,7 @@ def fit_surface(
     n_free = len(result.x)
     dof = max(force.size - n_free, 1)
     rss = float(res @ res)
-    cov_x, dof = _covariance(residuals, result.x, groups, dof)
+    cov_x, dof, influence = _covariance(residuals, result.x, groups, dof)
     # to SI and the model's coefficient names, block by block (delta rule)
     transform = np.eye(n_free)
     coefficients, cov_names = {}, []
@@ -322,6 +322,7 @@ def fit_surface(
         stderr=stderr,
         fixed=tuple(fixed),
         covariance=(cov_names, covariance),
+        influence=None if influence is None else (cov_names, influence @ transform.T),
         statistics={
             "n_points": int(force.size),
             "n_variables": int(n_free),
@@ -340,13 +341,16 @@ def fit_surface(
 
 
 def _covariance(residuals, x, groups, dof):
-    """Covariance of the fitted coefficients and its degrees of freedom.
+    """Covariance of the fitted coefficients, its degrees of freedom and the runs' influence.
 
     ``residuals`` are the weighted residuals; their Jacobian is taken by central
     differences (the robust loss's own Jacobian is reweighted). Without ``groups``:
     ``s^2 (J^T J)^-1``. With groups: the cluster-robust sandwich
     ``(J^T J)^-1 (sum_g J_g^T r_g r_g^T J_g) (J^T J)^-1`` with the usual small-sample
     factor G/(G-1) (N-1)/(N-K), and G - K degrees of freedom (Cameron & Miller 2015).
+    The third value is the influence of each run, ``D`` (runs x coefficients, None without
+    groups) with ``covariance = D.T @ D``: it gives the model's bands their effective
+    degrees of freedom where few runs carry a coefficient.
     """
     r = residuals(x)
     steps = 1e-6 * np.maximum(np.abs(x), 1e-3)
@@ -362,11 +366,11 @@ def _covariance(residuals, x, groups, dof):
     bread = np.linalg.pinv(scaled.T @ scaled) / np.outer(scale, scale)
     n, k = jac.shape
     if groups is None:
-        return bread * float(r @ r) / dof, dof
+        return bread * float(r @ r) / dof, dof, None
     labels, index = np.unique(np.asarray(groups), return_inverse=True)
     g = labels.size
     if g <= k:
-        return bread * float(r @ r) / dof, dof
+        return bread * float(r @ r) / dof, dof, None
     # leave-one-run-out jackknife, linearised (CR3): robust to unequal scatter and to the
     # high leverage of the few fastest runs
     information = scaled.T @ scaled
@@ -376,8 +380,8 @@ def _covariance(residuals, x, groups, dof):
         js = scaled[rows]
         reduced = np.linalg.pinv(information - js.T @ js)
         deltas[label] = (reduced @ (js.T @ r[rows])) / scale
-    centred = deltas - deltas.mean(axis=0)
-    return (g - 1) / g * centred.T @ centred, g - k
+    influence = math.sqrt((g - 1) / g) * (deltas - deltas.mean(axis=0))
+    return influence.T @ influence, g - k, influence
 
 
 def _block_jacobian(law, coef):

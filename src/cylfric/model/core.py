@@ -260,6 +260,11 @@ class FrictionModel:
         Parameter name -> (lower, upper) used by the fit.
     covariance : (names, matrix), optional
         Covariance [SI] of the fitted (varying) coefficients, in the order of ``names``.
+    influence : (names, matrix), optional
+        Influence of each run of the fit on the coefficients (runs x coefficients, SI, the
+        covariance's names): the leave-one-run-out jackknife with
+        ``covariance = matrix.T @ matrix``. With it, :meth:`band` uses each point's effective
+        degrees of freedom (few runs carrying a coefficient give few).
     statistics : mapping, optional
         ``n_points``, ``n_variables``, ``rmse`` [N], ``residual_std`` [N], ``dof``, ``aic``,
         ``bic`` of the fit that made the model.
@@ -295,6 +300,7 @@ class FrictionModel:
         provenance=None,
         not_identified=None,
         record=None,
+        influence=None,
     ):
         if coefficients is None:
             coefficients = THESIS_2016.coefficients
@@ -404,6 +410,20 @@ class FrictionModel:
             matrix.setflags(write=False)
             covariance = (names, matrix)
         self.covariance = covariance
+        if influence is not None:
+            names, matrix = tuple(influence[0]), np.array(influence[1], dtype=float)
+            if covariance is None or names != covariance[0] or matrix.ndim != 2:
+                raise ValueError(
+                    "influence needs a covariance with the same names and a (runs x "
+                    "coefficients) matrix"
+                )
+            if matrix.shape[1] != len(names) or not np.all(np.isfinite(matrix)):
+                raise ValueError(
+                    f"influence is {matrix.shape}; expected finite (runs x {len(names)})"
+                )
+            matrix.setflags(write=False)
+            influence = (names, matrix)
+        self.influence = influence
         self.statistics = MappingProxyType(dict(statistics or {}))
         self.validity = None if validity is None else MappingProxyType(dict(validity))
         self.provenance = MappingProxyType(dict(provenance or {}))
@@ -426,6 +446,7 @@ class FrictionModel:
             "fixed": fixed,
             "bounds": bounds,
             "covariance": self.covariance,
+            "influence": self.influence,
             "statistics": dict(self.statistics),
             "validity": None if self.validity is None else dict(self.validity),
             "provenance": dict(self.provenance),
@@ -447,6 +468,8 @@ class FrictionModel:
         if "friction_law" in changes:
             kwargs["not_identified"] = {}
         kwargs.update(changes)
+        if kwargs["covariance"] is None or ("covariance" in changes and "influence" not in changes):
+            kwargs["influence"] = None  # the runs' influence belongs to its covariance
         return FrictionModel(**kwargs)
 
     # ------------------------------------------------------------------ views
@@ -615,14 +638,37 @@ class FrictionModel:
                 }
         return out
 
-    def _quantile(self, level):
+    def _quantile(self, level, dof=None):
+        """Student-t quantile of a two-sided ``level`` band (normal without a dof) [-]."""
         if not 0 < level < 1:
             raise ValueError(f"level = {level} is out of range; expected 0 < level < 1")
         from scipy.special import stdtrit
 
-        dof = self.statistics.get("dof")
+        dof = self.statistics.get("dof") if dof is None else dof
         q = 0.5 + level / 2
-        return float(stdtrit(dof, q)) if dof else float(_normal_quantile(q))
+        if dof is None or np.all(np.asarray(dof) == 0):
+            return float(_normal_quantile(q))
+        return stdtrit(dof, q)
+
+    def effective_dof(self, velocity, pressure):
+        """Degrees of freedom [-] of :meth:`standard_error` at (velocity [m/s], pressure [Pa]).
+
+        With the runs' :attr:`influence` (a fitted model), Satterthwaite's effective number
+        of runs ``(sum a_g)^2 / sum a_g^2`` with ``a_g`` each run's share of the variance at
+        that point, at most the fit's ``dof``: near 1 where one run decides the friction, the
+        fit's dof where all runs share it. Without it, the fit's ``dof`` everywhere.
+        """
+        v, p = np.broadcast_arrays(
+            np.asarray(velocity, dtype=float), np.asarray(pressure, dtype=float)
+        )
+        dof = self.statistics.get("dof")
+        if self.influence is None:
+            return np.full(v.shape, np.nan if dof is None else float(dof))
+        share = (self._jacobian(v, p) @ self.influence[1].T) ** 2  # (..., runs)
+        total = share.sum(axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            effective = np.where(total > 0, total**2 / (share**2).sum(axis=-1), np.inf)
+        return np.clip(effective, 1.0, np.inf if dof is None else float(dof))
 
     def standard_error(self, velocity, pressure):
         """Standard error [N] of the mean friction at (velocity [m/s], pressure [Pa]).
@@ -644,12 +690,13 @@ class FrictionModel:
     def band(self, velocity, pressure, level=0.95):
         """Confidence band (lower, upper) [N] of the mean friction at ``level``.
 
-        The model's friction plus and minus the Student-t quantile (the fit's degrees of
-        freedom) times :meth:`standard_error`. It covers the *true steady-state curve*,
-        not individual measurements (see :meth:`prediction_band`).
+        The model's friction plus and minus the Student-t quantile (each point's
+        :meth:`effective_dof`) times :meth:`standard_error`. It covers the *true
+        steady-state curve*, not individual measurements (see :meth:`prediction_band`).
         """
         f = self._friction(velocity, pressure, self.coefficients())
-        half = self._quantile(level) * self.standard_error(velocity, pressure)
+        dof = self.effective_dof(velocity, pressure) if self.influence is not None else None
+        half = self._quantile(level, dof) * self.standard_error(velocity, pressure)
         return f - half, f + half
 
     def prediction_band(self, velocity, pressure, level=0.95):
@@ -663,7 +710,15 @@ class FrictionModel:
             raise ValueError("this model carries no residual scatter (statistics.residual_std)")
         f = self._friction(velocity, pressure, self.coefficients())
         se = self.standard_error(velocity, pressure)
-        half = self._quantile(level) * np.sqrt(se**2 + scatter**2)
+        dof = None
+        if self.influence is not None:  # Welch-Satterthwaite: the mean's and the scatter's
+            scatter_dof = max(
+                self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1
+            )
+            mean_dof = self.effective_dof(velocity, pressure)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                dof = (se**2 + scatter**2) ** 2 / (se**4 / mean_dof + scatter**4 / scatter_dof)
+        half = self._quantile(level, dof) * np.sqrt(se**2 + scatter**2)
         return f - half, f + half
 
     def correlations(self):

@@ -3,9 +3,9 @@
 The datasheet is the serialised :class:`~cylfric.model.FrictionModel`: the model owns the
 keys ``model``, ``parameters``, ``stderr``, ``not_identified``, ``dynamic``, ``validity`` and,
 under ``fit``, ``method``, ``rmse``, ``n_points``, ``fixed``, ``bounds``, ``covariance``,
-``correlations``, ``statistics`` and ``source``. Every other key (the per-pressure table,
-the offset, notes, ...) is kept verbatim in :attr:`FrictionModel.record`, so that
-datasheet -> model -> datasheet is the identity.
+``influence``, ``correlations``, ``statistics`` and ``source``. Every other key (the
+per-pressure table, the offset, notes, ...) is kept verbatim in
+:attr:`FrictionModel.record`, so that datasheet -> model -> datasheet is the identity.
 """
 
 from __future__ import annotations
@@ -54,6 +54,7 @@ UNITS = {
 """Units of a datasheet's values (SI)."""
 
 _MODEL_FIT_KEYS = (
+    "influence",
     "method",
     "rmse",
     "n_points",
@@ -130,6 +131,7 @@ def to_datasheet(model) -> dict:
         "bounds": {p.name: [_bound(p.bounds[0]), _bound(p.bounds[1])] for p in identified},
         "covariance": _matrix(model.covariance),
         "correlations": _matrix(model.correlations()),
+        "influence": _matrix(model.influence),
         "statistics": stats,
         "source": dict(model.provenance.get("source", {"campaign": "", "files": []})),
         **record_fit,
@@ -178,6 +180,7 @@ def from_datasheet(cls, source):
         stats["n_points"] = fit["n_points"]
     dynamic = sheet.get("dynamic") or {}
     covariance = fit.get("covariance")
+    influence = fit.get("influence")
     bounds = {
         name: (-math.inf if lo is None else lo, math.inf if hi is None else hi)
         for name, (lo, hi) in (fit.get("bounds") or {}).items()
@@ -204,6 +207,7 @@ def from_datasheet(cls, source):
             fixed=fixed,
             bounds=bounds,
             covariance=None if covariance is None else (covariance["names"], covariance["matrix"]),
+            influence=None if influence is None else (influence["names"], influence["matrix"]),
             statistics=stats,
             validity=sheet.get("validity"),
             provenance={"method": fit["method"], "source": fit["source"]},
