@@ -187,7 +187,7 @@ class LossReport:
         return (
             f"{self.title}: RMS difference {self.rms:.3f} N, maximum {abs(d):.3f} N "
             f"at {v * 1e3:+.4g} mm/s and {p / 1e5:.4g} bar "
-            f"({'above' if d > 0 else 'below'} cylfric)"
+            f"(the block gives {'more' if d * v > 0 else 'less'} friction than cylfric)"
         )
 
     def text(self) -> str:
