@@ -195,6 +195,7 @@ def run_fit(
     quiet=False,
     glob=None,
     strict=False,
+    export=(),
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
     from .io.campaign import discover_runs, load_config
@@ -224,6 +225,7 @@ def run_fit(
                 after_extraction=progress.stop,  # its thread ends before figures may fork
                 glob=glob,
                 strict=strict,
+                export=export,
             )
         finally:
             progress.stop()
@@ -241,6 +243,8 @@ def run_fit(
                 console.print(f"  {Path(item['file']).name}: {item['reason']}", markup=False)
         for note in result.identification.notes:
             console.print(f"[yellow]note:[/yellow] {note}")
+        for exported in result.exports.values():
+            console.print(exported.summary(), markup=False, highlight=False)
         console.print(f"outputs in {out}" + (f"; open {out / 'report.html'}" if report else ""))
     return result
 
@@ -270,10 +274,24 @@ def fit(
     strict: bool = typer.Option(
         False, "--strict", help="Stop (exit 2) instead of excluding runs the quality gate flags."
     ),
+    export: str = typer.Option(
+        None,
+        "--export",
+        help="Also export to simulators into OUT/export/<target>: e.g. fmu,simscape "
+        "(fmu, modelica, simscape, hopsan, matlab).",
+    ),
 ):
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
         raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
+    targets = ()
+    if export is not None:
+        from .export import parse_targets
+
+        try:
+            targets = parse_targets(export)
+        except ValueError as exc:
+            raise BadInput(f"--export {export!r}: {exc}") from None
     run_fit(
         campaign,
         out,
@@ -284,6 +302,7 @@ def fit(
         report=not no_report,
         glob=glob,
         strict=strict,
+        export=targets,
     )
 
 
