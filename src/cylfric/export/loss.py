@@ -207,7 +207,9 @@ class LossReport:
             "",
             "exported parameters (SI):",
         ]
-        lines += [f"  {name} = {value:.10g} {unit}" for name, (value, unit) in self.parameters.items()]
+        lines += [
+            f"  {name} = {value:.10g} {unit}" for name, (value, unit) in self.parameters.items()
+        ]
         if self.notes:
             lines += ["", "notes:"] + [f"  - {note}" for note in self.notes]
         return "\n".join(lines) + "\n"
@@ -249,7 +251,12 @@ class LossReport:
         limit = max(float(np.nanmax(np.abs(grid))), 1e-12)
         if levels.size > 1:
             mesh = right.pcolormesh(
-                speeds * 1e3, levels / 1e5, grid, cmap="RdBu_r", vmin=-limit, vmax=limit,
+                speeds * 1e3,
+                levels / 1e5,
+                grid,
+                cmap="RdBu_r",
+                vmin=-limit,
+                vmax=limit,
                 shading="nearest",
             )
             right.set_ylabel("chamber pressure [bar]")
@@ -317,7 +324,9 @@ def loss_report(
     """
     speeds = np.asarray(speeds, dtype=float)
     velocity_axis = np.concatenate([-speeds[::-1], speeds])
-    pressure, velocity = np.meshgrid(np.asarray(pressures, dtype=float), velocity_axis, indexing="ij")
+    pressure, velocity = np.meshgrid(
+        np.asarray(pressures, dtype=float), velocity_axis, indexing="ij"
+    )
     velocity, pressure = velocity.ravel(), pressure.ravel()
     cylfric = np.asarray(
         model.friction(velocity, model.operating_pressure(pressure, pressure)), dtype=float

@@ -111,12 +111,12 @@ def modelica_package(model, *, name=None) -> tuple[str, str]:
         kind = _TYPES[parameter][0]
         comment = _COMMENTS[parameter]
         if law == "same":
-            variables.append(f"    {kind} {parameter} \"{comment} (= {spec}: not identified)\";")
+            variables.append(f'    {kind} {parameter} "{comment} (= {spec}: not identified)";')
             laws.append(f"    {parameter} = {spec};")
         elif law == "constant":
             unit = "" if kind != "Real" else f'(unit="{_unit(parameter)}")'
             parameters.append(
-                f"    parameter {kind} {parameter}{unit} = {_num(spec['intercept'])} \"{comment}\";"
+                f'    parameter {kind} {parameter}{unit} = {_num(spec["intercept"])} "{comment}";'
             )
         else:
             for coefficient, value in spec.items():
@@ -124,9 +124,9 @@ def modelica_package(model, *, name=None) -> tuple[str, str]:
                 unit = "" if base != "Real" else f'(unit="{_unit(parameter, coefficient)}")'
                 parameters.append(
                     f"    parameter {base} {parameter}_{coefficient}{unit} = {_num(value)} "
-                    f"\"{comment}: {coefficient} of the {law} pressure law\";"
+                    f'"{comment}: {coefficient} of the {law} pressure law";'
                 )
-            variables.append(f"    {kind} {parameter} \"{comment} at the operating pressure\";")
+            variables.append(f'    {kind} {parameter} "{comment} at the operating pressure";')
             arguments = ", ".join(f"{parameter}_{c}" for c in spec)
             laws.append(f"    {parameter} = PressureLaws.{law}(p, {arguments});")
     validity = "the whole range (no validity given)"
@@ -137,8 +137,10 @@ def modelica_package(model, *, name=None) -> tuple[str, str]:
             f"{val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
         )
     label = str(model.record.get("name", "cylfric model"))
-    example_p = 55e5 if model.validity is None else 0.5 * (
-        model.validity["pressure_min"] + model.validity["pressure_max"]
+    example_p = (
+        55e5
+        if model.validity is None
+        else 0.5 * (model.validity["pressure_min"] + model.validity["pressure_max"])
     )
     example_p = example_p / float(model.operating_pressure(1.0, 1.0))
     template = Template(

@@ -8,7 +8,8 @@ validity range (:func:`cylfric.export.loss.loss_grid`), the parameters of
   Components), the current block. Its documented equations (MathWorks, "Cylinder Friction
   (IL)" reference page): the Stribeck and viscous parts as in the Foundation library's
   Translational Friction block, ``F = F_Stribeck + F_Coulomb + F_viscous`` with
-  ``F_Stribeck = sqrt(2e) (R_brk - 1) F_C (v/v_st) exp(-(v/v_st)^2)``, ``v_st = sqrt(2) v_brk``,
+  ``F_Stribeck = sqrt(2e) (R_brk - 1) F_C x exp(-x^2)`` with ``x = v/v_st``,
+  ``v_st = sqrt(2) v_brk``,
   ``F_Coulomb = F_C tanh(v/v_Coul)``, ``v_Coul = v_brk/10``, ``F_viscous = f v``, and the
   Coulomb force from the seal preload and the chamber pressures,
   ``F_C = F_pr + f_cfr (p_A + p_B)``.
@@ -83,7 +84,7 @@ def translational_friction(
 ):
     """Friction force of Simscape's Translational Friction block [N] (documented equations).
 
-    ``F = sqrt(2e) (F_brk - F_C) exp(-(v/v_st)^2) v/v_st + F_C tanh(v/v_Coul) + f v`` with
+    ``F = sqrt(2e) (F_brk - F_C) x exp(-x^2) + F_C tanh(v/v_Coul) + f v``, ``x = v/v_st``, with
     the Stribeck velocity threshold ``v_st = sqrt(2) v_brk`` and the Coulomb velocity
     threshold ``v_Coul = v_brk / 10`` (MathWorks, Translational Friction reference page).
 
@@ -287,7 +288,9 @@ def fit_cylinder_friction(model, speeds, pressures, *, velocity_threshold=None) 
         force = cylinder_friction(V, P, P, velocity_threshold=velocity_threshold, **unpack(x))
         return (force - target).ravel()
 
-    starts = [[max(preload, 0.0), max(slope, 0.0) * 1e5, max(ratio, 1.0), 1e-3 / v_r, viscous * 1e-3]]
+    starts = [
+        [max(preload, 0.0), max(slope, 0.0) * 1e5, max(ratio, 1.0), 1e-3 / v_r, viscous * 1e-3]
+    ]
     lower = [0.0, 0.0, 1.0, 1e-6, 0.0]
     upper = [np.inf, np.inf, 100.0, 1e3, np.inf]
     out = {k: float(v) for k, v in unpack(_least_squares(residual, starts, lower, upper)).items()}
@@ -544,9 +547,7 @@ def _script(stem, model, il, legacy, operating, per_level, reports) -> str:
     levels = []
     for k, (p, params) in enumerate(zip(operating, per_level, strict=True), start=1):
         levels.append(f"P.translational_friction({k}).pressure = {_num(p)};  % [Pa] operating")
-        levels.append(
-            _matlab_struct(f"P.translational_friction({k})", params, _TF_UNITS)
-        )
+        levels.append(_matlab_struct(f"P.translational_friction({k})", params, _TF_UNITS))
     source = model.provenance.get("source") or {}
     return template.substitute(
         stem=stem,
@@ -556,11 +557,18 @@ def _script(stem, model, il, legacy, operating, per_level, reports) -> str:
         il_struct=_matlab_struct("P.cylinder_friction_il", il, _IL_UNITS),
         legacy_struct=_matlab_struct("P.cylinder_friction", legacy, _LEGACY_UNITS),
         tf_struct="\n".join(levels),
-        il_sets=_matlab_sets("cylinder_friction_il_block", "P.cylinder_friction_il", il,
-                             _IL_PROMPTS, _IL_UNITS),
-        legacy_sets=_matlab_sets("cylinder_friction_block", "P.cylinder_friction", legacy,
-                                 _LEGACY_PROMPTS, _LEGACY_UNITS),
-        tf_sets=_matlab_sets("translational_friction_blocks{k}", "P.translational_friction(k)",
-                             per_level[0], _TF_PROMPTS, _TF_UNITS),
+        il_sets=_matlab_sets(
+            "cylinder_friction_il_block", "P.cylinder_friction_il", il, _IL_PROMPTS, _IL_UNITS
+        ),
+        legacy_sets=_matlab_sets(
+            "cylinder_friction_block", "P.cylinder_friction", legacy, _LEGACY_PROMPTS, _LEGACY_UNITS
+        ),
+        tf_sets=_matlab_sets(
+            "translational_friction_blocks{k}",
+            "P.translational_friction(k)",
+            per_level[0],
+            _TF_PROMPTS,
+            _TF_UNITS,
+        ),
         campaign=str(source.get("campaign", "")) if isinstance(source, dict) else "",
     )
