@@ -29,7 +29,8 @@ def test_export_hopsan_writes_files_and_summary(datasheet, tmp_path):
     assert result.exit_code == 0, result.output
     assert "RMS difference" in result.output
     for name in ("rig_hopsan.hcom", "rig_hopsan_parameters.csv", "README_hopsan.md",
-                 "loss_hopsan.csv", "loss_hopsan.txt", "loss_hopsan.png"):
+                 "loss_hopsan.csv", "loss_hopsan.txt", "loss_hopsan.png",
+                 "loss_hopsan_pressure_signal.csv"):
         assert (tmp_path / name).is_file(), name
 
 

@@ -134,6 +134,14 @@ def test_hopsan_fit_is_the_linear_least_squares_solution(thesis):
     assert_allclose(params["f_s"], thesis.params_at(0.5 * (0.1e5 + 159e5))["F_s"], rtol=1e-12)
     v = np.array([-0.05, 0.01])
     assert_allclose(hop.hopsan_friction(v, **params), f_k * np.sign(v) + b_p * v, rtol=1e-8)
+    # f_k wired to a pressure signal: f_k0 + k_p (p_1 + p_2), again a linear least squares
+    signal = hop.fit_hopsan_pressure_signal(thesis, speeds, pressures)
+    design = np.column_stack([np.ones(V.size), 2 * P.ravel(), V.ravel()])
+    (f_k0, k_p, b_p2), *_ = np.linalg.lstsq(design, target, rcond=None)
+    assert_allclose([signal["f_k0"], signal["f_k_pressure_coefficient"], signal["B_p"]],
+                    [f_k0, k_p, b_p2], rtol=1e-7)
+    assert_allclose(hop.hopsan_friction_pressure_signal(0.02, 50e5, 30e5, **signal),
+                    f_k0 + k_p * 80e5 + b_p2 * 0.02, rtol=1e-8)
 
 
 # ------------------------------------------------------------------ the loss report
@@ -148,8 +156,9 @@ def test_loss_report_of_the_thesis_model(thesis, tmp_path):
     assert legacy.rms <= 3.0 and legacy.max_abs <= 12.4  # not worse than the hand fit
     assert_allclose([legacy.rms, legacy.max_abs], [2.99, 12.29], rtol=5e-3)  # regression
     assert_allclose([il.rms, il.max_abs], [6.04, 15.96], rtol=5e-3)  # regression
-    hopsan = export(thesis, "hopsan", tmp_path / "hopsan", name="thesis").loss[0]
-    assert hopsan.rms > legacy.rms  # no pressure dependence, no Stribeck drop
+    hopsan, signal = export(thesis, "hopsan", tmp_path / "hopsan", name="thesis").loss
+    assert hopsan.rms > signal.rms > legacy.rms  # no pressure dependence / no Stribeck drop
+    assert_allclose([hopsan.rms, signal.rms], [30.96, 11.56], rtol=5e-3)  # regression
 
 
 def test_loss_report_grid_table_and_worst_point(thesis, tmp_path):

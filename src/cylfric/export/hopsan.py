@@ -31,12 +31,21 @@ from string import Template
 
 import numpy as np
 
+from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import loss_grid, loss_report
 from .result import ExportResult
 from .simscape import _identifier, _num
 
-__all__ = ["export_hopsan", "fit_hopsan", "hopsan_friction", "PARAMETERS", "SOURCES"]
+__all__ = [
+    "export_hopsan",
+    "fit_hopsan",
+    "fit_hopsan_pressure_signal",
+    "hopsan_friction",
+    "hopsan_friction_pressure_signal",
+    "PARAMETERS",
+    "SOURCES",
+]
 
 SOURCES = (
     "Hopsan source (github.com/Hopsan/hopsan): componentLibraries/defaultLibrary/Hydraulic/"
@@ -99,6 +108,40 @@ def fit_hopsan(model, speeds, pressures) -> dict:
     }
 
 
+def hopsan_friction_pressure_signal(
+    velocity, pressure_a, pressure_b, *, f_k0, f_k_pressure_coefficient, B_p
+):
+    """Steady sliding friction [N] with ``f_k`` driven by a pressure signal.
+
+    ``f_k`` is an input variable of MechanicTranslationalMassWithCoulombFriction, so a Hopsan
+    model can compute it from the chamber pressures with signal components:
+    ``f_k = f_k0 + k_p (p_1 + p_2)`` (cylfric's linear law of the pressure sum), then
+    ``F = f_k sign(v) + B_p v``. ``f_k0`` [N], ``f_k_pressure_coefficient`` ``k_p`` [N/Pa],
+    ``B_p`` [N*s/m], velocity [m/s], pressures [Pa].
+    """
+    kinetic = linear(
+        operating_pressure(pressure_a, pressure_b, reference="sum"), f_k0, f_k_pressure_coefficient
+    )
+    return hopsan_friction(velocity, f_k=kinetic, B_p=B_p)
+
+
+def fit_hopsan_pressure_signal(model, speeds, pressures) -> dict:
+    """Best-fit ``f_k0`` [N], ``f_k_pressure_coefficient`` [N/Pa], ``B_p`` [N*s/m] (bounded
+    linear least squares over the grid), for :func:`hopsan_friction_pressure_signal`."""
+    from scipy.optimize import lsq_linear
+
+    speeds, pressures = np.asarray(speeds, float), np.asarray(pressures, float)
+    P, V = np.meshgrid(pressures, speeds, indexing="ij")
+    target = model.friction(V, model.operating_pressure(P, P)).ravel()
+    design = np.column_stack([np.ones(V.size), 2 * P.ravel() / 1e5, V.ravel() * 1e3])
+    solution = lsq_linear(design, target, bounds=(0.0, np.inf), method="bvls").x
+    return {
+        "f_k0": float(solution[0]),
+        "f_k_pressure_coefficient": float(solution[1] / 1e5),
+        "B_p": float(solution[2] * 1e3),
+    }
+
+
 def export_hopsan(
     model,
     out,
@@ -117,7 +160,8 @@ def export_hopsan(
         The cylfric model.
     out : path-like
         Output folder: ``<name>_hopsan.hcom``, ``<name>_hopsan_parameters.csv``,
-        ``README_hopsan.md`` and ``loss_hopsan.csv/.txt/.png``.
+        ``README_hopsan.md``, ``loss_hopsan.csv/.txt/.png`` and
+        ``loss_hopsan_pressure_signal.csv/.txt/.png`` (``f_k`` wired to the pressures).
     name : str, optional
         Stem of the files; default the datasheet's name or ``cylfric``.
     velocity_range : (float, float), optional
@@ -130,7 +174,8 @@ def export_hopsan(
     Returns
     -------
     ExportResult
-        The files and the loss report.
+        The files and two loss reports (constant parameters; ``f_k`` from a pressure
+        signal).
     """
     out = Path(out)
     grid = {}
@@ -162,6 +207,22 @@ def export_hopsan(
             "the FMU export is the lossless route into Hopsan (FMIWrapper component)",
         ),
     )
+    signal = fit_hopsan_pressure_signal(model, speeds, pressures)
+    signal_units = {"f_k0": "N", "f_k_pressure_coefficient": "N/Pa", "B_p": "N*s/m"}
+    signal_report = loss_report(
+        model,
+        lambda v, pa, pb: hopsan_friction_pressure_signal(v, pa, pb, **signal),
+        target="hopsan_pressure_signal",
+        title="Hopsan, f_k driven by a pressure signal (f_k = f_k0 + k_p (p_1 + p_2))",
+        speeds=speeds,
+        pressures=pressures,
+        parameters={k: (v, signal_units[k]) for k, v in signal.items()},
+        notes=(
+            f"equations: {SOURCES}",
+            "f_k is an input variable of the mass component: wire pressure sensors of both "
+            "chambers, their sum times k_p plus f_k0, to it; no Stribeck drop",
+        ),
+    )
     rows = io.StringIO()
     rows.write("component,parameter,value,unit,description\n")
     for key, value in params.items():
@@ -180,6 +241,11 @@ def export_hopsan(
         "loss": report.summary(),
         "rms": f"{report.rms:.3f}",
         "max": f"{report.max_abs:.3f}",
+        "signal_rms": f"{signal_report.rms:.3f}",
+        "signal_max": f"{signal_report.max_abs:.3f}",
+        "f_k0": _num(signal["f_k0"]),
+        "k_p": _num(signal["f_k_pressure_coefficient"]),
+        "B_p_signal": _num(signal["B_p"]),
         "sources": SOURCES,
         **values,
     }
@@ -189,4 +255,5 @@ def export_hopsan(
         atomic_write_text(out / "README_hopsan.md", note.substitute(text)),
     ]
     files += report.write(out)
-    return ExportResult("hopsan", tuple(files), (report,))
+    files += signal_report.write(out)
+    return ExportResult("hopsan", tuple(files), (report, signal_report))

@@ -12,7 +12,8 @@ validity range (:func:`cylfric.export.loss.loss_grid`), the parameters of
   ``v_st = sqrt(2) v_brk``,
   ``F_Coulomb = F_C tanh(v/v_Coul)``, ``v_Coul = v_brk/10``, ``F_viscous = f v``, and the
   Coulomb force from the seal preload and the chamber pressures,
-  ``F_C = F_pr + f_cfr (p_A + p_B)``.
+  ``F_C = F_pr + f_cfr (p_A + p_B)`` (the IL page's text at hand states this part in words;
+  the sum of the chamber pressures is the form the legacy block's page writes out).
 * **Cylinder Friction** (Simscape Fluids, Hydraulics (Isothermal), to be removed since
   R2020a), the block :func:`cylfric.friction.simscape_cylinder_friction` already imports
   from: ``F = F_C (1 + (K_brk - 1) exp(-c_v |v|)) sign(v) + f_vfr v``,
