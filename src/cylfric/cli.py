@@ -286,11 +286,13 @@ def fit(
         raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
     targets = ()
     if export is not None:
-        from .export import parse_targets
+        from .export import parse_targets, resolve
 
         try:
             targets = parse_targets(export)
-        except ValueError as exc:
+            for target in targets:  # fail before the fit, not after it
+                resolve(target)
+        except (ValueError, ImportError) as exc:
             raise BadInput(f"--export {export!r}: {exc}") from None
     run_fit(
         campaign,
