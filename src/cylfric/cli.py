@@ -211,6 +211,7 @@ def run_fit(
     quiet=False,
     glob=None,
     strict=False,
+    export=(),
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
     from .io.campaign import discover_runs, load_config
@@ -240,6 +241,7 @@ def run_fit(
                 after_extraction=progress.stop,
                 glob=glob,
                 strict=strict,
+                export=export,
             )
         finally:
             progress.stop()
@@ -257,6 +259,8 @@ def run_fit(
                 console.print(f"  {Path(item['file']).name}: {item['reason']}", markup=False)
         for note in result.identification.notes:
             console.print(f"[yellow]note:[/yellow] {note}")
+        for exported in result.exports.values():
+            console.print(exported.summary(), markup=False, highlight=False)
         console.print(f"outputs in {out}" + (f"; open {out / 'report.html'}" if report else ""))
     return result
 
@@ -286,10 +290,26 @@ def fit(
     strict: bool = typer.Option(
         False, "--strict", help="Stop (exit 2) instead of excluding runs the quality gate flags."
     ),
+    export: str = typer.Option(
+        None,
+        "--export",
+        help="Also export to simulators into OUT/export/<target>: e.g. fmu,simscape "
+        "(fmu, modelica, simscape, hopsan, matlab).",
+    ),
 ):
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
         raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
+    targets = ()
+    if export is not None:
+        from .export import parse_targets, resolve
+
+        try:
+            targets = parse_targets(export)
+            for target in targets:  # fail before the fit, not after it
+                resolve(target)
+        except (ValueError, ImportError) as exc:
+            raise BadInput(f"--export {export!r}: {exc}") from None
     run_fit(
         campaign,
         out,
@@ -300,6 +320,7 @@ def fit(
         report=not no_report,
         glob=glob,
         strict=strict,
+        export=targets,
     )
 
 

@@ -29,6 +29,7 @@ class FitOutputs:
     """What :func:`fit_campaign` wrote and found.
 
     ``excluded`` lists the runs the data-quality gate left out (:mod:`cylfric.quality`).
+    ``exports`` maps each export target to its :class:`~cylfric.export.ExportResult`.
     ``files`` maps each output to its path; ``timings`` holds the wall time of each stage
     [s]: ``extract``, ``identify`` (with the sensitivity study), ``datasheet`` (with the
     CSV tables) and, with the report, ``report`` (figures and report.html).
@@ -41,6 +42,7 @@ class FitOutputs:
     files: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     excluded: pd.DataFrame | None = None
+    exports: dict = field(default_factory=dict)
 
 
 def _csv(path, frame: pd.DataFrame):
@@ -63,6 +65,7 @@ def fit_campaign(
     name=None,
     glob=None,
     strict=False,
+    export=(),
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -102,8 +105,16 @@ def fit_campaign(
     strict : bool
         Raise (ValueError) instead of leaving out runs the data-quality gate flags
         (:func:`cylfric.quality.assess`); by default they are listed in ``excluded.csv``.
+    export : sequence of str
+        Export targets (``"fmu"``, ``"simscape"``, ...; :data:`cylfric.export.TARGETS`)
+        written into ``out/export/<target>/`` after the datasheet; lossy targets' loss
+        reports are summarised in ``report.html``.
     """
     folder, out = Path(folder), Path(out)
+    if export:
+        from .export import parse_targets
+
+        export = parse_targets(export)
     _check_out(folder, out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with _lock(out):
@@ -126,6 +137,7 @@ def fit_campaign(
                 name,
                 glob,
                 strict,
+                export or (),
             )
             _swap_in(staging, out)
         except BaseException:
@@ -133,6 +145,12 @@ def fit_campaign(
             raise
     result.out = out
     result.files = {k: out / Path(v).relative_to(staging) for k, v in result.files.items()}
+    result.exports = {
+        target: replace(
+            exported, files=tuple(out / Path(f).relative_to(staging) for f in exported.files)
+        )
+        for target, exported in result.exports.items()
+    }
     return result
 
 
@@ -262,6 +280,7 @@ def _fit(
     name,
     glob,
     strict,
+    export=(),
 ):
     timings = {}
     t0 = time.perf_counter()
@@ -316,10 +335,47 @@ def _fit(
         "Written by cylfric fit; the next cylfric fit into this folder replaces it whole.\n",
     )
     timings["datasheet"] = time.perf_counter() - t0
+    exports = {}
+    if export:
+        from .export import export as export_to
+
+        t0 = time.perf_counter()
+        for target in export:
+            exports[target] = export_to(sheet, target, out / "export" / target)
+        timings["export"] = time.perf_counter() - t0
     if report:
         from .report import write_report_folder
 
         t0 = time.perf_counter()
-        files.update(write_report_folder(out, sheet, ident, extraction, quality.excluded))
+        summaries = [_export_summary(out, result) for result in exports.values()]
+        files.update(
+            write_report_folder(
+                out, sheet, ident, extraction, quality.excluded, exports=summaries
+            )
+        )
         timings["report"] = time.perf_counter() - t0
-    return FitOutputs(out, sheet, ident, extraction, files, timings, quality.excluded)
+    return FitOutputs(
+        out, sheet, ident, extraction, files, timings, quality.excluded, exports
+    )
+
+
+def _export_summary(out: Path, result) -> dict:
+    """Plain data about one export for the report (the report never imports export)."""
+    folder = Path(result.files[0]).parent if result.files else out / "export"
+    return {
+        "target": result.target,
+        "folder": str(folder.relative_to(out)),
+        "files": [Path(f).name for f in result.files],
+        "loss": None
+        if result.loss is None
+        else [
+            {
+                "block": report.title,
+                "rms [N]": report.rms,
+                "max [N]": report.max_abs,
+                "velocity [mm/s]": report.worst[0] * 1e3,
+                "pressure [bar]": report.worst[1] / 1e5,
+            }
+            for report in result.loss
+        ],
+    }

@@ -42,7 +42,14 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
 
 
 def render_report(
-    sheet, ident, extraction, figures, *, title="cylfric friction report", excluded=None
+    sheet,
+    ident,
+    extraction,
+    figures,
+    *,
+    title="cylfric friction report",
+    excluded=None,
+    exports=None,
 ) -> str:
     """HTML text of the report: datasheet summary, figures, tables, data quality."""
     parts = [
@@ -112,6 +119,8 @@ def render_report(
             f"<p>Recommended fixed values (grid minimum): alpha = {rec['alpha']:.3g}, "
             f"v_r = {rec['v_r'] * 1e3:.3g} mm/s, RMSE {rec['rmse']:.3f} N.</p>"
         )
+    if exports:
+        parts.append(_exports(exports))
     parts.append("<h2>Data quality</h2>")
     if excluded is not None and len(excluded):
         parts.append(
@@ -124,6 +133,26 @@ def render_report(
     parts.append(_quality(extraction))
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def _exports(exports) -> str:
+    """The simulator exports of ``fit --export`` and what the lossy ones lose."""
+    lines = ["<h2>Simulator exports</h2>"]
+    for item in exports:
+        where = html.escape(f"{item['folder']}/")
+        if item["loss"] is None:
+            lines.append(
+                f"<p><b>{html.escape(item['target'])}</b> ({where}): lossless, the full "
+                "pressure-dependent LuGre model.</p>"
+            )
+            continue
+        lines.append(
+            f"<p><b>{html.escape(item['target'])}</b> ({where}): best-fit parameters of the "
+            "simulator's own block over the validity range; difference to this datasheet "
+            "(block - cylfric, both directions; loss_*.csv/.txt/.png in that folder):</p>"
+        )
+        lines.append(_table(pd.DataFrame(item["loss"])))
+    return "\n".join(lines)
 
 
 def _engineering_per_pressure(table):
@@ -179,11 +208,14 @@ def write_report(path, text: str):
     return atomic_write_text(path, text)
 
 
-def write_report_folder(out, sheet, ident, extraction, excluded=None, *, workers=2) -> dict:
+def write_report_folder(
+    out, sheet, ident, extraction, excluded=None, *, workers=2, exports=None
+) -> dict:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
     Returns {output name: path}. ``workers=2`` draws on two cores (see
-    :func:`~cylfric.report.figures.render_all`).
+    :func:`~cylfric.report.figures.render_all`). ``exports``: plain summaries of the
+    simulator exports (target, folder, files, loss rows) for their section.
     """
     from pathlib import Path
 
@@ -194,6 +226,7 @@ def write_report_folder(out, sheet, ident, extraction, excluded=None, *, workers
         files[f"figure_{stem}"] = save_rendered(out / "figures", stem, png, svg)["png"]
         shown.append((stem, caption, png))
     files["report"] = write_report(
-        out / "report.html", render_report(sheet, ident, extraction, shown)
+        out / "report.html",
+        render_report(sheet, ident, extraction, shown, exports=exports),
     )
     return files

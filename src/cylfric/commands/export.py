@@ -1,0 +1,46 @@
+"""``cylfric export DATASHEET --to TARGET --out PATH``: the datasheet in a simulator's form."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..cli import BadInput, console, guarded
+
+TARGET_NAMES = ("fmu", "modelica", "simscape", "hopsan", "matlab")
+
+
+def register(app) -> None:
+    """Add ``cylfric export`` to the app."""
+
+    @app.command("export")
+    @guarded
+    def export_command(
+        datasheet: Path = typer.Argument(..., help="A datasheet.json file (never modified)."),
+        to: str = typer.Option(..., "--to", help=f"Target: {', '.join(TARGET_NAMES)}."),
+        out: Path = typer.Option(Path("cylfric-export"), "--out", "-o", help="Output folder."),
+        name: str = typer.Option(
+            None, "--name", help="Name of the exported files (default: the datasheet's name)."
+        ),
+    ):
+        """Datasheet -> FMU, Modelica package, Simscape or Hopsan parameters, MATLAB function.
+
+        Lossy targets (simscape, hopsan) fit the simulator's own friction block over the
+        datasheet's validity range and write a loss report (CSV, text, figure) beside it.
+        """
+        from ..export import TARGETS, export
+
+        target = to.strip().lower()
+        if target not in TARGETS:
+            raise BadInput(f"--to {to!r}: unknown export target; valid: {sorted(TARGETS)}")
+        if not datasheet.is_file():
+            raise BadInput(f"{datasheet}: no such datasheet file; expected a datasheet.json")
+        if out.exists() and not out.is_dir():
+            raise BadInput(f"--out {out} is a file; expected a folder")
+        options = {} if name is None else {"name": name}
+        result = export(datasheet, target, out, **options)
+        for line in result.summary().splitlines():
+            console.print(line, markup=False, highlight=False)
+        for path in result.files:
+            console.print(f"  wrote {path}", markup=False, highlight=False)
