@@ -156,3 +156,14 @@ def test_a_flipped_load_cell_sign_exits_2_naming_the_key_and_its_line(clean, tmp
     assert "friction level is pushed to 0 N" in result.output
     assert "campaign.toml, line 5: load_cell_sign" in result.output
     assert not (out / "datasheet.json").exists()
+
+
+def test_the_report_lists_the_excluded_runs(clean, tmp_path):
+    folder = _copy(clean, tmp_path)
+    _edit(folder / "run_013_p55bar_v7mms.txt", "s\tmm\tkN", "s\tmm\tN")  # force in N
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["fit", str(folder), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    page = (out / "report.html").read_text()
+    assert "The data-quality gate left 1 run(s) out of the fit" in page
+    assert "run_013_p55bar_v7mms.txt" in page

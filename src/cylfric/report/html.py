@@ -227,6 +227,6 @@ def write_report_folder(
         shown.append((stem, caption, png))
     files["report"] = write_report(
         out / "report.html",
-        render_report(sheet, ident, extraction, shown, exports=exports),
+        render_report(sheet, ident, extraction, shown, excluded=excluded, exports=exports),
     )
     return files
