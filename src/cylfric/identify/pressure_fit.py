@@ -345,12 +345,13 @@ def _covariance(residuals, x, groups, dof):
 
     ``residuals`` are the weighted residuals; their Jacobian is taken by central
     differences (the robust loss's own Jacobian is reweighted). Without ``groups``:
-    ``s^2 (J^T J)^-1``. With groups: the cluster-robust sandwich
-    ``(J^T J)^-1 (sum_g J_g^T r_g r_g^T J_g) (J^T J)^-1`` with the usual small-sample
-    factor G/(G-1) (N-1)/(N-K), and G - K degrees of freedom (Cameron & Miller 2015).
-    The third value is the influence of each run, ``D`` (runs x coefficients, None without
-    groups) with ``covariance = D.T @ D``: it gives the model's bands their effective
-    degrees of freedom where few runs carry a coefficient.
+    ``s^2 (J^T J)^-1``. With groups (runs): the cluster-robust CR2 sandwich
+    ``(J^T J)^-1 (sum_g J_g^T A_g r_g r_g^T A_g J_g) (J^T J)^-1`` with
+    ``A_g = (I - H_gg)^(-1/2)`` (Bell & McCaffrey 2002; Cameron & Miller 2015) and G - K
+    degrees of freedom. The third value is the influence of each run, ``D`` (runs x
+    coefficients, None without groups) with ``covariance = D.T @ D``: it gives the model's
+    bands each point's effective degrees of freedom, as Imbens & Kolesar (2016) recommend
+    with CR2 when few runs carry a coefficient.
     """
     r = residuals(x)
     steps = 1e-6 * np.maximum(np.abs(x), 1e-3)
@@ -371,16 +372,19 @@ def _covariance(residuals, x, groups, dof):
     g = labels.size
     if g <= k:
         return bread * float(r @ r) / dof, dof, None
-    # leave-one-run-out jackknife, linearised (CR3): robust to unequal scatter and to the
-    # high leverage of the few fastest runs
+    # cluster-robust CR2 (Bell & McCaffrey 2002): each run's residuals scaled by
+    # (I - H_gg)^(-1/2), robust to unequal scatter and to the high leverage of the few
+    # fastest runs; with each point's effective degrees of freedom (FrictionModel.band)
+    # this is the combination Imbens & Kolesar (2016) recommend for few dominant clusters
     information = scaled.T @ scaled
-    deltas = np.empty((g, k))
+    inverse = np.linalg.pinv(information)
+    influence = np.empty((g, k))
     for label in range(g):
         rows = index == label
         js = scaled[rows]
-        reduced = np.linalg.pinv(information - js.T @ js)
-        deltas[label] = (reduced @ (js.T @ r[rows])) / scale
-    influence = math.sqrt((g - 1) / g) * (deltas - deltas.mean(axis=0))
+        leverage, vectors = np.linalg.eigh(js @ inverse @ js.T)
+        adjust = (vectors / np.sqrt(np.clip(1.0 - leverage, 1e-12, None))) @ vectors.T
+        influence[label] = (inverse @ (js.T @ (adjust @ r[rows]))) / scale
     return influence.T @ influence, g - k, influence
 
 
