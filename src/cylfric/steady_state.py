@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.ndimage import convolve1d, median_filter, uniform_filter1d
 
+from ._filters import convolve_nearest, rolling_mean, rolling_median
 from .io.campaign import CampaignConfig, discover_runs, load_config, read_run, unlisted_files
 from .io.text import BenchFileError
 
@@ -103,7 +103,7 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     # scipy.signal.savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest") computes
     # (scipy.signal is not imported: it loads scipy.stats)
     k = np.arange(n // 2, -(n // 2) - 1, -1, dtype=float)  # reversed: convolution
-    return sign * convolve1d(position, k / (dt * float(k @ k)), mode="nearest")
+    return sign * convolve_nearest(position, k / (dt * float(k @ k)))
 
 
 WINDOW_METHODS = ("auto", "fixed-index")
@@ -229,7 +229,7 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     """Trim ends where the rolling median of the force leaves the centre level."""
     n = len(force)
     w = min(median_window, max(1, n // 3) | 1)
-    rolling = median_filter(force, size=w, mode="nearest")
+    rolling = rolling_median(force, w)
     centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
     level = np.median(centre)
     spread = 1.4826 * np.median(np.abs(force - np.median(force))) / math.sqrt(w)
@@ -240,7 +240,7 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     w_long = max(w, n // 10)
     if w_long > w:
         sigma = 1.4826 * np.median(np.abs(force - np.median(force)))
-        mean = uniform_filter1d(force, size=w_long, mode="nearest")
+        mean = rolling_mean(force, w_long)
         outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
     outside = np.flatnonzero(outside)
     mid = n // 2
