@@ -1,0 +1,1 @@
+"""Exports of the friction model to simulators (FMU, MATLAB, Modelica, Simscape, Hopsan)."""
