@@ -98,8 +98,16 @@ _MISSING = {
 """What a reduced law uses for the parameters it lacks (as ``FrictionModel.params_at``)."""
 
 # SI base-unit exponents (kg, m, s) of the units the description uses
-_BASE = {"N": (1, 1, -2), "Pa": (1, -1, -2), "m/s": (0, 1, -1), "m": (0, 1, 0), "s": (0, 0, 1),
-         "N/m": (1, 0, -2), "N*s/m": (1, 0, -1), "-": (0, 0, 0)}
+_BASE = {
+    "N": (1, 1, -2),
+    "Pa": (1, -1, -2),
+    "m/s": (0, 1, -1),
+    "m": (0, 1, 0),
+    "s": (0, 0, 1),
+    "N/m": (1, 0, -2),
+    "N*s/m": (1, 0, -1),
+    "-": (0, 0, 0),
+}
 
 _FIXED_DATE = (1980, 1, 1, 0, 0, 0)
 _TEMPLATE_FILES = ("cylfric_fmu.c", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
@@ -119,6 +127,19 @@ def _as_model(model):
         f"model is a {type(model).__name__}; expected a cylfric.model.FrictionModel, "
         "a datasheet path or a datasheet dict"
     )
+
+
+def datasheet_text(model) -> str:
+    """The model's datasheet as JSON text, without a creation date the model does not carry.
+
+    ``to_datasheet`` stamps the current time when the model has none (a model built in Python
+    rather than read from a datasheet); an export leaves it out, so that the same model gives
+    the same files.
+    """
+    sheet = model.to_datasheet()
+    if "created" not in model.record:
+        sheet.pop("created", None)
+    return json.dumps(sheet, indent=2, allow_nan=False) + "\n"
 
 
 def _check_name(name, default):
@@ -196,8 +217,9 @@ def _coefficients(model):
                 text += f", {law} pressure law: {_COEFFICIENT_TEXT[coefficient]}"
             rows.append((key, model.parameters[key].value, unit, exponents, text + note))
             args.append(key)
-        refs = ", ".join(f"r[VR_FIRST_PARAMETER + {len(rows) - len(args) + i}]"
-                         for i in range(len(args)))
+        refs = ", ".join(
+            f"r[VR_FIRST_PARAMETER + {len(rows) - len(args) + i}]" for i in range(len(args))
+        )
         lines.append(f"    prm[{index}] = law_{law}(p, {refs}); /* {parameter} */")
     return rows, lines
 
@@ -222,22 +244,67 @@ def _variables(model):
     pressure = _start_pressure(model)
     rows = [
         ("velocity", 0, "input", "continuous", None, "m/s", 0.0, "rod velocity, > 0 extends"),
-        ("pressure_a", 1, "input", "continuous", None, "Pa", pressure,
-         "pressure in chamber A (cap side)"),
-        ("pressure_b", 2, "input", "continuous", None, "Pa", pressure,
-         "pressure in chamber B (rod side)"),
-        ("friction_force", 3, "output", "continuous", None, "N", None,
-         "friction force, positive in the direction of motion (eq. 2.5)"),
+        (
+            "pressure_a",
+            1,
+            "input",
+            "continuous",
+            None,
+            "Pa",
+            pressure,
+            "pressure in chamber A (cap side)",
+        ),
+        (
+            "pressure_b",
+            2,
+            "input",
+            "continuous",
+            None,
+            "Pa",
+            pressure,
+            "pressure in chamber B (rod side)",
+        ),
+        (
+            "friction_force",
+            3,
+            "output",
+            "continuous",
+            None,
+            "N",
+            None,
+            "friction force, positive in the direction of motion (eq. 2.5)",
+        ),
         ("z", 4, "local", "continuous", "exact", "m", 0.0, "mean bristle deflection"),
         ("der(z)", 5, "local", "continuous", None, "m/s", None, "bristle rate (eq. 2.5)"),
-        ("operating_pressure", 6, "local", "continuous", None, "Pa", None,
-         f"pressure the laws see, {REFERENCE_TEXT[model.reference]}"),
-        ("max_substep", 7, "parameter", "tunable", None, "s", 1e-4,
-         "longest internal step of co-simulation doStep"),
+        (
+            "operating_pressure",
+            6,
+            "local",
+            "continuous",
+            None,
+            "Pa",
+            None,
+            f"pressure the laws see, {REFERENCE_TEXT[model.reference]}",
+        ),
+        (
+            "max_substep",
+            7,
+            "parameter",
+            "tunable",
+            None,
+            "s",
+            1e-4,
+            "longest internal step of co-simulation doStep",
+        ),
     ]
     coefficient_rows, law_lines = _coefficients(model)
-    units = {"m/s": _BASE["m/s"], "Pa": _BASE["Pa"], "N": _BASE["N"], "m": _BASE["m"],
-             "s": _BASE["s"]}
+    units = {
+        "m/s": _BASE["m/s"],
+        "Pa": _BASE["Pa"],
+        "N": _BASE["N"],
+        "m": _BASE["m"],
+        "s": _BASE["s"],
+    }
     for offset, (key, value, unit, exponents, text) in enumerate(coefficient_rows):
         rows.append((key, 8 + offset, "parameter", "tunable", None, unit, value, text))
         if unit:
@@ -303,7 +370,7 @@ def _model_description(model, name, guid, rows, units, nominal) -> str:
     index = {}
     for i, (var, vr, causality, variability, initial, unit, start, text) in enumerate(rows, 1):
         index[var] = i
-        attrs = f"name={quoteattr(var)} valueReference=\"{vr}\" description={quoteattr(text)}"
+        attrs = f'name={quoteattr(var)} valueReference="{vr}" description={quoteattr(text)}'
         attrs += f' causality="{causality}" variability="{variability}"'
         if initial:
             attrs += f' initial="{initial}"'
@@ -341,59 +408,66 @@ def _model_description(model, name, guid, rows, units, nominal) -> str:
 
 
 def _model_header(model, name, guid, rows, nominal) -> str:
-    values = ",\n".join(f"    {float(r[6] if r[6] is not None else 0.0)!r} /* {r[0]} */"
-                        for r in rows)
-    return "\n".join([
-        "/* Generated by cylfric.export.fmu: value references and default values of this model. */",
-        "#ifndef CYLFRIC_MODEL_H",
-        "#define CYLFRIC_MODEL_H",
-        f'#define MODEL_IDENTIFIER_STRING "{name}"',
-        f'#define MODEL_GUID "{guid}"',
-        f"#define CYLFRIC_REFERENCE {REFERENCE_CODES[model.reference]} "
-        f"/* {REFERENCE_TEXT[model.reference]} */",
-        f"#define N_REALS {len(rows)}",
-        "#define N_STATES 1",
-        "#define VR_VELOCITY 0",
-        "#define VR_PRESSURE_A 1",
-        "#define VR_PRESSURE_B 2",
-        "#define VR_FRICTION_FORCE 3",
-        "#define VR_Z 4",
-        "#define VR_DER_Z 5",
-        "#define VR_OPERATING_PRESSURE 6",
-        "#define VR_MAX_SUBSTEP 7",
-        "#define VR_FIRST_PARAMETER 8",
-        f"#define NOMINAL_Z {nominal!r}",
-        "static const fmi2Real DEFAULT_REALS[N_REALS] = {",
-        values,
-        "};",
-        "#endif",
-        "",
-    ])
+    values = ",\n".join(
+        f"    {float(r[6] if r[6] is not None else 0.0)!r} /* {r[0]} */" for r in rows
+    )
+    return "\n".join(
+        [
+            "/* Generated by cylfric.export.fmu: value references and defaults of this model. */",
+            "#ifndef CYLFRIC_MODEL_H",
+            "#define CYLFRIC_MODEL_H",
+            f'#define MODEL_IDENTIFIER_STRING "{name}"',
+            f'#define MODEL_GUID "{guid}"',
+            f"#define CYLFRIC_REFERENCE {REFERENCE_CODES[model.reference]} "
+            f"/* {REFERENCE_TEXT[model.reference]} */",
+            f"#define N_REALS {len(rows)}",
+            "#define N_STATES 1",
+            "#define VR_VELOCITY 0",
+            "#define VR_PRESSURE_A 1",
+            "#define VR_PRESSURE_B 2",
+            "#define VR_FRICTION_FORCE 3",
+            "#define VR_Z 4",
+            "#define VR_DER_Z 5",
+            "#define VR_OPERATING_PRESSURE 6",
+            "#define VR_MAX_SUBSTEP 7",
+            "#define VR_FIRST_PARAMETER 8",
+            f"#define NOMINAL_Z {nominal!r}",
+            "static const fmi2Real DEFAULT_REALS[N_REALS] = {",
+            values,
+            "};",
+            "#endif",
+            "",
+        ]
+    )
 
 
 def _params_header(model, law_lines) -> str:
-    return "\n".join([
-        "/* Generated by cylfric.export.fmu: the friction parameters of eq. 2.5 at the operating",
-        f" * pressure p [Pa] ({model.friction_law} law; {REFERENCE_TEXT[model.reference]}). */",
-        "static void cylfric_params_at(const fmi2Real *r, fmi2Real p, fmi2Real prm[N_PRM]) {",
-        *law_lines,
-        "}",
-        "",
-    ])
+    return "\n".join(
+        [
+            "/* Generated by cylfric.export.fmu: friction parameters of eq. 2.5 at the operating",
+            f" * pressure p [Pa] ({model.friction_law} law; {REFERENCE_TEXT[model.reference]}). */",
+            "static void cylfric_params_at(const fmi2Real *r, fmi2Real p, fmi2Real prm[N_PRM]) {",
+            *law_lines,
+            "}",
+            "",
+        ]
+    )
 
 
 def _build_description(name) -> str:
-    return "\n".join([
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        '<fmiBuildDescription fmiVersion="3.0">',
-        f'  <BuildConfiguration modelIdentifier="{name}">',
-        '    <SourceFileSet language="C99">',
-        '      <SourceFile name="cylfric_fmu.c"/>',
-        "    </SourceFileSet>",
-        "  </BuildConfiguration>",
-        "</fmiBuildDescription>",
-        "",
-    ])
+    return "\n".join(
+        [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            '<fmiBuildDescription fmiVersion="3.0">',
+            f'  <BuildConfiguration modelIdentifier="{name}">',
+            '    <SourceFileSet language="C99">',
+            '      <SourceFile name="cylfric_fmu.c"/>',
+            "    </SourceFileSet>",
+            "  </BuildConfiguration>",
+            "</fmiBuildDescription>",
+            "",
+        ]
+    )
 
 
 def _template(filename: str) -> bytes:
@@ -466,7 +540,7 @@ def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
     name = _check_name(name, f"cylfric_{element}")
     rows, law_lines, units, pressure = _variables(model)
     nominal = _nominal_z(model, pressure)
-    datasheet = json.dumps(model.to_datasheet(), indent=2, allow_nan=False) + "\n"
+    datasheet = datasheet_text(model)
     params_h = _params_header(model, law_lines)
     # the GUID is a hash of everything the binary depends on: same model, same GUID
     digest = hashlib.sha256()
@@ -487,8 +561,10 @@ def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
     target = fmi_platform()
     cc = compiler()
     if target is None or cc is None:
-        why = "no C compiler ($CC, cc, gcc, clang)" if cc is None else (
-            f"no FMI 2.0 platform name for {sys.platform}/{platform.machine()}"
+        why = (
+            "no C compiler ($CC, cc, gcc, clang)"
+            if cc is None
+            else (f"no FMI 2.0 platform name for {sys.platform}/{platform.machine()}")
         )
         warnings.warn(
             f"{why}: the FMU carries its C sources only; compile them on the target "
