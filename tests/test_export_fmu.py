@@ -29,7 +29,7 @@ from fmpy.validation import validate_fmu  # noqa: E402
 from cylfric.export.fmu import compiler, export_fmu, fmi_platform  # noqa: E402
 from cylfric.friction import lugre_z_update  # noqa: E402
 from cylfric.model import FrictionModel  # noqa: E402
-from cylfric.simulate import Cylinder, PrescribedMotion, simulate  # noqa: E402
+from cylfric.simulate import AppliedForce, Cylinder, PrescribedMotion, simulate  # noqa: E402
 
 needs_cc = pytest.mark.skipif(
     compiler() is None or fmi_platform() is None,
@@ -379,3 +379,77 @@ def test_unphysical_parameters_are_an_error(fmus):
             stop_time=0.01,
             start_values={"F_c.intercept": -500.0, "F_s.intercept": -500.0},
         )
+
+
+# ----------------------------------------------------------------------------- cylinder
+CYLINDER_CASES = {
+    # drive between F_c and F_s of the thesis law at 45 bar: the rod sticks (presliding)
+    "stuck": (100.0, 0.0, 0.0, 45e5, 45e5),
+    # 60 N plus the pressure force 1e-4 m^2 * 50 bar - 0.5e-4 m^2 * 40 bar = 360 N: it slides
+    "sliding": (60.0, 1e-4, 0.5e-4, 50e5, 40e5),
+}
+
+
+@pytest.fixture(scope="module")
+def cylinder_fmu(tmp_path_factory):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return export_fmu(MODELS["thesis"], tmp_path_factory.mktemp("cyl"), element="cylinder")[0]
+
+
+def test_cylinder_fmu_validates(cylinder_fmu):
+    assert validate_fmu(str(cylinder_fmu)) == []
+    md = read_model_description(str(cylinder_fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    assert [u.variable.name for u in md.outputs] == ["friction_force", "position", "velocity"]
+    assert [u.variable.name for u in md.derivatives] == ["velocity", "der(velocity)", "der(z)"]
+    assert (variables["force"].causality, variables["force"].unit) == ("input", "N")
+    assert (variables["mass"].causality, variables["mass"].unit) == ("parameter", "kg")
+    assert md.coSimulation.modelIdentifier == "cylfric_cylinder"
+
+
+@needs_cc
+@pytest.mark.parametrize("case", list(CYLINDER_CASES))
+def test_cylinder_reproduces_cylfric_simulate(cylinder_fmu, case):
+    """Co-simulation = cylfric.simulate "fixed" (the same impulse scheme, 1e-4 s steps);
+    model exchange = cylfric.simulate "dopri" at rtol 1e-10 (an independent integrator)."""
+    force, area_a, area_b, pa, pb = CYLINDER_CASES[case]
+    model, mass, dt, duration = MODELS["thesis"], 2.5, 1e-3, 0.5
+    cylinder = Cylinder(mass, area_a=area_a, area_b=area_b)
+    signals = np.array(
+        [(0.0, force, pa, pb), (duration, force, pa, pb)],
+        dtype=[("time", float), ("force", float), ("pressure_a", float), ("pressure_b", float)],
+    )
+    start = {"mass": mass, "area_a": area_a, "area_b": area_b}
+    for fmi_type, method, options, tolerance in (
+        ("CoSimulation", "fixed", {"step": 1e-4}, 1e-9),
+        ("ModelExchange", "dopri", {"rtol": 1e-10}, 1e-6),
+    ):
+        reference = simulate(
+            cylinder,
+            model,
+            AppliedForce(force),
+            duration,
+            dt=dt,
+            pressure_a=pa,
+            pressure_b=pb,
+            method=method,
+            **options,
+        )
+        result = fmpy.simulate_fmu(
+            str(cylinder_fmu),
+            fmi_type=fmi_type,
+            stop_time=duration,
+            output_interval=dt,
+            input=signals,
+            start_values=start,
+            output=["friction_force", "position", "velocity"],
+            relative_tolerance=1e-10,
+        )
+        for name, expected in (
+            ("friction_force", reference.outputs["friction_force"]),
+            ("position", reference.states["position"]),
+            ("velocity", reference.states["velocity"]),
+        ):
+            scale = np.abs(expected).max()
+            assert_allclose(result[name], expected, rtol=0, atol=tolerance * scale, err_msg=name)

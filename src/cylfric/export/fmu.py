@@ -45,7 +45,7 @@ from xml.sax.saxutils import quoteattr
 
 __all__ = ["export_fmu", "ELEMENTS", "FMU_INPUTS", "FMU_OUTPUTS", "compiler", "fmi_platform"]
 
-ELEMENTS = ("friction",)
+ELEMENTS = ("friction", "cylinder")
 """Elements :func:`export_fmu` can write."""
 
 FMU_INPUTS = {"velocity": "m/s", "pressure_a": "Pa", "pressure_b": "Pa"}
@@ -107,6 +107,9 @@ _BASE = {
     "N/m": (1, 0, -2),
     "N*s/m": (1, 0, -1),
     "-": (0, 0, 0),
+    "kg": (1, 0, 0),
+    "m2": (0, 2, 0),
+    "m/s2": (0, 1, -2),
 }
 
 _FIXED_DATE = (1980, 1, 1, 0, 0, 0)
@@ -239,74 +242,118 @@ def _nominal_z(model, pressure) -> float:
     return 1e-4
 
 
-def _variables(model):
-    """Variable rows: (name, vr, causality, variability, initial, unit, start, description)."""
-    pressure = _start_pressure(model)
-    rows = [
-        ("velocity", 0, "input", "continuous", None, "m/s", 0.0, "rod velocity, > 0 extends"),
-        (
-            "pressure_a",
-            1,
-            "input",
-            "continuous",
-            None,
-            "Pa",
-            pressure,
-            "pressure in chamber A (cap side)",
-        ),
-        (
-            "pressure_b",
-            2,
-            "input",
-            "continuous",
-            None,
-            "Pa",
-            pressure,
-            "pressure in chamber B (rod side)",
-        ),
-        (
-            "friction_force",
-            3,
-            "output",
-            "continuous",
-            None,
-            "N",
-            None,
-            "friction force, positive in the direction of motion (eq. 2.5)",
-        ),
-        ("z", 4, "local", "continuous", "exact", "m", 0.0, "mean bristle deflection"),
-        ("der(z)", 5, "local", "continuous", None, "m/s", None, "bristle rate (eq. 2.5)"),
-        (
-            "operating_pressure",
-            6,
-            "local",
-            "continuous",
-            None,
-            "Pa",
-            None,
-            f"pressure the laws see, {REFERENCE_TEXT[model.reference]}",
-        ),
-        (
-            "max_substep",
-            7,
+_COMMON_ROWS = {
+    "pressure_a": ("input", "continuous", None, "Pa", "pressure in chamber A (cap side)"),
+    "pressure_b": ("input", "continuous", None, "Pa", "pressure in chamber B (rod side)"),
+    "friction_force": (
+        "output",
+        "continuous",
+        None,
+        "N",
+        "friction force, positive in the direction of motion (eq. 2.5)",
+    ),
+    "z": ("local", "continuous", "exact", "m", "mean bristle deflection"),
+    "der(z)": ("local", "continuous", None, "m/s", "bristle rate (eq. 2.5)"),
+    "operating_pressure": ("local", "continuous", None, "Pa", "pressure the laws see"),
+    "max_substep": (
+        "parameter",
+        "tunable",
+        None,
+        "s",
+        "longest internal step of co-simulation doStep",
+    ),
+}
+_ELEMENT_ROWS = {
+    "friction": {
+        "velocity": ("input", "continuous", None, "m/s", "rod velocity, > 0 extends"),
+    },
+    "cylinder": {
+        "force": ("input", "continuous", None, "N", "drive force on the rod, > 0 extends"),
+        "position": ("output", "continuous", "exact", "m", "rod position"),
+        "velocity": ("output", "continuous", "exact", "m/s", "rod velocity, > 0 extends"),
+        "der(velocity)": ("local", "continuous", None, "m/s2", "rod acceleration (eq. 3.1)"),
+        "mass": ("parameter", "tunable", None, "kg", "moving mass (rod, piston, load)"),
+        "area_a": (
             "parameter",
             "tunable",
             None,
-            "s",
-            1e-4,
-            "longest internal step of co-simulation doStep",
+            "m2",
+            "piston area of chamber A; 0: the pressures only set the friction",
         ),
-    ]
-    coefficient_rows, law_lines = _coefficients(model)
-    units = {
-        "m/s": _BASE["m/s"],
-        "Pa": _BASE["Pa"],
-        "N": _BASE["N"],
-        "m": _BASE["m"],
-        "s": _BASE["s"],
+        "area_b": (
+            "parameter",
+            "tunable",
+            None,
+            "m2",
+            "piston area of chamber B; 0: the pressures only set the friction",
+        ),
+    },
+}
+_LAYOUT = {
+    "friction": (
+        "velocity",
+        "pressure_a",
+        "pressure_b",
+        "friction_force",
+        "z",
+        "der(z)",
+        "operating_pressure",
+        "max_substep",
+    ),
+    "cylinder": (
+        "force",
+        "pressure_a",
+        "pressure_b",
+        "friction_force",
+        "z",
+        "der(z)",
+        "operating_pressure",
+        "max_substep",
+        "position",
+        "velocity",
+        "der(velocity)",
+        "mass",
+        "area_a",
+        "area_b",
+    ),
+}
+"""Value references (the position in the tuple) of each element's variables."""
+_STATES = {
+    "friction": (("z", "der(z)"),),
+    "cylinder": (("position", "velocity"), ("velocity", "der(velocity)"), ("z", "der(z)")),
+}
+"""(state, derivative) pairs of each element, in the order of the state vector."""
+_DEFAULT_MASS = 2.5
+"""Default moving mass [kg]: the thesis rig's assumed 2.5 kg (cylfric.simulate.THESIS_CYLINDER)."""
+
+
+def _variables(model, element):
+    """Variable rows (name, vr, causality, variability, initial, unit, start, description)."""
+    pressure = _start_pressure(model)
+    starts = {
+        "velocity": 0.0,
+        "force": 0.0,
+        "pressure_a": pressure,
+        "pressure_b": pressure,
+        "z": 0.0,
+        "max_substep": 1e-4,
+        "position": 0.0,
+        "mass": _DEFAULT_MASS,
+        "area_a": 0.0,
+        "area_b": 0.0,
     }
+    table = {**_COMMON_ROWS, **_ELEMENT_ROWS[element]}
+    rows = []
+    for vr, var in enumerate(_LAYOUT[element]):
+        causality, variability, initial, unit, text = table[var]
+        if var == "operating_pressure":
+            text = f"{text}, {REFERENCE_TEXT[model.reference]}"
+        rows.append((var, vr, causality, variability, initial, unit, starts.get(var), text))
+    coefficient_rows, law_lines = _coefficients(model)
+    units = {row[5]: _BASE[row[5]] for row in rows}
+    first = len(rows)
     for offset, (key, value, unit, exponents, text) in enumerate(coefficient_rows):
-        rows.append((key, 8 + offset, "parameter", "tunable", None, unit, value, text))
+        rows.append((key, first + offset, "parameter", "tunable", None, unit, value, text))
         if unit:
             units[unit] = exponents
     return rows, law_lines, units, pressure
@@ -331,11 +378,21 @@ def _law_summary(model) -> str:
     return "; ".join(parts)
 
 
-def _model_description(model, name, guid, rows, units, nominal) -> str:
+def _nominals(element, nominal_z):
+    """Nominal value of each state [m], [m/s] (tolerances scale with them)."""
+    return {"position": 0.1, "velocity": 0.1, "z": nominal_z}
+
+
+def _model_description(model, name, guid, rows, units, nominals, element) -> str:
     from .. import __version__
 
+    what = (
+        "moving mass of a hydraulic cylinder driven by a force, with its"
+        if element == "cylinder"
+        else "hydraulic cylinder:"
+    )
     description = (
-        f"Pressure-dependent LuGre friction of a hydraulic cylinder (cylfric, thesis eq. 2.5/2.7),"
+        f"Pressure-dependent LuGre friction of a {what} (cylfric, thesis eq. 2.5/2.7),"
         f" {model.friction_law} steady-state law; {REFERENCE_TEXT[model.reference]}; "
         f"{_law_summary(model)}"
     )
@@ -377,28 +434,38 @@ def _model_description(model, name, guid, rows, units, nominal) -> str:
         real = []
         if unit:
             real.append(f"unit={quoteattr(unit)}")
-        if var == "der(z)":
-            real.append(f'derivative="{index["z"]}"')
-        if var == "z":
-            real.append(f'nominal="{nominal!r}"')
+        derivative_of = {d: state for state, d in _STATES[element]}
+        if var in derivative_of:
+            real.append(f'derivative="{index[derivative_of[var]]}"')
+        if var in derivative_of.values():
+            real.append(f'nominal="{nominals[var]!r}"')
         if start is not None:
             real.append(f'start="{float(start)!r}"')
         out.append(f"    <!-- index {i} -->")
         out.append(f"    <ScalarVariable {attrs}>")
         out.append(f"      <Real {' '.join(real)}/>" if real else "      <Real/>")
         out.append("    </ScalarVariable>")
+    outputs = [index[r[0]] for r in rows if r[2] == "output"]
+    derivatives = [index[d] for _, d in _STATES[element]]
+    initial = sorted(
+        {index[r[0]] for r in rows if r[2] == "output" and r[4] is None}
+        | {i for i in derivatives if rows[i - 1][4] is None}
+    )
+
+    def unknowns(indices):
+        return [f'      <Unknown index="{i}"/>' for i in indices]
+
     out += [
         "  </ModelVariables>",
         "  <ModelStructure>",
         "    <Outputs>",
-        f'      <Unknown index="{index["friction_force"]}"/>',
+        *unknowns(sorted(outputs)),
         "    </Outputs>",
         "    <Derivatives>",
-        f'      <Unknown index="{index["der(z)"]}"/>',
+        *unknowns(derivatives),
         "    </Derivatives>",
         "    <InitialUnknowns>",
-        f'      <Unknown index="{index["friction_force"]}"/>',
-        f'      <Unknown index="{index["der(z)"]}"/>',
+        *unknowns(initial),
         "    </InitialUnknowns>",
         "  </ModelStructure>",
         "</fmiModelDescription>",
@@ -407,10 +474,20 @@ def _model_description(model, name, guid, rows, units, nominal) -> str:
     return "\n".join(out)
 
 
-def _model_header(model, name, guid, rows, nominal) -> str:
+def _flags(rows, test):
+    return "{" + ", ".join("1" if test(r) else "0" for r in rows) + "}"
+
+
+def _model_header(model, name, guid, rows, nominals, element) -> str:
     values = ",\n".join(
         f"    {float(r[6] if r[6] is not None else 0.0)!r} /* {r[0]} */" for r in rows
     )
+    states = _STATES[element]
+    vr = {r[0]: r[1] for r in rows}
+    defines = [
+        f"#define VR_{var.replace('der(', 'der_').rstrip(')').upper()} {vr[var]}"
+        for var in _LAYOUT[element]
+    ]
     return "\n".join(
         [
             "/* Generated by cylfric.export.fmu: value references and defaults of this model. */",
@@ -420,18 +497,26 @@ def _model_header(model, name, guid, rows, nominal) -> str:
             f'#define MODEL_GUID "{guid}"',
             f"#define CYLFRIC_REFERENCE {REFERENCE_CODES[model.reference]} "
             f"/* {REFERENCE_TEXT[model.reference]} */",
+            f"#define CYLFRIC_CYLINDER {int(element == 'cylinder')}",
             f"#define N_REALS {len(rows)}",
-            "#define N_STATES 1",
-            "#define VR_VELOCITY 0",
-            "#define VR_PRESSURE_A 1",
-            "#define VR_PRESSURE_B 2",
-            "#define VR_FRICTION_FORCE 3",
-            "#define VR_Z 4",
-            "#define VR_DER_Z 5",
-            "#define VR_OPERATING_PRESSURE 6",
-            "#define VR_MAX_SUBSTEP 7",
-            "#define VR_FIRST_PARAMETER 8",
-            f"#define NOMINAL_Z {nominal!r}",
+            f"#define N_STATES {len(states)}",
+            *defines,
+            f"#define VR_FIRST_PARAMETER {len(_LAYOUT[element])}",
+            "static const fmi2ValueReference STATE_VRS[N_STATES] = {"
+            + ", ".join(str(vr[st]) for st, _ in states)
+            + "};",
+            "static const fmi2ValueReference DERIVATIVE_VRS[N_STATES] = {"
+            + ", ".join(str(vr[d]) for _, d in states)
+            + "};",
+            "static const fmi2Real STATE_NOMINALS[N_STATES] = {"
+            + ", ".join(repr(nominals[st]) for st, _ in states)
+            + "};",
+            "static const unsigned char IS_INPUT[N_REALS] = "
+            + _flags(rows, lambda r: r[2] == "input")
+            + ";",
+            "static const unsigned char IS_SETTABLE[N_REALS] = "
+            + _flags(rows, lambda r: r[2] in ("input", "parameter") or r[4] == "exact")
+            + ";",
             "static const fmi2Real DEFAULT_REALS[N_REALS] = {",
             values,
             "};",
@@ -538,8 +623,8 @@ def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
         raise ValueError(f"unknown FMU element {element!r}; valid: {list(ELEMENTS)}")
     model = _as_model(model)
     name = _check_name(name, f"cylfric_{element}")
-    rows, law_lines, units, pressure = _variables(model)
-    nominal = _nominal_z(model, pressure)
+    rows, law_lines, units, pressure = _variables(model, element)
+    nominals = _nominals(element, _nominal_z(model, pressure))
     datasheet = datasheet_text(model)
     params_h = _params_header(model, law_lines)
     # the GUID is a hash of everything the binary depends on: same model, same GUID
@@ -550,12 +635,12 @@ def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
     h = digest.hexdigest()
     guid = f"{{{h[:8]}-{h[8:12]}-{h[12:16]}-{h[16:20]}-{h[20:32]}}}"
     sources = {f: _template(f) for f in _TEMPLATE_FILES}
-    sources["cylfric_model.h"] = _model_header(model, name, guid, rows, nominal).encode()
+    sources["cylfric_model.h"] = _model_header(model, name, guid, rows, nominals, element).encode()
     sources["cylfric_params.h"] = params_h.encode()
     entries = {f"sources/{f}": data for f, data in sources.items()}
     entries["sources/buildDescription.xml"] = _build_description(name).encode()
     entries["modelDescription.xml"] = _model_description(
-        model, name, guid, rows, units, nominal
+        model, name, guid, rows, units, nominals, element
     ).encode()
     entries["resources/datasheet.json"] = datasheet.encode()
     target = fmi_platform()

@@ -19,6 +19,13 @@
  * derivatives, held otherwise). The update is unconditionally stable for any sigma_0 and
  * step, and exact for held inputs.
  *
+ * Element "cylinder" (CYLFRIC_CYLINDER = 1) adds the moving mass m driven by the input force:
+ *   m dv/dt = force + area_a pressure_a - area_b pressure_b - F,   dx/dt = v      eq. 3.1
+ * with states position, velocity, z; its co-simulation step is cylfric's fixed-step impulse
+ * scheme (cylfric.simulate, method "fixed"): midpoint velocity, exact z for it, friction as
+ * its impulse over the substep, the new velocity by a quasi-Newton iteration that converges
+ * for any sigma_0 and step.
+ *
  * Compile (Linux):  cc -shared -fPIC -O2 -ffp-contract=off -I. cylfric_fmu.c -o <id>.so -lm
  */
 
@@ -130,16 +137,21 @@ static fmi2Status compute(Instance *c) {
     c->r[VR_DER_Z] = dz;
     c->r[VR_FRICTION_FORCE] = prm[P_SIGMA_0] * z + prm[P_SIGMA_1] * dz + prm[P_SIGMA_2] * v;
     c->r[VR_OPERATING_PRESSURE] = p;
+#if CYLFRIC_CYLINDER
+    if (!(c->r[VR_MASS] > 0)) {
+        logf_(c, fmi2Error, "logStatusError", "mass = %g kg; expected > 0 kg", c->r[VR_MASS]);
+        return fmi2Error;
+    }
+    c->r[VR_DER_VELOCITY] = (c->r[VR_FORCE] + c->r[VR_AREA_A] * c->r[VR_PRESSURE_A] -
+                             c->r[VR_AREA_B] * c->r[VR_PRESSURE_B] - c->r[VR_FRICTION_FORCE]) /
+                            c->r[VR_MASS]; /* eq. 3.1 */
+#endif
     return fmi2OK;
 }
 
-static int is_input(fmi2ValueReference vr) {
-    return vr == VR_VELOCITY || vr == VR_PRESSURE_A || vr == VR_PRESSURE_B;
-}
+static int is_input(fmi2ValueReference vr) { return vr < N_REALS && IS_INPUT[vr]; }
 
-static int is_settable(fmi2ValueReference vr) {
-    return is_input(vr) || vr == VR_Z || vr >= VR_FIRST_PARAMETER;
-}
+static int is_settable(fmi2ValueReference vr) { return vr < N_REALS && IS_SETTABLE[vr]; }
 
 /* ------------------------------------------------------------------ common functions */
 
@@ -374,16 +386,18 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
 
 fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_t nx) {
     Instance *c = (Instance *)comp;
+    size_t i;
     if (nx != N_STATES) return fmi2Error;
-    c->r[VR_Z] = x[0];
+    for (i = 0; i < nx; i++) c->r[STATE_VRS[i]] = x[i];
     return fmi2OK;
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t nx) {
     Instance *c = (Instance *)comp;
+    size_t i;
     if (nx != N_STATES) return fmi2Error;
     if (compute(c) != fmi2OK) return fmi2Error;
-    derivatives[0] = c->r[VR_DER_Z];
+    for (i = 0; i < nx; i++) derivatives[i] = c->r[DERIVATIVE_VRS[i]];
     return fmi2OK;
 }
 
@@ -395,15 +409,17 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real indicators[], size_t
 
 fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx) {
     Instance *c = (Instance *)comp;
+    size_t i;
     if (nx != N_STATES) return fmi2Error;
-    x[0] = c->r[VR_Z];
+    for (i = 0; i < nx; i++) x[i] = c->r[STATE_VRS[i]];
     return fmi2OK;
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    size_t i;
     (void)c;
     if (nx != N_STATES) return fmi2Error;
-    x_nominal[0] = NOMINAL_Z;
+    for (i = 0; i < nx; i++) x_nominal[i] = STATE_NOMINALS[i];
     return fmi2OK;
 }
 
@@ -433,6 +449,84 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     return nvr == 0 ? fmi2OK : fmi2Error;
 }
 
+#if CYLFRIC_CYLINDER
+/* exact z over a substep at constant v: z(h) and the integral of z over the substep
+ * (cylfric.simulate.kernels.z_step) */
+static void z_step(fmi2Real z0, fmi2Real v, fmi2Real h, fmi2Real s0, fmi2Real g, fmi2Real *z1,
+                   fmi2Real *zint) {
+    fmi2Real lam, x, z_ss, one_minus_e, integral_factor;
+    if (v == 0.0 || !(s0 > 0)) {
+        *z1 = z0 + v * h;
+        *zint = z0 * h + 0.5 * v * h * h;
+        return;
+    }
+    lam = s0 * fabs(v) / g;
+    x = lam * h;
+    z_ss = v > 0 ? g / s0 : -g / s0;
+    if (x < 1e-5) {
+        one_minus_e = x * (1.0 - x * (0.5 - x / 6.0));
+        integral_factor = h * (1.0 - x * (0.5 - x / 6.0));
+    } else {
+        one_minus_e = -expm1(-x);
+        integral_factor = one_minus_e / lam;
+    }
+    *z1 = z_ss + (z0 - z_ss) * (1.0 - one_minus_e);
+    *zint = z_ss * h + (z0 - z_ss) * integral_factor;
+}
+
+fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
+                      fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    Instance *c = (Instance *)comp;
+    fmi2Real prm[N_PRM], g, p, w, hs, pa, pb, fext, jac, v1, vm, z1, zint, impulse, dv;
+    fmi2Real x = c->r[VR_POSITION], v = c->r[VR_VELOCITY], z = c->r[VR_Z];
+    fmi2Real m = c->r[VR_MASS];
+    int n, j, it;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!(communicationStepSize >= 0) || !(m > 0)) {
+        logf_(c, fmi2Error, "logStatusError",
+              "communication step %g s, mass %g kg; expected a step >= 0 s and a mass > 0 kg",
+              communicationStepSize, m);
+        return fmi2Error;
+    }
+    n = (int)ceil(communicationStepSize / c->r[VR_MAX_SUBSTEP] - 1e-9);
+    if (n < 1) n = 1;
+    hs = communicationStepSize / n;
+    for (j = 0; j < n; j++) {
+        w = (j + 0.5) * hs; /* inputs at the middle of the substep */
+        pa = c->r[VR_PRESSURE_A] + c->du[VR_PRESSURE_A] * w;
+        pb = c->r[VR_PRESSURE_B] + c->du[VR_PRESSURE_B] * w;
+        fext = c->r[VR_FORCE] + c->du[VR_FORCE] * w + c->r[VR_AREA_A] * pa - c->r[VR_AREA_B] * pb;
+        p = operating_pressure(pa, pb);
+        cylfric_params_at(c->r, p, prm);
+        /* stuck-contact Jacobian: bounds the true one, so the iteration converges */
+        jac = m + 0.5 * (0.5 * prm[P_SIGMA_0] * hs * hs + prm[P_SIGMA_1] * hs + prm[P_SIGMA_2] * hs);
+        v1 = v;
+        for (it = 0; it < 60; it++) {
+            vm = 0.5 * (v + v1);
+            if (!g_function(c, vm, prm, p, &g)) return fmi2Error;
+            z_step(z, vm, hs, prm[P_SIGMA_0], g, &z1, &zint);
+            impulse = prm[P_SIGMA_0] * zint + prm[P_SIGMA_1] * (z1 - z) + prm[P_SIGMA_2] * vm * hs;
+            dv = (m * (v1 - v) - fext * hs + impulse) / jac;
+            v1 -= dv;
+            if (fabs(dv) <= 1e-10 * (fabs(v1) + 1e-9)) break;
+        }
+        vm = 0.5 * (v + v1);
+        if (!g_function(c, vm, prm, p, &g)) return fmi2Error;
+        z_step(z, vm, hs, prm[P_SIGMA_0], g, &z1, &zint);
+        x += hs * vm;
+        v = v1;
+        z = z1;
+    }
+    c->r[VR_POSITION] = x;
+    c->r[VR_VELOCITY] = v;
+    c->r[VR_Z] = z;
+    c->r[VR_FORCE] += c->du[VR_FORCE] * communicationStepSize;
+    c->r[VR_PRESSURE_A] += c->du[VR_PRESSURE_A] * communicationStepSize;
+    c->r[VR_PRESSURE_B] += c->du[VR_PRESSURE_B] * communicationStepSize;
+    c->time = currentCommunicationPoint + communicationStepSize;
+    return compute(c);
+}
+#else
 fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     Instance *c = (Instance *)comp;
@@ -472,6 +566,8 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
     c->time = currentCommunicationPoint + communicationStepSize;
     return compute(c);
 }
+
+#endif
 
 fmi2Status fmi2CancelStep(fmi2Component c) {
     (void)c;
