@@ -9,14 +9,18 @@ datasheet itself under ``resources/``.
 
 The element (thesis eq. 2.5, 2.7; SI throughout):
 
-* inputs ``velocity`` [m/s], ``pressure_a`` [Pa], ``pressure_b`` [Pa];
+* element ``"friction"``: inputs ``velocity`` [m/s], ``pressure_a`` [Pa], ``pressure_b`` [Pa];
 * output ``friction_force`` [N] (positive in the direction of motion);
 * state ``z`` [m] (bristle deflection), ``der(z)`` [m/s];
 * parameters: the coefficients of the pressure laws (``F_c.intercept`` [N],
   ``F_c.slope`` [N/Pa], ...), ``sigma_0`` [N/m], ``sigma_1`` [N*s/m], and ``max_substep`` [s]
   (longest internal step of the co-simulation ``doStep``);
 * the operating-pressure rule (a, b, sum, mean, max) and the pressure law of each parameter
-  are fixed at export (structural); their coefficients are tunable.
+  are fixed at export (structural); their coefficients are tunable;
+* element ``"cylinder"``: the moving mass driven by the input ``force`` [N] and the pressure
+  force (eq. 3.1), outputs ``position`` [m], ``velocity`` [m/s], ``friction_force`` [N],
+  parameters ``mass`` [kg], ``area_a``, ``area_b`` [m^2]; its co-simulation step is cylfric's
+  fixed-step impulse scheme (``cylfric.simulate(method="fixed")``).
 
 Co-simulation integrates z with the exact solution of eq. 2.5 for a velocity held over each
 substep (inputs at the middle of the substep, linear in time when the master sets input
@@ -601,11 +605,17 @@ def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
         :meth:`cylfric.model.FrictionModel.from_datasheet`.
     out : path
         Output folder (created if needed); the FMU is ``<out>/<name>.fmu``.
-    element : {"friction"}
-        The element: ``"friction"`` (inputs ``velocity`` [m/s], ``pressure_a``,
-        ``pressure_b`` [Pa]; output ``friction_force`` [N]; state ``z`` [m]).
+    element : {"friction", "cylinder"}
+        ``"friction"``: inputs ``velocity`` [m/s], ``pressure_a``, ``pressure_b`` [Pa];
+        output ``friction_force`` [N]; state ``z`` [m].
+        ``"cylinder"``: the moving mass with the friction, ``m dv/dt = force + area_a
+        pressure_a - area_b pressure_b - friction_force`` (thesis eq. 3.1): inputs ``force``
+        [N], ``pressure_a``, ``pressure_b`` [Pa]; outputs ``friction_force`` [N],
+        ``position`` [m], ``velocity`` [m/s]; states position, velocity, z; parameters
+        ``mass`` [kg] (default 2.5, the thesis rig's assumption), ``area_a``, ``area_b``
+        [m^2] (default 0).
     name : str, optional
-        Model identifier (a C identifier); default ``"cylfric_friction"``.
+        Model identifier (a C identifier); default ``"cylfric_<element>"``.
 
     Returns
     -------
