@@ -29,7 +29,13 @@ from fmpy.validation import validate_fmu  # noqa: E402
 from cylfric.export.fmu import compiler, export_fmu, fmi_platform  # noqa: E402
 from cylfric.friction import lugre_z_update  # noqa: E402
 from cylfric.model import FrictionModel  # noqa: E402
-from cylfric.simulate import AppliedForce, Cylinder, PrescribedMotion, simulate  # noqa: E402
+from cylfric.simulate import (  # noqa: E402
+    AppliedForce,
+    Cylinder,
+    PositionServo,
+    PrescribedMotion,
+    simulate,
+)
 
 needs_cc = pytest.mark.skipif(
     compiler() is None or fmi_platform() is None,
@@ -443,6 +449,55 @@ def test_cylinder_reproduces_cylfric_simulate(cylinder_fmu, case):
             output_interval=dt,
             input=signals,
             start_values=start,
+            output=["friction_force", "position", "velocity"],
+            relative_tolerance=1e-10,
+        )
+        for name, expected in (
+            ("friction_force", reference.outputs["friction_force"]),
+            ("position", reference.states["position"]),
+            ("velocity", reference.states["velocity"]),
+        ):
+            scale = np.abs(expected).max()
+            assert_allclose(result[name], expected, rtol=0, atol=tolerance * scale, err_msg=name)
+
+
+@needs_cc
+def test_cylinder_position_drive_reproduces_cylfric_simulate(cylinder_fmu):
+    """A 10 mm position step through the servo inputs = cylfric.simulate with PositionServo."""
+    model, mass, dt, duration = MODELS["thesis"], 2.5, 1e-3, 0.3
+    kp, kd, target, pressure = 1e5, 1e3, 0.01, 80e5
+    signals = np.array(
+        [(0.0, target, 0.0, pressure, pressure), (duration, target, 0.0, pressure, pressure)],
+        dtype=[
+            ("time", float),
+            ("position_reference", float),
+            ("velocity_reference", float),
+            ("pressure_a", float),
+            ("pressure_b", float),
+        ],
+    )
+    drive = PositionServo(target, kp=kp, kd=kd, reference_velocity=0.0)
+    for fmi_type, method, options, tolerance in (
+        ("CoSimulation", "fixed", {"step": 1e-4}, 1e-9),
+        ("ModelExchange", "dopri", {"rtol": 1e-10}, 1e-6),
+    ):
+        reference = simulate(
+            Cylinder(mass),
+            model,
+            drive,
+            duration,
+            dt=dt,
+            pressure_a=pressure,
+            method=method,
+            **options,
+        )
+        result = fmpy.simulate_fmu(
+            str(cylinder_fmu),
+            fmi_type=fmi_type,
+            stop_time=duration,
+            output_interval=dt,
+            input=signals,
+            start_values={"mass": mass, "kp": kp, "kd": kd},
             output=["friction_force", "position", "velocity"],
             relative_tolerance=1e-10,
         )

@@ -18,9 +18,11 @@ The element (thesis eq. 2.5, 2.7; SI throughout):
 * the operating-pressure rule (a, b, sum, mean, max) and the pressure law of each parameter
   are fixed at export (structural); their coefficients are tunable;
 * element ``"cylinder"``: the moving mass driven by the input ``force`` [N] and the pressure
-  force (eq. 3.1), outputs ``position`` [m], ``velocity`` [m/s], ``friction_force`` [N],
-  parameters ``mass`` [kg], ``area_a``, ``area_b`` [m^2]; its co-simulation step is cylfric's
-  fixed-step impulse scheme (``cylfric.simulate(method="fixed")``).
+  force (eq. 3.1), or by a position servo (inputs ``position_reference`` [m],
+  ``velocity_reference`` [m/s], gains ``kp`` [N/m], ``kd`` [N*s/m]), outputs ``position``
+  [m], ``velocity`` [m/s], ``friction_force`` [N], parameters ``mass`` [kg], ``area_a``,
+  ``area_b`` [m^2]; its co-simulation step is cylfric's fixed-step impulse scheme
+  (``cylfric.simulate(method="fixed")``).
 
 Co-simulation integrates z with the exact solution of eq. 2.5 for a velocity held over each
 substep (inputs at the middle of the substep, linear in time when the master sets input
@@ -291,6 +293,22 @@ _ELEMENT_ROWS = {
             "m2",
             "piston area of chamber B; 0: the pressures only set the friction",
         ),
+        "position_reference": (
+            "input",
+            "continuous",
+            None,
+            "m",
+            "position drive: reference position of the servo (acts with kp)",
+        ),
+        "velocity_reference": (
+            "input",
+            "continuous",
+            None,
+            "m/s",
+            "position drive: reference velocity of the servo (acts with kd)",
+        ),
+        "kp": ("parameter", "tunable", None, "N/m", "position drive: servo stiffness; 0: off"),
+        "kd": ("parameter", "tunable", None, "N.s/m", "position drive: servo damping; 0: off"),
     },
 }
 _LAYOUT = {
@@ -319,6 +337,10 @@ _LAYOUT = {
         "mass",
         "area_a",
         "area_b",
+        "position_reference",
+        "velocity_reference",
+        "kp",
+        "kd",
     ),
 }
 """Value references (the position in the tuple) of each element's variables."""
@@ -345,6 +367,10 @@ def _variables(model, element):
         "mass": _DEFAULT_MASS,
         "area_a": 0.0,
         "area_b": 0.0,
+        "position_reference": 0.0,
+        "velocity_reference": 0.0,
+        "kp": 0.0,
+        "kd": 0.0,
     }
     table = {**_COMMON_ROWS, **_ELEMENT_ROWS[element]}
     rows = []
@@ -354,7 +380,7 @@ def _variables(model, element):
             text = f"{text}, {REFERENCE_TEXT[model.reference]}"
         rows.append((var, vr, causality, variability, initial, unit, starts.get(var), text))
     coefficient_rows, law_lines = _coefficients(model)
-    units = {row[5]: _BASE[row[5]] for row in rows}
+    units = {row[5]: _BASE[row[5].replace(".", "*")] for row in rows}
     first = len(rows)
     for offset, (key, value, unit, exponents, text) in enumerate(coefficient_rows):
         rows.append((key, first + offset, "parameter", "tunable", None, unit, value, text))
@@ -609,11 +635,14 @@ def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
         ``"friction"``: inputs ``velocity`` [m/s], ``pressure_a``, ``pressure_b`` [Pa];
         output ``friction_force`` [N]; state ``z`` [m].
         ``"cylinder"``: the moving mass with the friction, ``m dv/dt = force + area_a
-        pressure_a - area_b pressure_b - friction_force`` (thesis eq. 3.1): inputs ``force``
-        [N], ``pressure_a``, ``pressure_b`` [Pa]; outputs ``friction_force`` [N],
+        pressure_a - area_b pressure_b - friction_force + drive`` (thesis eq. 3.1): inputs
+        ``force`` [N], ``pressure_a``, ``pressure_b`` [Pa]; outputs ``friction_force`` [N],
         ``position`` [m], ``velocity`` [m/s]; states position, velocity, z; parameters
         ``mass`` [kg] (default 2.5, the thesis rig's assumption), ``area_a``, ``area_b``
-        [m^2] (default 0).
+        [m^2] (default 0). Position drive: ``drive = kp (position_reference - position) +
+        kd (velocity_reference - velocity)`` with inputs ``position_reference`` [m],
+        ``velocity_reference`` [m/s] and parameters ``kp`` [N/m], ``kd`` [N*s/m] (default 0:
+        force drive only), as :class:`cylfric.simulate.PositionServo` without integral gain.
     name : str, optional
         Model identifier (a C identifier); default ``"cylfric_<element>"``.
 

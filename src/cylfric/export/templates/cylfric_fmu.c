@@ -19,8 +19,10 @@
  * derivatives, held otherwise). The update is unconditionally stable for any sigma_0 and
  * step, and exact for held inputs.
  *
- * Element "cylinder" (CYLFRIC_CYLINDER = 1) adds the moving mass m driven by the input force:
- *   m dv/dt = force + area_a pressure_a - area_b pressure_b - F,   dx/dt = v      eq. 3.1
+ * Element "cylinder" (CYLFRIC_CYLINDER = 1) adds the moving mass m driven by the input force
+ * and/or a position servo (gains kp, kd on the reference inputs):
+ *   m dv/dt = force + kp (x_ref - x) + kd (v_ref - v) + area_a p_a - area_b p_b - F    eq. 3.1
+ *   dx/dt = v
  * with states position, velocity, z; its co-simulation step is cylfric's fixed-step impulse
  * scheme (cylfric.simulate, method "fixed"): midpoint velocity, exact z for it, friction as
  * its impulse over the substep, the new velocity by a quasi-Newton iteration that converges
@@ -142,9 +144,11 @@ static fmi2Status compute(Instance *c) {
         logf_(c, fmi2Error, "logStatusError", "mass = %g kg; expected > 0 kg", c->r[VR_MASS]);
         return fmi2Error;
     }
-    c->r[VR_DER_VELOCITY] = (c->r[VR_FORCE] + c->r[VR_AREA_A] * c->r[VR_PRESSURE_A] -
-                             c->r[VR_AREA_B] * c->r[VR_PRESSURE_B] - c->r[VR_FRICTION_FORCE]) /
-                            c->r[VR_MASS]; /* eq. 3.1 */
+    c->r[VR_DER_VELOCITY] =
+        (c->r[VR_FORCE] + c->r[VR_KP] * (c->r[VR_POSITION_REFERENCE] - c->r[VR_POSITION]) +
+         c->r[VR_KD] * (c->r[VR_VELOCITY_REFERENCE] - v) + c->r[VR_AREA_A] * c->r[VR_PRESSURE_A] -
+         c->r[VR_AREA_B] * c->r[VR_PRESSURE_B] - c->r[VR_FRICTION_FORCE]) /
+        c->r[VR_MASS]; /* eq. 3.1 */
 #endif
     return fmi2OK;
 }
@@ -478,8 +482,9 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     Instance *c = (Instance *)comp;
     fmi2Real prm[N_PRM], g, p, w, hs, pa, pb, fext, jac, v1, vm, z1, zint, impulse, dv;
+    fmi2Real xr, vr, em, drive;
     fmi2Real x = c->r[VR_POSITION], v = c->r[VR_VELOCITY], z = c->r[VR_Z];
-    fmi2Real m = c->r[VR_MASS];
+    fmi2Real m = c->r[VR_MASS], k = c->r[VR_KP], cd = c->r[VR_KD];
     int n, j, it;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!(communicationStepSize >= 0) || !(m > 0)) {
@@ -496,17 +501,22 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
         pa = c->r[VR_PRESSURE_A] + c->du[VR_PRESSURE_A] * w;
         pb = c->r[VR_PRESSURE_B] + c->du[VR_PRESSURE_B] * w;
         fext = c->r[VR_FORCE] + c->du[VR_FORCE] * w + c->r[VR_AREA_A] * pa - c->r[VR_AREA_B] * pb;
+        xr = c->r[VR_POSITION_REFERENCE] + c->du[VR_POSITION_REFERENCE] * w;
+        vr = c->r[VR_VELOCITY_REFERENCE] + c->du[VR_VELOCITY_REFERENCE] * w;
         p = operating_pressure(pa, pb);
         cylfric_params_at(c->r, p, prm);
         /* stuck-contact Jacobian: bounds the true one, so the iteration converges */
-        jac = m + 0.5 * (0.5 * prm[P_SIGMA_0] * hs * hs + prm[P_SIGMA_1] * hs + prm[P_SIGMA_2] * hs);
+        jac = m + 0.25 * k * hs * hs + 0.5 * cd * hs +
+              0.5 * (0.5 * prm[P_SIGMA_0] * hs * hs + prm[P_SIGMA_1] * hs + prm[P_SIGMA_2] * hs);
         v1 = v;
         for (it = 0; it < 60; it++) {
             vm = 0.5 * (v + v1);
             if (!g_function(c, vm, prm, p, &g)) return fmi2Error;
             z_step(z, vm, hs, prm[P_SIGMA_0], g, &z1, &zint);
             impulse = prm[P_SIGMA_0] * zint + prm[P_SIGMA_1] * (z1 - z) + prm[P_SIGMA_2] * vm * hs;
-            dv = (m * (v1 - v) - fext * hs + impulse) / jac;
+            em = xr - (x + 0.5 * hs * vm);
+            drive = (k * em + cd * (vr - vm) + fext) * hs;
+            dv = (m * (v1 - v) - drive + impulse) / jac;
             v1 -= dv;
             if (fabs(dv) <= 1e-10 * (fabs(v1) + 1e-9)) break;
         }
@@ -521,6 +531,8 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
     c->r[VR_VELOCITY] = v;
     c->r[VR_Z] = z;
     c->r[VR_FORCE] += c->du[VR_FORCE] * communicationStepSize;
+    c->r[VR_POSITION_REFERENCE] += c->du[VR_POSITION_REFERENCE] * communicationStepSize;
+    c->r[VR_VELOCITY_REFERENCE] += c->du[VR_VELOCITY_REFERENCE] * communicationStepSize;
     c->r[VR_PRESSURE_A] += c->du[VR_PRESSURE_A] * communicationStepSize;
     c->r[VR_PRESSURE_B] += c->du[VR_PRESSURE_B] * communicationStepSize;
     c->time = currentCommunicationPoint + communicationStepSize;
