@@ -389,7 +389,8 @@ def test_unphysical_parameters_are_an_error(fmus):
 
 # ----------------------------------------------------------------------------- cylinder
 CYLINDER_CASES = {
-    # drive between F_c and F_s of the thesis law at 45 bar: the rod sticks (presliding)
+    # drive between F_c and F_s of the thesis law at 45 bar: the rod nearly sticks (LuGre
+    # creep, 0.6 mm in 0.5 s)
     "stuck": (100.0, 0.0, 0.0, 45e5, 45e5),
     # 60 N plus the pressure force 1e-4 m^2 * 50 bar - 0.5e-4 m^2 * 40 bar = 360 N: it slides
     "sliding": (60.0, 1e-4, 0.5e-4, 50e5, 40e5),
