@@ -23,6 +23,12 @@ def register(app) -> None:
         name: str = typer.Option(
             None, "--name", help="Name of the exported files (default: the datasheet's name)."
         ),
+        element: str = typer.Option(
+            None,
+            "--element",
+            help="FMU only: 'friction' (the friction element, default) or 'cylinder' (with "
+            "the moving mass, driven by a force or a position servo).",
+        ),
     ):
         """Datasheet -> FMU, Modelica package, Simscape or Hopsan parameters, MATLAB function.
 
@@ -38,8 +44,18 @@ def register(app) -> None:
             raise BadInput(f"{datasheet}: no such datasheet file; expected a datasheet.json")
         if out.exists() and not out.is_dir():
             raise BadInput(f"--out {out} is a file; expected a folder")
+        import warnings
+
         options = {} if name is None else {"name": name}
-        result = export(datasheet, target, out, **options)
+        if element is not None:
+            if target != "fmu":
+                raise BadInput(f"--element is for --to fmu only; --to {target} has one form")
+            options["element"] = element
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = export(datasheet, target, out, **options)
+        for message in dict.fromkeys(str(w.message) for w in caught):  # each once, as a note
+            console.print(f"[yellow]note:[/yellow] {message}", highlight=False)
         for line in result.summary().splitlines():
             console.print(line, markup=False, highlight=False)
         for path in result.files:
