@@ -86,7 +86,9 @@ def test_add_refuses_bad_input(db, tmp_path):
         db.add(sheet, "b", temperature=40.0)
     with pytest.raises(CatalogError, match="catalogue name ' b'"):
         db.add(sheet, " b")
-    broken = dict(sheet, parameters=dict(sheet["parameters"], F_c={"intercept": -5.0, "slope": 0.0}))
+    broken = dict(
+        sheet, parameters=dict(sheet["parameters"], F_c={"intercept": -5.0, "slope": 0.0})
+    )
     with pytest.raises(DatasheetError, match="F_c < 0"):
         db.add(broken, "b")
     with pytest.raises(DatasheetError, match="cannot read"):

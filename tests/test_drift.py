@@ -27,8 +27,10 @@ def _model(shift=0.0, relative_se=0.01) -> FrictionModel:
     values = {n: p.value for n, p in model.parameters.items() if p.value is not None}
     cov = np.diag([(relative_se * values[n]) ** 2 for n in NAMES])
     stderr = {
-        "F_c": {"intercept": relative_se * values["F_c.intercept"],
-                "slope": relative_se * values["F_c.slope"]},
+        "F_c": {
+            "intercept": relative_se * values["F_c.intercept"],
+            "slope": relative_se * values["F_c.slope"],
+        },
     }
     return model.replace(
         covariance=(NAMES, cov), stderr=stderr, statistics={"dof": 200}, validity=VALIDITY
@@ -64,8 +66,12 @@ def test_a_shifted_model_is_significant():
 
 def test_drift_refuses_disjoint_ranges_and_bad_level():
     other = _model().replace(
-        validity={"pressure_min": 170e5, "pressure_max": 200e5, "velocity_min": 1e-3,
-                  "velocity_max": 0.1}
+        validity={
+            "pressure_min": 170e5,
+            "pressure_max": 200e5,
+            "velocity_min": 1e-3,
+            "velocity_max": 0.1,
+        }
     )
     with pytest.raises(ValueError, match="validity ranges do not overlap"):
         drift(_model(), other)
@@ -100,13 +106,19 @@ def _warm_campaign(drop_per_run=-0.5, drop_per_stroke=0.0, runs=8, strokes=6, se
         p, v = 20e5 + 15e5 * (run % 4), 0.01 * (1 + run % 3)
         for stroke in range(strokes):
             f = truth.friction(v, p) + drop_per_run * run + drop_per_stroke * stroke
-            rows.append({
-                "run": run, "file": f"run_{run:03d}.txt", "stroke": stroke,
-                "direction [-]": 1 if stroke % 2 else -1, "pressure [Pa]": p,
-                "velocity [m/s]": v * (1 if stroke % 2 else -1),
-                "friction [N]": f + rng.normal(0, 0.3), "window_start [s]": 2.0 * stroke,
-                "flag": "ok",
-            })
+            rows.append(
+                {
+                    "run": run,
+                    "file": f"run_{run:03d}.txt",
+                    "stroke": stroke,
+                    "direction [-]": 1 if stroke % 2 else -1,
+                    "pressure [Pa]": p,
+                    "velocity [m/s]": v * (1 if stroke % 2 else -1),
+                    "friction [N]": f + rng.normal(0, 0.3),
+                    "window_start [s]": 2.0 * stroke,
+                    "flag": "ok",
+                }
+            )
     return pd.DataFrame(rows), truth
 
 

@@ -332,19 +332,27 @@ def figure_run_order(trend: RunOrderTrend, title=""):
     fig = Figure(figsize=(8, 3.6), layout="constrained")
     ax = fig.subplots()
     pts = trend.points
-    position = pts["order [-]"] + (pts["stroke order [-]"] + 0.5) / (
-        pts.groupby("order [-]")["stroke order [-]"].transform("max") + 1
-    ) - 0.5
+    position = (
+        pts["order [-]"]
+        + (pts["stroke order [-]"] + 0.5)
+        / (pts.groupby("order [-]")["stroke order [-]"].transform("max") + 1)
+        - 0.5
+    )
     ax.plot(position, pts["residual [N]"], ".", ms=3, alpha=0.6, label="points (strokes in order)")
     ax.plot(trend.runs["order [-]"], trend.runs["residual [N]"], "o", label="run mean")
     if math.isfinite(trend.between_slope):
         x = trend.runs["order [-]"].to_numpy(dtype=float)
         y = trend.runs["residual [N]"].to_numpy()
         line = y.mean() + trend.between_slope * (x - x.mean())
-        ax.plot(x, line, "-", label=f"trend {trend.between_slope:+.3g} ± "
-                f"{trend.between_stderr:.2g} N/run")
+        ax.plot(
+            x,
+            line,
+            "-",
+            label=f"trend {trend.between_slope:+.3g} ± {trend.between_stderr:.2g} N/run",
+        )
     ax.axhline(0.0, color="0.5", lw=0.8)
-    ax.set_xlabel(f"run order [-] ({'file modification time' if trend.order == 'mtime' else 'run'})")
+    basis = "file modification time" if trend.order == "mtime" else "run"
+    ax.set_xlabel(f"run order [-] ({basis})")
     ax.set_ylabel("measured - model [N]")
     ax.set_title(title or "friction against run order (warm-up)")
     ax.grid(True, alpha=0.3)

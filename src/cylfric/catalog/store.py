@@ -94,8 +94,7 @@ def _now() -> str:
 def _check_name(name) -> str:
     if not isinstance(name, str) or not name.strip() or name != name.strip():
         raise CatalogError(
-            f"catalogue name {name!r}: expected a non-empty text without leading or "
-            "trailing spaces"
+            f"catalogue name {name!r}: expected a non-empty text without leading or trailing spaces"
         )
     return name
 
@@ -226,9 +225,12 @@ class Catalog:
         db.execute("BEGIN IMMEDIATE")
         try:
             version = db.execute("PRAGMA user_version").fetchone()[0]  # another process?
-            if version == 0 and db.execute(
-                "SELECT count(*) FROM sqlite_master WHERE type = 'table'"
-            ).fetchone()[0]:
+            if (
+                version == 0
+                and db.execute(
+                    "SELECT count(*) FROM sqlite_master WHERE type = 'table'"
+                ).fetchone()[0]
+            ):
                 raise CatalogError(
                     f"{self.path}: an SQLite file that is not a cylfric catalogue "
                     "(tables but no schema version)"
