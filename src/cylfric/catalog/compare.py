@@ -96,6 +96,7 @@ def _span(models, key_min, key_max, fallback):
 def _figure(models: dict, pressures, velocities, level):
     """Two panels: friction against velocity (at ``pressures``) and against pressure."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import ScalarFormatter
 
     fig = Figure(figsize=(10, 4.2), layout="constrained")
     ax_v, ax_p = fig.subplots(1, 2)
@@ -126,6 +127,9 @@ def _figure(models: dict, pressures, velocities, level):
                 p_grid / 1e5, np.where(inside, lo, np.nan), hi, color=color, alpha=0.15, lw=0
             )
     ax_v.set_xscale("log")
+    ax_v.xaxis.set_major_formatter(ScalarFormatter())
+    ax_v.xaxis.set_minor_formatter(ScalarFormatter())
+    ax_v.tick_params(axis="x", which="minor", labelsize=7)
     ax_v.set_xlabel("velocity [mm/s]")
     ax_v.set_ylabel("friction [N]")
     ax_v.set_title("friction against velocity")

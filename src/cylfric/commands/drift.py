@@ -77,14 +77,14 @@ def register(app) -> None:
         params = table[table["kind"] == "parameter"]
         view = Table(title=f"Change of the coefficients, {b.name} - {a.name}")
         for column in ("coefficient", "unit", "a", "b", "change", "z", "sig."):
-            view.add_column(escape(column), justify="right", no_wrap=column != "unit")
+            view.add_column(escape(column), justify="right", no_wrap=True)
         for row in params.to_dict("records"):
             unit, k = engineering_unit(row["quantity"])
             view.add_row(
                 row["quantity"],
                 unit,
-                f"{row['a'] * k:.5g}",
-                f"{row['b'] * k:.5g}",
+                f"{row['a'] * k:.4g}",
+                f"{row['b'] * k:.4g}",
                 f"{row['change'] * k:+.3g}",
                 f"{row['z [-]']:+.2f}",
                 "yes" if row["significant"] else "no",
