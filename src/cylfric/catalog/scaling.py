@@ -233,7 +233,7 @@ def predict_datasheet(
     record["offset"] = None
     record.pop("offset_std", None)
     target = f"bore {bore * 1e3:g} mm" + ("" if rod is None else f", rod {rod * 1e3:g} mm")
-    record["name"] = f"{sheet.get('name', source_name)} scaled to {target}"
+    record["name"] = f"{source_name} scaled to {target}"
     prediction = {
         "from": source_name,
         "rule": f"seal contact length ({rule})",

@@ -196,6 +196,8 @@ class Catalog:
             if mode.lower() != "wal":  # pragma: no cover - file systems without shared memory
                 db.execute("PRAGMA journal_mode = DELETE")
             yield db
+        except sqlite3.OperationalError as exc:
+            raise CatalogError(f"{self.path}: catalogue not usable now ({exc})") from None
         except sqlite3.DatabaseError as exc:
             raise CatalogError(f"{self.path}: not a usable catalogue ({exc})") from None
         finally:
