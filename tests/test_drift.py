@@ -162,3 +162,73 @@ def test_run_order_by_modification_time(tmp_path):
     by_time = run_order_trend(points, truth, order="mtime", campaign=tmp_path)
     assert by_time.runs["file"].tolist() == [f"run_{r:03d}.txt" for r in (3, 2, 1, 0)]
     assert by_time.between_slope > 0
+
+
+OIL_VG46 = ((313.15, 46e-6), (373.15, 6.8e-6))
+"""An ISO VG 46 mineral oil of viscosity index about 100: 46 and 6.8 mm^2/s at 40 and
+100 degC (typical data-sheet values, used here only as the two Walther points)."""
+
+
+def test_walther_viscosity_passes_its_two_points_and_falls_with_temperature():
+    from cylfric.drift import walther_viscosity
+
+    assert_allclose(walther_viscosity(313.15, OIL_VG46), 46e-6, rtol=1e-12)
+    assert_allclose(walther_viscosity(373.15, OIL_VG46), 6.8e-6, rtol=1e-12)
+    t = np.linspace(273.15, 393.15, 25)
+    nu = walther_viscosity(t, OIL_VG46)
+    assert np.all(np.diff(nu) < 0)
+    # ASTM D341 is a straight line in log log (nu + 0.7) against log T
+    z = np.log10(np.log10(nu * 1e6 + 0.7))
+    assert_allclose(np.diff(z) / np.diff(np.log10(t)), (z[1] - z[0]) / np.diff(np.log10(t))[0])
+    with pytest.raises(ValueError, match="holds from 2 mm\\^2/s"):
+        walther_viscosity(313.15, ((313.15, 46.0e-9), (373.15, 6.8e-9)))
+    with pytest.raises(ValueError, match="different positive temperatures"):
+        walther_viscosity(313.15, ((313.15, 46e-6), (313.15, 6.8e-6)))
+
+
+def test_viscosity_correction_lets_runs_at_two_temperatures_be_identified_as_one():
+    """Points at 30 and 50 degC of a seal whose Stribeck curve follows the Hersey number:
+    friction(v, T) = friction_ref(v nu(T) / nu(T_ref)). Identified raw, the two
+    temperatures disagree; mapped to 40 degC they give back the reference model."""
+    from cylfric.drift import viscosity_corrected, walther_viscosity
+    from cylfric.identify import identify
+
+    truth = FrictionModel()  # the thesis law (eq. 4.1-4.3) at the reference 40 degC
+    t_ref = 313.15
+    rng = np.random.default_rng(3)
+    rows = []
+    for run, temperature in enumerate((303.15, 323.15)):
+        ratio = walther_viscosity(temperature, OIL_VG46) / walther_viscosity(t_ref, OIL_VG46)
+        for p in (20e5, 80e5, 150e5):
+            for v in (0.001, 0.003, 0.006, 0.01, 0.02, 0.04, 0.08, 0.13):
+                f = truth.friction(v * ratio, p) + rng.normal(0, 0.3)
+                rows.append(
+                    {
+                        "run": run,
+                        "velocity [m/s]": v,
+                        "pressure [Pa]": p,
+                        "friction [N]": f,
+                        "friction_std [N]": 0.3,
+                        "flag": "ok",
+                        "temperature [K]": temperature,
+                    }
+                )
+    points = pd.DataFrame(rows)
+    raw = identify(points, fixed={"alpha": 1.0}, sensitivity=False).model
+    corrected = identify(
+        viscosity_corrected(points, oil=OIL_VG46, reference_temperature=t_ref),
+        fixed={"alpha": 1.0},
+        sensitivity=False,
+    ).model
+    assert corrected.statistics["rmse"] < 0.5  # the 0.3 N noise
+    assert raw.statistics["rmse"] > 3 * corrected.statistics["rmse"]
+    assert_allclose(corrected.parameters["v_r"].value, 0.010, rtol=0.03)
+    assert_allclose(corrected.friction(0.02, 80e5), truth.friction(0.02, 80e5), rtol=0.01)
+    with pytest.raises(ValueError, match="no 'temperature \\[K\\]' column"):
+        viscosity_corrected(
+            points.drop(columns="temperature [K]"), oil=OIL_VG46, reference_temperature=t_ref
+        )
+    with pytest.raises(ValueError, match="outside 200-450 K"):
+        viscosity_corrected(points, oil=OIL_VG46, reference_temperature=40.0)
+    same = viscosity_corrected(points, oil=OIL_VG46, reference_temperature=t_ref, temperature=t_ref)
+    assert_allclose(same["velocity [m/s]"], points["velocity [m/s]"], rtol=1e-12)

@@ -19,7 +19,11 @@ fits carry:
   A campaign run in order of pressure confounds the between-run trend with pressure,
   which the model has partly absorbed; the within-run trend is free of that.
 
-No temperature or viscosity correction (Walther / ASTM D341) is implemented yet.
+Temperature, as an identification option: :func:`walther_viscosity` (ASTM D341 for mineral
+oils, from two points of the oil's data sheet) and :func:`viscosity_corrected`, which maps
+each point's speed to the speed with the same Hersey number (thesis eq. 2.8) at a reference
+temperature, so that runs made at different oil temperatures can be identified as one
+campaign at that temperature: ``identify(viscosity_corrected(points, oil=..., ...))``.
 """
 
 from __future__ import annotations
@@ -32,7 +36,15 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["drift", "load_fit", "run_order_trend", "RunOrderTrend", "figure_run_order"]
+__all__ = [
+    "drift",
+    "load_fit",
+    "run_order_trend",
+    "RunOrderTrend",
+    "figure_run_order",
+    "walther_viscosity",
+    "viscosity_corrected",
+]
 
 _ORDERS = ("run", "mtime")
 
@@ -385,3 +397,105 @@ def write_drift(table, out) -> Path:
     }
     atomic_write_text(out / "drift.json", json.dumps(summary, indent=1) + "\n")
     return path
+
+
+# ---------------------------------------------------------------------- temperature
+
+
+def walther_viscosity(temperature, oil):
+    """Kinematic viscosity [m^2/s] of a mineral oil by the Walther equation (ASTM D341).
+
+    ``log10(log10(nu + 0.7)) = A - B log10(T)`` with ``nu`` in mm^2/s (cSt) and ``T`` in K;
+    ``A`` and ``B`` from the two points of ``oil``. Valid for ``nu`` >= 2 mm^2/s (the
+    standard adds terms below) and for mineral oils; interpolate rather than extrapolate.
+
+    Parameters
+    ----------
+    temperature : float or array_like
+        Oil temperature [K].
+    oil : ((float, float), (float, float))
+        Two (temperature [K], kinematic viscosity [m^2/s]) points of the oil's data sheet,
+        e.g. ``((313.15, 46e-6), (373.15, 6.8e-6))`` for an ISO VG 46 oil of viscosity
+        index about 100 (46 and 6.8 mm^2/s at 40 and 100 degC).
+
+    Examples
+    --------
+    >>> oil = ((313.15, 46e-6), (373.15, 6.8e-6))
+    >>> round(walther_viscosity(313.15, oil) * 1e6, 6)    # [mm^2/s] at 40 degC
+    46.0
+    """
+    (t1, nu1), (t2, nu2) = oil
+    if not (t1 > 0 and t2 > 0 and t1 != t2 and nu1 > 0 and nu2 > 0):
+        raise ValueError(
+            f"oil = {oil!r}: expected two (temperature [K], viscosity [m^2/s]) points at "
+            "different positive temperatures"
+        )
+    if min(nu1, nu2) < 2e-6:
+        raise ValueError(
+            f"oil viscosities {nu1 * 1e6:g} and {nu2 * 1e6:g} mm^2/s: the Walther form of "
+            "ASTM D341 holds from 2 mm^2/s (viscosities are in m^2/s: 46 cSt = 46e-6)"
+        )
+    z1 = np.log10(np.log10(nu1 * 1e6 + 0.7))
+    z2 = np.log10(np.log10(nu2 * 1e6 + 0.7))
+    slope = (z1 - z2) / (np.log10(t2) - np.log10(t1))  # B
+    intercept = z1 + slope * np.log10(t1)  # A
+    t = np.asarray(temperature, dtype=float)
+    if np.any(~np.isfinite(t)) or np.any(t <= 0):
+        raise ValueError(f"temperature {temperature!r}: expected positive kelvin values")
+    nu = 10.0 ** (10.0 ** (intercept - slope * np.log10(t))) - 0.7  # [mm^2/s]
+    return nu * 1e-6 if np.ndim(nu) else float(nu) * 1e-6
+
+
+def viscosity_corrected(points, *, oil, reference_temperature, temperature=None):
+    """Points with their speeds mapped to a reference oil temperature (same Hersey number).
+
+    The lubrication regime of a seal, and so the Stribeck curve, depends on the Hersey
+    number ``|v| mu / (F_N / L)`` (thesis eq. 2.8). At the same pressure (same load per
+    length) a point measured at speed ``v`` with viscosity ``nu(T)`` behaves as a point at
+    ``v nu(T) / nu(T_ref)`` at the reference temperature. Kinematic viscosities are used
+    for the ratio (the density of a mineral oil changes by about 0.07 %/K, neglected).
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        A points table (``velocity [m/s]``; ``temperature [K]`` unless ``temperature`` is
+        given).
+    oil : pair of (temperature [K], viscosity [m^2/s])
+        See :func:`walther_viscosity`.
+    reference_temperature : float
+        Temperature the corrected campaign represents [K].
+    temperature : float, optional
+        One oil temperature for every point [K] (campaign metadata), instead of the
+        ``temperature [K]`` column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy with ``velocity [m/s]`` replaced by the equivalent speed, the measured one
+        in ``velocity measured [m/s]`` and ``temperature [K]`` filled in.
+    """
+    from .friction import hersey_number
+
+    table = points.copy()
+    if temperature is not None:
+        table["temperature [K]"] = float(temperature)
+    if "temperature [K]" not in table:
+        raise ValueError(
+            "points table: no 'temperature [K]' column and no temperature given; "
+            "expected the oil temperature of each point [K]"
+        )
+    t = table["temperature [K]"].to_numpy(dtype=float)
+    for name, values in (("temperature [K]", t), ("reference_temperature", reference_temperature)):
+        values = np.atleast_1d(np.asarray(values, dtype=float))
+        if np.any(~np.isfinite(values)) or np.any(values < 200) or np.any(values > 450):
+            raise ValueError(
+                f"{name}: values outside 200-450 K; temperatures are in kelvin (40 degC = 313.15 K)"
+            )
+    velocity = table["velocity [m/s]"].to_numpy(dtype=float)
+    nu = walther_viscosity(t, oil)
+    nu_ref = walther_viscosity(reference_temperature, oil)
+    # equal Hersey number (eq. 2.8) at equal load per length: |v_eq| nu_ref = |v| nu(T)
+    speed = hersey_number(velocity, nu, 1.0) / nu_ref
+    table["velocity measured [m/s]"] = velocity
+    table["velocity [m/s]"] = np.sign(velocity) * speed
+    return table
