@@ -109,9 +109,14 @@ def contact_ratio(
     return ratio, f"{text} = {ratio:.4g}"
 
 
-def _factor(name, ratio):
+def _scales(name) -> bool:
+    """Whether a coefficient is a force (or force per speed) that the rule scales."""
     parameter, _, coefficient = name.partition(".")
-    return ratio if parameter in _SCALED and coefficient != "rate" else 1.0
+    return parameter in _SCALED and coefficient != "rate"
+
+
+def _factor(name, ratio):
+    return ratio if _scales(name) else 1.0
 
 
 def scale_model(model, ratio, rule_stderr=RULE_RELATIVE_STDERR):
@@ -129,7 +134,8 @@ def scale_model(model, ratio, rule_stderr=RULE_RELATIVE_STDERR):
     -------
     FrictionModel
         Coefficients ``k x`` (forces), covariance ``k^2 C + r^2 x' x'^T`` over the fitted
-        coefficients and every scaled coefficient, standard errors from its diagonal, and
+        coefficients and every scaled coefficient (no rule term for ``k = 1``, the tested
+        size), standard errors from its diagonal, and
         the residual scatter and RMSE scaled by ``k``.
     """
     if not (math.isfinite(rule_stderr) and 0 <= rule_stderr < 1):
@@ -137,7 +143,7 @@ def scale_model(model, ratio, rule_stderr=RULE_RELATIVE_STDERR):
     values = {n: p.value for n, p in model.parameters.items() if p.value is not None}
     scaled = {n: v * _factor(n, ratio) for n, v in values.items()}
     names = list(model.covariance[0]) if model.covariance is not None else []
-    names += [n for n in scaled if _factor(n, ratio) != 1.0 and n not in names]
+    names += [n for n in scaled if _scales(n) and n not in names]
     index = {n: i for i, n in enumerate(names)}
     cov = np.zeros((len(names), len(names)))
     if model.covariance is not None:
@@ -145,8 +151,9 @@ def scale_model(model, ratio, rule_stderr=RULE_RELATIVE_STDERR):
         k = np.array([_factor(n, ratio) for n in old_names])
         idx = [index[n] for n in old_names]
         cov[np.ix_(idx, idx)] = old * np.outer(k, k)
-    x = np.array([scaled[n] if _factor(n, ratio) != 1.0 else 0.0 for n in names])
-    cov += rule_stderr**2 * np.outer(x, x)
+    if ratio != 1.0:  # the tested size itself needs no rule
+        x = np.array([scaled[n] if _scales(n) else 0.0 for n in names])
+        cov += rule_stderr**2 * np.outer(x, x)
 
     coefficients = model.coefficients(include_dynamic=False)
     stderr = model.stderr()
