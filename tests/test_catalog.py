@@ -273,6 +273,10 @@ def test_predict_scales_forces_and_adds_the_rule_uncertainty(db):
     # the rule's common factor alone gives a standard error of 10 % of the friction
     se = model.standard_error(0.02, 80e5)
     assert se > 0.10 * model.friction(0.02, 80e5)
+    # the tested size itself: same friction, same uncertainty (no rule term at k = 1)
+    same = FrictionModel.from_datasheet(db.predict("thesis", 0.040))
+    assert_allclose(same.friction(0.02, 80e5), source.friction(0.02, 80e5), rtol=1e-12)
+    assert_allclose(same.standard_error(0.02, 80e5), source.standard_error(0.02, 80e5), rtol=1e-6)
     with pytest.raises(ValueError, match="rule_stderr = 1.5"):
         db.predict("thesis", 0.080, rule_stderr=1.5)
 
