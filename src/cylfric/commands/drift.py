@@ -1,0 +1,119 @@
+"""``cylfric drift A [B]``: did the friction change between two fits, and along a campaign?"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..cli import BadInput, console, guarded
+
+
+def _trend(source, label, out, order, campaign):
+    from ..drift import figure_run_order, load_fit, run_order_trend
+
+    model, points, _ = load_fit(source)
+    if points is None:
+        return None
+    trend = run_order_trend(points, model, order=order, campaign=campaign)
+    console.print(f"[bold]{label}[/bold]: friction against run order ({len(trend.runs)} runs)")
+    console.print(trend.summary(), highlight=False, markup=False)
+    if out is not None:
+        import io
+
+        from ..io.writers import atomic_write_bytes, atomic_write_text
+
+        fig = figure_run_order(trend, title=f"{label}: friction against run order")
+        for fmt in ("png", "svg"):
+            buffer = io.BytesIO()
+            fig.savefig(buffer, format=fmt, dpi=110)
+            atomic_write_bytes(Path(out) / f"run_order_{label}.{fmt}", buffer.getvalue())
+        atomic_write_text(Path(out) / f"run_order_{label}.csv", trend.runs.to_csv(index=False))
+    return trend
+
+
+def register(app) -> None:
+    """Add ``cylfric drift`` to the app."""
+
+    @app.command("drift")
+    @guarded
+    def drift(
+        a: Path = typer.Argument(..., help="Earlier datasheet.json or fit output folder."),
+        b: Path = typer.Argument(None, help="Later datasheet.json or fit output folder."),
+        out: Path = typer.Option(None, "--out", "-o", help="Folder for CSV, JSON and figures."),
+        level: float = typer.Option(0.95, "--level", help="Confidence level of the marks [-]."),
+        order: str = typer.Option("run", "--order", help="Run order: run (manifest) or mtime."),
+        campaign: Path = typer.Option(
+            None, "--campaign", help="Raw-file folder of A (for --order mtime)."
+        ),
+    ):
+        """Change of friction between two fits (z-scores), and friction against run order."""
+        from rich.markup import escape
+        from rich.table import Table
+
+        from ..drift import drift as compute
+        from ..drift import write_drift
+
+        for path in (a, b):
+            if path is not None and not path.exists():
+                raise BadInput(f"{path}: not found; expected a datasheet.json or a fit folder")
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+        if b is None:
+            if _trend(a, a.stem if a.is_file() else a.name, out, order, campaign) is None:
+                raise BadInput(
+                    f"{a}: no points.csv beside the datasheet; the run-order trend needs a fit "
+                    "output folder (or give a second datasheet B to compare)"
+                )
+            return
+        if order != "run" or campaign is not None:
+            raise BadInput(
+                "--order and --campaign apply to one campaign (cylfric drift A --order mtime "
+                "--campaign RAW); with two fits the run-order trends use the run order"
+            )
+        table = compute(a, b, level=level)
+        from ..model.core import engineering_unit
+
+        params = table[table["kind"] == "parameter"]
+        view = Table(title=f"Change of the coefficients, {b.name} - {a.name}")
+        for column in ("coefficient", "unit", "a", "b", "change", "z", "sig."):
+            view.add_column(escape(column), justify="right", no_wrap=True)
+        for row in params.to_dict("records"):
+            unit, k = engineering_unit(row["quantity"])
+            view.add_row(
+                row["quantity"],
+                unit,
+                f"{row['a'] * k:.4g}",
+                f"{row['b'] * k:.4g}",
+                f"{row['change'] * k:+.3g}",
+                f"{row['z [-]']:+.2f}",
+                "yes" if row["significant"] else "no",
+            )
+        console.print(view)
+        friction = table[table["kind"] == "friction"]
+        view = Table(title="Change of the friction over the common validity range")
+        for column in ("p [bar]", "v [mm/s]", "a [N]", "b [N]", "change [N]", "z", "sig."):
+            view.add_column(escape(column), justify="right")
+        for row in friction.to_dict("records"):
+            view.add_row(
+                f"{row['pressure [Pa]'] / 1e5:.4g}",
+                f"{row['velocity [m/s]'] * 1e3:.3g}",
+                f"{row['a']:.2f}",
+                f"{row['b']:.2f}",
+                f"{row['change']:+.2f}",
+                f"{row['z [-]']:+.2f}",
+                "yes" if row["significant"] else "no",
+            )
+        console.print(view)
+        console.print(
+            f"{int(friction['significant'].sum())} of {len(friction)} operating points changed "
+            f"more than their uncertainty (|z| > {table.attrs['z_critical']:.2f}, "
+            f"{level:.0%} two-sided); largest |z| = {friction['z [-]'].abs().max():.2f}",
+            highlight=False,
+        )
+        if out is not None:
+            write_drift(table, out)
+        for source in (a, b):
+            _trend(source, source.stem if source.is_file() else source.name, out, "run", None)
+        if out is not None:
+            console.print(f"outputs in {out}", highlight=False)

@@ -1,0 +1,234 @@
+"""Drift between two fits of a cylinder, and friction against run order (warm-up)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from numpy.testing import assert_allclose
+
+from cylfric.drift import drift, figure_run_order, load_fit, run_order_trend, write_drift
+from cylfric.model import FrictionModel
+
+VALIDITY = {"pressure_min": 5e5, "pressure_max": 160e5, "velocity_min": 1e-3, "velocity_max": 0.1}
+NAMES = ["F_c.intercept", "F_c.slope", "F_s.intercept", "F_s.slope", "sigma_2.intercept"]
+
+
+def _model(shift=0.0, relative_se=0.01) -> FrictionModel:
+    """The thesis law (eq. 4.1-4.3) with F_c and F_s raised by ``shift`` [N] and a made-up
+    diagonal covariance of ``relative_se`` on five coefficients."""
+    model = FrictionModel()
+    coefficients = model.coefficients(include_dynamic=False)
+    coefficients["F_c"] = dict(coefficients["F_c"], intercept=70.2 + shift)
+    coefficients["F_s"] = dict(coefficients["F_s"], intercept=112.9 + shift)
+    model = model.replace(coefficients=coefficients)
+    values = {n: p.value for n, p in model.parameters.items() if p.value is not None}
+    cov = np.diag([(relative_se * values[n]) ** 2 for n in NAMES])
+    stderr = {
+        "F_c": {
+            "intercept": relative_se * values["F_c.intercept"],
+            "slope": relative_se * values["F_c.slope"],
+        },
+    }
+    return model.replace(
+        covariance=(NAMES, cov), stderr=stderr, statistics={"dof": 200}, validity=VALIDITY
+    )
+
+
+def test_same_datasheet_shows_no_change():
+    sheet = _model().to_datasheet()
+    table = drift(sheet, sheet)
+    assert not table["significant"].any()
+    assert_allclose(table["change"], 0.0, atol=0)
+    friction = table[table["kind"] == "friction"]
+    assert len(friction) == 25  # default 5 x 5 grid over the common validity range
+    assert friction["pressure [Pa]"].min() == 5e5 and friction["pressure [Pa]"].max() == 160e5
+    assert_allclose(friction["velocity [m/s]"].max(), 0.1)
+
+
+def test_a_shifted_model_is_significant():
+    # F_c.intercept + 5 N: se of the change = hypot(0.702, 0.752) = 1.03 N -> z = 4.9
+    table = drift(_model(), _model(shift=5.0))
+    row = table[table["quantity"] == "F_c.intercept"].iloc[0]
+    assert_allclose(row["change"], 5.0, rtol=1e-12)
+    assert_allclose(row["z [-]"], 5.0 / np.hypot(0.702, 0.752), rtol=1e-9)
+    assert row["significant"]
+    assert not table[table["quantity"] == "F_c.slope"]["significant"].any()
+    friction = table[table["kind"] == "friction"]
+    assert_allclose(friction["change"], 5.0, rtol=1e-9)  # F_c and F_s + 5 N: every point
+    assert friction["significant"].all()
+    # a 0.5 N shift hides inside the uncertainty
+    small = drift(_model(), _model(shift=0.5))
+    assert not small["significant"].any()
+
+
+def test_drift_refuses_disjoint_ranges_and_bad_level():
+    other = _model().replace(
+        validity={
+            "pressure_min": 170e5,
+            "pressure_max": 200e5,
+            "velocity_min": 1e-3,
+            "velocity_max": 0.1,
+        }
+    )
+    with pytest.raises(ValueError, match="validity ranges do not overlap"):
+        drift(_model(), other)
+    table = drift(_model(), other, pressures=[100e5], velocities=[0.01])
+    assert (table["kind"] == "friction").sum() == 1
+    with pytest.raises(ValueError, match="level = 1.5"):
+        drift(_model(), _model(), level=1.5)
+
+
+def test_write_drift_and_load_fit(tmp_path):
+    folder = tmp_path / "fit"
+    folder.mkdir()
+    (folder / "datasheet.json").write_text(json.dumps(_model().to_datasheet()))
+    model, points, label = load_fit(folder)
+    assert points is None and label == "fit"
+    table = drift(folder, _model(shift=5.0))
+    path = write_drift(table, tmp_path / "out")
+    assert pd.read_csv(path).shape[0] == len(table)
+    summary = json.loads((tmp_path / "out" / "drift.json").read_text())
+    assert summary["significant_points"] == summary["points"] == 25
+    with pytest.raises(ValueError, match="no datasheet"):
+        load_fit(tmp_path / "nowhere")
+
+
+def _warm_campaign(drop_per_run=-0.5, drop_per_stroke=0.0, runs=8, strokes=6, seed=0):
+    """A points table of a campaign whose friction falls by ``drop_per_run`` [N] each run
+    and ``drop_per_stroke`` each stroke, with 0.3 N noise, around the thesis law."""
+    rng = np.random.default_rng(seed)
+    truth = FrictionModel()
+    rows = []
+    for run in range(runs):
+        p, v = 20e5 + 15e5 * (run % 4), 0.01 * (1 + run % 3)
+        for stroke in range(strokes):
+            f = truth.friction(v, p) + drop_per_run * run + drop_per_stroke * stroke
+            rows.append(
+                {
+                    "run": run,
+                    "file": f"run_{run:03d}.txt",
+                    "stroke": stroke,
+                    "direction [-]": 1 if stroke % 2 else -1,
+                    "pressure [Pa]": p,
+                    "velocity [m/s]": v * (1 if stroke % 2 else -1),
+                    "friction [N]": f + rng.normal(0, 0.3),
+                    "window_start [s]": 2.0 * stroke,
+                    "flag": "ok",
+                }
+            )
+    return pd.DataFrame(rows), truth
+
+
+def test_run_order_trend_finds_warm_up():
+    points, truth = _warm_campaign(drop_per_run=-0.5, drop_per_stroke=-0.1)
+    trend = run_order_trend(points, truth)
+    # 8 run means of 6 points (noise 0.3/sqrt(6) N): slope -0.5 N/run within a few stderr
+    assert abs(trend.between_slope + 0.5) < 4 * trend.between_stderr
+    assert trend.between_stderr < 0.05
+    assert abs(trend.within_slope + 0.1) < 4 * trend.within_stderr
+    assert "between runs: -0.5" in trend.summary() or "between runs: -0.4" in trend.summary()
+    fig = figure_run_order(trend)
+    assert len(fig.axes) == 1
+
+
+def test_run_order_trend_without_drift_and_errors(tmp_path):
+    points, truth = _warm_campaign(drop_per_run=0.0)
+    trend = run_order_trend(points, truth)
+    assert abs(trend.between_slope) < 4 * trend.between_stderr
+    # flagged rows are left out
+    flagged = points.assign(flag=["excluded: outlier"] * 6 + ["ok"] * (len(points) - 6))
+    assert len(run_order_trend(flagged, truth).runs) == 7
+    with pytest.raises(ValueError, match="order = 'mtime' needs the campaign folder"):
+        run_order_trend(points, truth, order="mtime")
+    with pytest.raises(ValueError, match="run file not found"):
+        run_order_trend(points, truth, order="mtime", campaign=tmp_path)
+    with pytest.raises(ValueError, match="order = 'time': unknown"):
+        run_order_trend(points, truth, order="time")
+    with pytest.raises(ValueError, match=r"missing columns \['friction \[N\]'\]"):
+        run_order_trend(points.drop(columns="friction [N]"), truth)
+
+
+def test_run_order_by_modification_time(tmp_path):
+    import os
+
+    points, truth = _warm_campaign(drop_per_run=-0.5, runs=4)
+    for run in range(4):  # files written in reverse order: the trend reverses
+        path = tmp_path / f"run_{run:03d}.txt"
+        path.write_text("x")
+        os.utime(path, (1000 - run, 1000 - run))
+    by_time = run_order_trend(points, truth, order="mtime", campaign=tmp_path)
+    assert by_time.runs["file"].tolist() == [f"run_{r:03d}.txt" for r in (3, 2, 1, 0)]
+    assert by_time.between_slope > 0
+
+
+OIL_VG46 = ((313.15, 46e-6), (373.15, 6.8e-6))
+"""An ISO VG 46 mineral oil of viscosity index about 100: 46 and 6.8 mm^2/s at 40 and
+100 degC (typical data-sheet values, used here only as the two Walther points)."""
+
+
+def test_walther_viscosity_passes_its_two_points_and_falls_with_temperature():
+    from cylfric.drift import walther_viscosity
+
+    assert_allclose(walther_viscosity(313.15, OIL_VG46), 46e-6, rtol=1e-12)
+    assert_allclose(walther_viscosity(373.15, OIL_VG46), 6.8e-6, rtol=1e-12)
+    t = np.linspace(273.15, 393.15, 25)
+    nu = walther_viscosity(t, OIL_VG46)
+    assert np.all(np.diff(nu) < 0)
+    # ASTM D341 is a straight line in log log (nu + 0.7) against log T
+    z = np.log10(np.log10(nu * 1e6 + 0.7))
+    assert_allclose(np.diff(z) / np.diff(np.log10(t)), (z[1] - z[0]) / np.diff(np.log10(t))[0])
+    with pytest.raises(ValueError, match="holds from 2 mm\\^2/s"):
+        walther_viscosity(313.15, ((313.15, 46.0e-9), (373.15, 6.8e-9)))
+    with pytest.raises(ValueError, match="different positive temperatures"):
+        walther_viscosity(313.15, ((313.15, 46e-6), (313.15, 6.8e-6)))
+
+
+def test_viscosity_correction_lets_runs_at_two_temperatures_be_identified_as_one():
+    """Points at 30 and 50 degC of a seal whose Stribeck curve follows the Hersey number:
+    friction(v, T) = friction_ref(v nu(T) / nu(T_ref)). Identified raw, the two
+    temperatures disagree; mapped to 40 degC they give back the reference model."""
+    from cylfric.drift import viscosity_corrected, walther_viscosity
+    from cylfric.identify import identify
+
+    truth = FrictionModel()  # the thesis law (eq. 4.1-4.3) at the reference 40 degC
+    t_ref = 313.15
+    rng = np.random.default_rng(3)
+    rows = []
+    for run, temperature in enumerate((303.15, 323.15)):
+        ratio = walther_viscosity(temperature, OIL_VG46) / walther_viscosity(t_ref, OIL_VG46)
+        for p in (20e5, 80e5, 150e5):
+            for v in (0.001, 0.003, 0.006, 0.01, 0.02, 0.04, 0.08, 0.13):
+                f = truth.friction(v * ratio, p) + rng.normal(0, 0.3)
+                rows.append(
+                    {
+                        "run": run,
+                        "velocity [m/s]": v,
+                        "pressure [Pa]": p,
+                        "friction [N]": f,
+                        "friction_std [N]": 0.3,
+                        "flag": "ok",
+                        "temperature [K]": temperature,
+                    }
+                )
+    points = pd.DataFrame(rows)
+    raw = identify(points, fixed={"alpha": 1.0}, sensitivity=False).model
+    corrected = identify(
+        viscosity_corrected(points, oil=OIL_VG46, reference_temperature=t_ref),
+        fixed={"alpha": 1.0},
+        sensitivity=False,
+    ).model
+    assert corrected.statistics["rmse"] < 0.5  # the 0.3 N noise
+    assert raw.statistics["rmse"] > 3 * corrected.statistics["rmse"]
+    assert_allclose(corrected.parameters["v_r"].value, 0.010, rtol=0.03)
+    assert_allclose(corrected.friction(0.02, 80e5), truth.friction(0.02, 80e5), rtol=0.01)
+    with pytest.raises(ValueError, match="no 'temperature \\[K\\]' column"):
+        viscosity_corrected(
+            points.drop(columns="temperature [K]"), oil=OIL_VG46, reference_temperature=t_ref
+        )
+    with pytest.raises(ValueError, match="outside 200-450 K"):
+        viscosity_corrected(points, oil=OIL_VG46, reference_temperature=40.0)
+    same = viscosity_corrected(points, oil=OIL_VG46, reference_temperature=t_ref, temperature=t_ref)
+    assert_allclose(same["velocity [m/s]"], points["velocity [m/s]"], rtol=1e-12)
