@@ -140,6 +140,7 @@ def test_show_and_version(fitted):
     out, _ = fitted
     result = runner.invoke(app, ["show", str(out / "datasheet.json")])
     assert result.exit_code == 0 and "Table 4.1" in result.output
+    assert "[bar]" in result.output and "[N]" in result.output  # units are not rich markup
     result = runner.invoke(app, ["--version"])
     assert result.exit_code == 0 and result.output.startswith("cylfric ")
 

@@ -20,6 +20,7 @@ from pathlib import Path
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.markup import escape
 from rich.table import Table
 
 from . import __version__
@@ -169,7 +170,7 @@ def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
         name, sep, rest = line.partition(" = ")
         if not sep:
             name, _, rest = line.partition(": ")
-        table.add_row(name, rest)
+        table.add_row(escape(name), escape(rest))
     fit = sheet["fit"]
     if fit.get("rmse") is not None:
         table.add_row("RMSE", f"{fit['rmse']:.3f} N over {fit.get('n_points', '?')} points")
@@ -395,7 +396,7 @@ def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
             "RMSE [N]",
             "n",
         ):
-            table.add_column(col, justify="right")
+            table.add_column(escape(col), justify="right")  # "[bar]" is not rich markup
         for r in rows:
             vs = r.get("stribeck_velocity")
             table.add_row(
