@@ -462,6 +462,7 @@ def extract_campaign(
     skip_bad=False,
     progress=None,
     workers=None,
+    exclude=(),
     **options,
 ) -> Extraction:
     """Read every run of a campaign folder and extract its friction points.
@@ -471,11 +472,20 @@ def extract_campaign(
     ``skip_bad`` it is listed in ``Extraction.skipped`` with the reason and the rest goes on.
     ``progress`` is called with each file name; ``workers`` threads read files (default 1:
     the per-file Python work holds the GIL, so more threads do not help on small files).
-    Input files are never modified.
+    ``exclude`` names files of the campaign that are not constant-velocity runs (the
+    presliding and breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they
+    are not read here. Input files are never modified.
     """
     config = config or load_config(folder)
     options = extraction_options(config, options)
-    infos = discover_runs(folder, config)
+    excluded = set(exclude)
+    infos = [i for i in discover_runs(folder, config) if i.path.name not in excluded]
+    if not infos:
+        raise BenchFileError(
+            folder,
+            "no constant-velocity runs (only presliding/breakaway tests); the steady-state "
+            "fit needs constant-velocity runs",
+        )
     per_run, skipped, runs = [], [], []
     total = 0
 

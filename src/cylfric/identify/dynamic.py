@@ -51,6 +51,7 @@ __all__ = [
     "simulate_record",
     "fit_presliding",
     "breakaway_force",
+    "ramp_fit",
     "validate_breakaway",
     "identify_dynamic",
 ]
@@ -433,29 +434,46 @@ def breakaway_force(record_or_time, force=None, displacement=None, *, travel=BRE
     return float(np.polyval(line, t_cross))
 
 
+def ramp_fit(record: DynamicRecord, *, travel=BREAKAWAY_TRAVEL) -> tuple[float, float]:
+    """(rate [N/s], start time [s]) of the straight line fitted to a ramp test's force.
+
+    Fitted over the samples between 10 % of the force reached at breakaway (or of the peak
+    force) and breakaway itself, where the force is the machine's ramp.
+    """
+    beyond = np.nonzero(record.displacement >= travel)[0]
+    stop = int(beyond[0]) if beyond.size else record.time.size
+    force = record.force[:stop]
+    ramp = np.nonzero(force > 0.1 * np.max(force))[0] if stop > 2 else np.array([], int)
+    if ramp.size < 3:
+        raise DynamicDataError(f"{record.file}: no force ramp before breakaway")
+    rate, intercept = np.polyfit(record.time[ramp], force[ramp], 1)
+    if not rate > 0:
+        raise DynamicDataError(f"{record.file}: the force does not rise; expected a force ramp")
+    return float(rate), float(-intercept / rate)
+
+
 def validate_breakaway(
     model: FrictionModel, records, *, travel=BREAKAWAY_TRAVEL
 ) -> pd.DataFrame:
     """Breakaway forces of the ramp tests, measured and simulated with ``model``.
 
-    Each breakaway record's force drives the model (:func:`simulate_record`); both
-    displacements go through :func:`breakaway_force`. Columns: ``file``,
-    ``pressure [Pa]``, ``force_rate [N/s]`` (fitted slope of the ramp),
-    ``measured [N]``, ``simulated [N]``, ``error [N]``, ``relative_error [-]``.
+    Each breakaway record's ramp (:func:`ramp_fit`: the straight line the machine followed,
+    free of load-cell noise) drives the model (:func:`simulate_record`); both displacements
+    go through :func:`breakaway_force`. Columns: ``file``, ``pressure [Pa]``,
+    ``force_rate [N/s]`` (fitted), ``measured [N]``, ``simulated [N]``, ``error [N]``,
+    ``relative_error [-]``.
     """
+    from dataclasses import replace
+
     rows = []
     for record in records:
         if record.test != "breakaway":
             continue
         measured = breakaway_force(record, travel=travel)
-        simulated_x = simulate_record(model, record)
-        simulated = breakaway_force(record.time, record.force, simulated_x, travel=travel)
-        ramp = record.force > 0.1 * np.max(record.force)
-        rate = (
-            float(np.polyfit(record.time[ramp], record.force[ramp], 1)[0])
-            if ramp.sum() > 2
-            else record.force_rate
-        )
+        rate, start = ramp_fit(record, travel=travel)
+        ramp = rate * np.clip(record.time - start, 0.0, None)
+        simulated_x = simulate_record(model, replace(record, force=ramp))
+        simulated = breakaway_force(record.time, ramp, simulated_x, travel=travel)
         rows.append(
             {
                 "file": record.file,

@@ -42,7 +42,14 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
 
 
 def render_report(
-    sheet, ident, extraction, figures, *, title="cylfric friction report", excluded=None
+    sheet,
+    ident,
+    extraction,
+    figures,
+    *,
+    title="cylfric friction report",
+    excluded=None,
+    dynamic_section=None,
 ) -> str:
     """HTML text of the report: datasheet summary, figures, tables, data quality."""
     parts = [
@@ -112,6 +119,8 @@ def render_report(
             f"<p>Recommended fixed values (grid minimum): alpha = {rec['alpha']:.3g}, "
             f"v_r = {rec['v_r'] * 1e3:.3g} mm/s, RMSE {rec['rmse']:.3f} N.</p>"
         )
+    if dynamic_section:
+        parts.append(dynamic_section)
     parts.append("<h2>Data quality</h2>")
     if excluded is not None and len(excluded):
         parts.append(
@@ -179,11 +188,15 @@ def write_report(path, text: str):
     return atomic_write_text(path, text)
 
 
-def write_report_folder(out, sheet, ident, extraction, excluded=None, *, workers=2) -> dict:
+def write_report_folder(
+    out, sheet, ident, extraction, excluded=None, *, workers=2, dynamic=None
+) -> dict:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
     Returns {output name: path}. ``workers=2`` draws on two cores (see
-    :func:`~cylfric.report.figures.render_all`).
+    :func:`~cylfric.report.figures.render_all`). ``dynamic`` (a
+    :class:`~cylfric.identify.dynamic.DynamicIdentification`) adds the presliding and
+    breakaway figure and tables.
     """
     from pathlib import Path
 
@@ -193,7 +206,16 @@ def write_report_folder(out, sheet, ident, extraction, excluded=None, *, workers
     for stem, caption, png, svg in render_all(ident, offset, workers=workers):
         files[f"figure_{stem}"] = save_rendered(out / "figures", stem, png, svg)["png"]
         shown.append((stem, caption, png))
+    section = None
+    if dynamic is not None:
+        from .dynamic import dynamic_html, figure_dynamic
+        from .figures import render
+
+        png, svg = render(figure_dynamic(dynamic))
+        files["figure_dynamic"] = save_rendered(out / "figures", "dynamic", png, svg)["png"]
+        section = dynamic_html(dynamic, base64.b64encode(png).decode("ascii"), _table)
     files["report"] = write_report(
-        out / "report.html", render_report(sheet, ident, extraction, shown)
+        out / "report.html",
+        render_report(sheet, ident, extraction, shown, dynamic_section=section),
     )
     return files
