@@ -410,7 +410,9 @@ def generate(
     chosen = list(TESTS) if chosen == ["all"] else chosen
     unknown = [t for t in chosen if t not in TESTS]
     if unknown or not chosen:
-        raise BadInput(f"--tests {tests!r}: unknown test(s) {unknown}; valid: {', '.join(TESTS)}, all")
+        raise BadInput(
+            f"--tests {tests!r}: unknown test(s) {unknown}; valid: {', '.join(TESTS)}, all"
+        )
     kwargs = {"seed": seed, "decimal_comma": decimal_comma, "pressure_channel": pressure_channel}
     if pressures:
         kwargs["pressures_bar"] = tuple(p / 1e5 for p in _numbers(pressures, "pressure", "bar"))

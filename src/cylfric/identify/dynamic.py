@@ -452,9 +452,7 @@ def ramp_fit(record: DynamicRecord, *, travel=BREAKAWAY_TRAVEL) -> tuple[float, 
     return float(rate), float(-intercept / rate)
 
 
-def validate_breakaway(
-    model: FrictionModel, records, *, travel=BREAKAWAY_TRAVEL
-) -> pd.DataFrame:
+def validate_breakaway(model: FrictionModel, records, *, travel=BREAKAWAY_TRAVEL) -> pd.DataFrame:
     """Breakaway forces of the ramp tests, measured and simulated with ``model``.
 
     Each breakaway record's ramp (:func:`ramp_fit`: the straight line the machine followed,
@@ -598,7 +596,12 @@ def _pressure_law(pressure, value, stderr, name):
         if p.size >= 3
         else f"{p.size} pressure level(s): too few for a pressure law"
     )
-    return {"law": "constant", "intercept": mean, "stderr": {"intercept": se_mean}, "reason": reason}
+    return {
+        "law": "constant",
+        "intercept": mean,
+        "stderr": {"intercept": se_mean},
+        "reason": reason,
+    }
 
 
 def identify_dynamic(

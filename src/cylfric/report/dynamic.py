@@ -55,7 +55,9 @@ def figure_dynamic(dynamic) -> Figure:
             for level, color in zip(levels, level_colors, strict=True):
                 rows = table[table["pressure [Pa]"] == level].sort_values("force_rate [N/s]")
                 rate = rows["force_rate [N/s]"]
-                right.plot(rate, rows["measured [N]"], "o", color=color, label=f"{level / 1e5:.3g} bar")
+                right.plot(
+                    rate, rows["measured [N]"], "o", color=color, label=f"{level / 1e5:.3g} bar"
+                )
                 right.plot(rate, rows["simulated [N]"], "x--", color=color)
             right.set_xscale("log")
             right.legend(fontsize=7, title="o measured, x simulated", title_fontsize=7)
@@ -141,5 +143,6 @@ def _law_text(name, law):
     se = law["stderr"]
     text = f"{name}(p) = {law['intercept'] * scale:.4g} ± {se['intercept'] * scale:.2g} {unit}"
     if law["law"] == "linear":
-        text += f" + ({law['slope'] * scale * 1e5:.4g} ± {se['slope'] * scale * 1e5:.2g}) {unit}/bar * p"
+        slope, slope_se = law["slope"] * scale * 1e5, se["slope"] * scale * 1e5
+        text += f" + ({slope:.4g} ± {slope_se:.2g}) {unit}/bar * p"
     return f"{text}  [{law['reason']}]"
