@@ -124,3 +124,20 @@ def test_dynamic_settings_refuse_bad_values():
         DynamicTestSettings(presliding_frequencies=(2.0,), presliding_periods=(1, 2))
     with pytest.raises(ValueError, match=r"unknown tests \['creep'\]"):
         generate_campaign("unused", tests=("creep",))
+
+
+def test_breakaway_tests_alone_leave_the_sigmas_assumed_with_a_note(campaign, tmp_path):
+    # the campaign's constant-velocity runs plus its breakaway ramps, no presliding test
+    folder = tmp_path / "ramps"
+    folder.mkdir()
+    with open(campaign / "manifest.csv", newline="") as handle:
+        rows = [r for r in csv.DictReader(handle) if r["test"] != "presliding"]
+    for row in rows:
+        (folder / row["file"]).write_bytes((campaign / row["file"]).read_bytes())
+    lines = ["file,pressure_bar,velocity_mm_s,test,force_rate_N_s"]
+    lines += [",".join(row[k] for k in lines[0].split(",")) for row in rows]
+    (folder / "manifest.csv").write_text("\n".join(lines) + "\n")
+    result = fit_campaign(folder, tmp_path / "out", report=False)
+    assert result.datasheet["dynamic"]["sigma_0"]["status"] == "assumed"
+    assert any("9 breakaway test(s) but no presliding test" in n for n in result.datasheet["notes"])
+    assert result.excluded.empty

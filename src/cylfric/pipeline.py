@@ -281,8 +281,9 @@ def _fit(
         ident.notes.insert(0, quality.summary())
     dynamic = None
     if dynamic_runs:
-        dynamic = _identify_dynamic(dynamic_runs, config, ident.model)
-        ident = replace(ident, model=dynamic.model, notes=ident.notes + dynamic.notes)
+        dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model)
+        model = ident.model if dynamic is None else dynamic.model
+        ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
@@ -334,7 +335,11 @@ def _dynamic_runs(folder, config):
 
 
 def _identify_dynamic(infos, config, model):
-    """sigma_0 and sigma_1 from the presliding tests, validated on the breakaway ramps."""
+    """sigma_0 and sigma_1 from the presliding tests, validated on the breakaway ramps.
+
+    Returns (DynamicIdentification or None, notes): without a presliding test the
+    parameters stay assumed and a note says why.
+    """
     from .identify.dynamic import dynamic_record, identify_dynamic
 
     records = []
@@ -350,4 +355,10 @@ def _identify_dynamic(infos, config, model):
                 force_sign=config.load_cell_sign,
             )
         )
-    return identify_dynamic(records, model)
+    if not any(record.test == "presliding" for record in records):
+        return None, [
+            f"{len(records)} breakaway test(s) but no presliding test: sigma_0 and sigma_1 "
+            "stay assumed (they are identified from presliding tests)"
+        ]
+    dynamic = identify_dynamic(records, model)
+    return dynamic, list(dynamic.notes)
