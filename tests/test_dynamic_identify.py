@@ -190,3 +190,10 @@ def test_identify_without_presliding_records_is_refused():
     )
     with pytest.raises(DynamicDataError, match=r"no presliding record.*\['breakaway'\]"):
         identify_dynamic([record], FrictionModel())
+
+
+def test_measured_pressure_wins_over_the_nominal_one():
+    data = _data()
+    data["pressure [Pa]"] = np.full(400, 81e5)
+    record = dynamic_record(data, _metadata())  # nominal 50 bar in the metadata
+    assert_allclose(record.pressure, 81e5)

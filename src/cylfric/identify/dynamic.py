@@ -152,6 +152,8 @@ def clean_force(force, *, sigma=SPIKE_SIGMA):
     return out, int(spikes.size)
 
 
+_PRESSURE_COLUMNS = ("pressure [Pa]", "pressure_a [Pa]", "pressure_b [Pa]")
+
 _RATE = {"n/s": 1.0, "kn/s": 1e3, "": 1.0}
 
 
@@ -205,7 +207,9 @@ def dynamic_record(
     Parameters
     ----------
     data : mapping
-        SI arrays ``time [s]``, ``position [m]``, ``force [N]``.
+        SI arrays ``time [s]``, ``position [m]``, ``force [N]``; a measured pressure
+        (``pressure [Pa]``, or the mean of ``pressure_a [Pa]`` and ``pressure_b [Pa]``)
+        wins over the nominal one.
     metadata : dict
         ``path``/``file``, ``pressure`` [Pa], ``extra`` (manifest columns: ``test``,
         ``force_rate_n_s`` [N/s]) and ``header`` (``Test``, ``Moving mass``, ``Force rate``).
@@ -261,6 +265,9 @@ def dynamic_record(
     if not (np.all(np.isfinite(position)) and np.all(np.isfinite(force))):
         raise DynamicDataError(f"{where}: NaN or inf in the position or force column")
     pressure = float(metadata.get("pressure", math.nan))
+    measured = [np.asarray(data[c], dtype=float) for c in _PRESSURE_COLUMNS if c in data]
+    if measured:  # a measured pressure wins over the nominal one (as in the steady state)
+        pressure = float(np.median(np.mean(measured, axis=0)))
     if not (math.isfinite(pressure) and pressure >= 0):
         raise DynamicDataError(
             f"{where}: unknown pressure; give pressure_bar in manifest.csv or a "
