@@ -482,8 +482,8 @@ class DynamicTestSettings:
     sample_interval: float = 2.5e-4  # [s]
     hold: float = 0.05  # [s] at zero net force before the excitation
     presliding_fraction: float = 0.5  # [-] force amplitude / F_c(p)
-    presliding_frequencies: tuple = (2.0, 20.0, 60.0, 120.0)  # [Hz]
-    presliding_periods: tuple = (1, 6, 24, 24)  # [-] periods at each frequency
+    presliding_frequencies: tuple = (2.0, 20.0, 40.0, 60.0)  # [Hz]
+    presliding_periods: tuple = (1, 6, 16, 32)  # [-] periods at each frequency
     breakaway_rates: tuple = (50.0, 200.0, 1000.0)  # [N/s]
     breakaway_stop: float = 1.0e-3  # [m] travel at which the machine ends a ramp
 
