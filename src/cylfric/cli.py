@@ -19,8 +19,8 @@ from pathlib import Path
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from . import __version__
@@ -429,6 +429,12 @@ def generate(
     force: bool = typer.Option(
         False, "--force", help="Write into a folder that already holds files (overwriting)."
     ),
+    tests: str = typer.Option(
+        "constant-velocity",
+        "--tests",
+        help="Tests to write, comma-separated: constant-velocity, presliding, breakaway "
+        "(force-controlled, for sigma_0 and sigma_1), or all.",
+    ),
 ):
     """Virtual test bench: write a campaign of raw files and manifest.csv."""
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())) and not force:
@@ -436,8 +442,15 @@ def generate(
             f"{out_dir} is not empty; generate writes raw files and manifest.csv that would "
             "overwrite what is there: choose an empty folder or add --force"
         )
-    from .simulate.bench import BenchSettings, generate_campaign
+    from .simulate.bench import TESTS, BenchSettings, DynamicTestSettings, generate_campaign
 
+    chosen = [t.strip() for t in tests.split(",") if t.strip()]
+    chosen = list(TESTS) if chosen == ["all"] else chosen
+    unknown = [t for t in chosen if t not in TESTS]
+    if unknown or not chosen:
+        raise BadInput(
+            f"--tests {tests!r}: unknown test(s) {unknown}; valid: {', '.join(TESTS)}, all"
+        )
     kwargs = {"seed": seed, "decimal_comma": decimal_comma, "pressure_channel": pressure_channel}
     if pressures:
         kwargs["pressures_bar"] = tuple(p / 1e5 for p in _numbers(pressures, "pressure", "bar"))
@@ -448,10 +461,14 @@ def generate(
     if any(p < 0 for p in kwargs.get("pressures_bar", (0,))):
         raise BadInput("--pressures must be >= 0")
     settings = BenchSettings(**kwargs)
-    n = len(settings.pressures_bar) * len(settings.speeds_mm_s)
+    n = len(settings.pressures_bar) * len(settings.speeds_mm_s) * ("constant-velocity" in chosen)
+    rates = len(DynamicTestSettings().breakaway_rates)
+    n += len(settings.pressures_bar) * (("presliding" in chosen) + rates * ("breakaway" in chosen))
     with _progress() as progress:
         task = progress.add_task("virtual bench", total=n)
-        info = generate_campaign(out_dir, settings, progress=lambda _: progress.advance(task))
+        info = generate_campaign(
+            out_dir, settings, progress=lambda _: progress.advance(task), tests=chosen
+        )
     console.print(
         f"wrote {len(info['files'])} files and manifest.csv to {out_dir} "
         f"({info['steps']:.3g} simulated steps)"

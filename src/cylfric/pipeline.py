@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .io.campaign import load_config
+from .io.campaign import discover_runs, load_config, read_run
 from .io.writers import atomic_write_text
 from .quality import assess
 from .steady_state import extract_campaign
@@ -30,6 +30,8 @@ class FitOutputs:
 
     ``excluded`` lists the runs the data-quality gate left out (:mod:`cylfric.quality`).
     ``exports`` maps each export target to its :class:`~cylfric.export.ExportResult`.
+    ``dynamic`` is the :class:`~cylfric.identify.dynamic.DynamicIdentification` of the
+    campaign's presliding and breakaway tests (None without them).
     ``files`` maps each output to its path; ``timings`` holds the wall time of each stage
     [s]: ``extract``, ``identify`` (with the sensitivity study), ``datasheet`` (with the
     CSV tables) and, with the report, ``report`` (figures and report.html).
@@ -43,6 +45,7 @@ class FitOutputs:
     timings: dict = field(default_factory=dict)
     excluded: pd.DataFrame | None = None
     exports: dict = field(default_factory=dict)
+    dynamic: object = None
 
 
 def _csv(path, frame: pd.DataFrame):
@@ -81,7 +84,8 @@ def fit_campaign(
         Campaign folder of raw bench files (never modified).
     out : path-like
         Output folder: ``datasheet.json``, ``points.csv``, ``per_pressure.csv``,
-        ``sensitivity.csv``, ``law_comparison.csv``, ``skipped.csv`` (when files were
+        ``sensitivity.csv``, ``law_comparison.csv``, ``dynamic.csv`` and ``breakaway.csv``
+        (with presliding/breakaway tests), ``skipped.csv`` (when files were
         skipped), ``excluded.csv`` (when the data-quality gate left runs out), and with
         ``report`` the figures (PNG, SVG) and ``report.html``.
     fixed : dict, optional
@@ -284,12 +288,18 @@ def _fit(
 ):
     timings = {}
     t0 = time.perf_counter()
-    config = None
+    config = load_config(folder)
     if glob is not None:
-        config = replace(load_config(folder), glob=glob)
+        config = replace(config, glob=glob)
+    dynamic_runs = _dynamic_runs(folder, config)
     try:
         extraction = extract_campaign(
-            folder, config, skip_bad=skip_bad, progress=progress, meanwhile=_import_next_stages
+            folder,
+            config,
+            skip_bad=skip_bad,
+            progress=progress,
+            meanwhile=_import_next_stages,
+            exclude=[info.path.name for info in dynamic_runs],
         )
     finally:
         if after_extraction is not None:
@@ -314,10 +324,22 @@ def _fit(
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder)}") from None
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
+    dynamic = None
+    if dynamic_runs:
+        dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model)
+        model = ident.model if dynamic is None else dynamic.model
+        ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
+    if dynamic is not None:
+        from .model.serialize import clean
+
+        sheet["dynamic_fit"] = clean(dynamic.summary())
     files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
+    if dynamic is not None:
+        files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
+        files["breakaway"] = _csv(out / "breakaway.csv", dynamic.breakaway)
     files["points"] = _csv(out / "points.csv", extraction.points)
     files["per_pressure"] = _csv(out / "per_pressure.csv", ident.per_pressure)
     files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
@@ -350,12 +372,18 @@ def _fit(
         summaries = [_export_summary(out, result) for result in exports.values()]
         files.update(
             write_report_folder(
-                out, sheet, ident, extraction, quality.excluded, exports=summaries
+                out,
+                sheet,
+                ident,
+                extraction,
+                quality.excluded,
+                exports=summaries,
+                dynamic=dynamic,
             )
         )
         timings["report"] = time.perf_counter() - t0
     return FitOutputs(
-        out, sheet, ident, extraction, files, timings, quality.excluded, exports
+        out, sheet, ident, extraction, files, timings, quality.excluded, exports, dynamic
     )
 
 
@@ -379,3 +407,44 @@ def _export_summary(out: Path, result) -> dict:
             for report in result.loss
         ],
     }
+
+
+def _dynamic_runs(folder, config):
+    """Runs of the campaign that ``manifest.csv`` marks as presliding or breakaway tests."""
+    from .identify.dynamic import DYNAMIC_TESTS
+
+    return [
+        info
+        for info in discover_runs(folder, config)
+        if str(info.extra.get("test", "")).strip().lower() in DYNAMIC_TESTS
+    ]
+
+
+def _identify_dynamic(infos, config, model):
+    """sigma_0 and sigma_1 from the presliding tests, validated on the breakaway ramps.
+
+    Returns (DynamicIdentification or None, notes): without a presliding test the
+    parameters stay assumed and a note says why.
+    """
+    from .identify.dynamic import dynamic_record, identify_dynamic
+
+    records = []
+    for info in infos:
+        data, metadata = read_run(info, config)
+        metadata["path"] = str(info.path)
+        records.append(
+            dynamic_record(
+                data,
+                metadata,
+                mass=config.moving_mass or None,
+                position_sign=config.position_sign,
+                force_sign=config.load_cell_sign,
+            )
+        )
+    if not any(record.test == "presliding" for record in records):
+        return None, [
+            f"{len(records)} breakaway test(s) but no presliding test: sigma_0 and sigma_1 "
+            "stay assumed (they are identified from presliding tests)"
+        ]
+    dynamic = identify_dynamic(records, model)
+    return dynamic, list(dynamic.notes)

@@ -468,9 +468,7 @@ PARALLEL_MIN_FILES = 16
 
 def _can_fork() -> bool:
     return (
-        sys.platform.startswith("linux")
-        and hasattr(os, "fork")
-        and threading.active_count() == 1
+        sys.platform.startswith("linux") and hasattr(os, "fork") and threading.active_count() == 1
     )
 
 
@@ -568,6 +566,7 @@ def extract_campaign(
     progress=None,
     workers=None,
     meanwhile=None,
+    exclude=(),
     **options,
 ) -> Extraction:
     """Read every run of a campaign folder and extract its friction points.
@@ -582,11 +581,20 @@ def extract_campaign(
     that hold the GIL, so threads would not help); the result is the same either way, and
     files of a child that died are extracted here. ``meanwhile`` (a callable) runs in this
     process once the child has started, before it takes files (the pipeline imports the
-    identification there). Input files are never modified.
+    identification there). ``exclude`` names files of the campaign that are not
+    constant-velocity runs (the presliding and breakaway tests, identified by
+    :mod:`cylfric.identify.dynamic`); they are not read here. Input files are never modified.
     """
     config = config or load_config(folder)
     options = extraction_options(config, options)
-    infos = discover_runs(folder, config)
+    excluded = set(exclude)
+    infos = [i for i in discover_runs(folder, config) if i.path.name not in excluded]
+    if not infos:
+        raise BenchFileError(
+            folder,
+            "no constant-velocity runs (only presliding/breakaway tests); the steady-state "
+            "fit needs constant-velocity runs",
+        )
     per_run, skipped, runs = [], [], []
     total = 0
 

@@ -50,6 +50,7 @@ def render_report(
     title="cylfric friction report",
     excluded=None,
     exports=None,
+    dynamic_section=None,
 ) -> str:
     """HTML text of the report: datasheet summary, figures, tables, data quality."""
     parts = [
@@ -119,6 +120,8 @@ def render_report(
             f"<p>Recommended fixed values (grid minimum): alpha = {rec['alpha']:.3g}, "
             f"v_r = {rec['v_r'] * 1e3:.3g} mm/s, RMSE {rec['rmse']:.3f} N.</p>"
         )
+    if dynamic_section:
+        parts.append(dynamic_section)
     if exports:
         parts.append(_exports(exports))
     parts.append("<h2>Data quality</h2>")
@@ -209,13 +212,15 @@ def write_report(path, text: str):
 
 
 def write_report_folder(
-    out, sheet, ident, extraction, excluded=None, *, workers=2, exports=None
+    out, sheet, ident, extraction, excluded=None, *, workers=2, exports=None, dynamic=None
 ) -> dict:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
     Returns {output name: path}. ``workers=2`` draws on two cores (see
     :func:`~cylfric.report.figures.render_all`). ``exports``: plain summaries of the
-    simulator exports (target, folder, files, loss rows) for their section.
+    simulator exports (target, folder, files, loss rows) for their section. ``dynamic`` (a
+    :class:`~cylfric.identify.dynamic.DynamicIdentification`) adds the presliding and
+    breakaway figure and tables.
     """
     from pathlib import Path
 
@@ -225,8 +230,24 @@ def write_report_folder(
     for stem, caption, png, svg in render_all(ident, offset, workers=workers):
         files[f"figure_{stem}"] = save_rendered(out / "figures", stem, png, svg)["png"]
         shown.append((stem, caption, png))
+    section = None
+    if dynamic is not None:
+        from .dynamic import dynamic_html, figure_dynamic
+        from .figures import render
+
+        png, svg = render(figure_dynamic(dynamic))
+        files["figure_dynamic"] = save_rendered(out / "figures", "dynamic", png, svg)["png"]
+        section = dynamic_html(dynamic, base64.b64encode(png).decode("ascii"), _table)
     files["report"] = write_report(
         out / "report.html",
-        render_report(sheet, ident, extraction, shown, excluded=excluded, exports=exports),
+        render_report(
+            sheet,
+            ident,
+            extraction,
+            shown,
+            excluded=excluded,
+            exports=exports,
+            dynamic_section=section,
+        ),
     )
     return files

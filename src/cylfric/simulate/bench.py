@@ -35,6 +35,13 @@ __all__ = [
     "THESIS_PRESSURES_BAR",
     "THESIS_SPEEDS_MM_S",
     "run_file_name",
+    "TESTS",
+    "DYNAMIC_TESTS",
+    "DynamicTestSettings",
+    "DynamicRun",
+    "run_dynamic_test",
+    "generate_dynamic_tests",
+    "write_test_manifest",
 ]
 
 THESIS_PRESSURES_BAR = (0.1, 20.7, 38.0, 55.0, 69.0, 83.0, 103.0, 124.0, 141.0, 159.0)
@@ -341,11 +348,20 @@ def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int):
 
 
 def generate_campaign(
-    out_dir, settings: BenchSettings | None = None, *, progress=None, workers: int | None = None
+    out_dir,
+    settings: BenchSettings | None = None,
+    *,
+    progress=None,
+    workers: int | None = None,
+    tests=("constant-velocity",),
+    dynamic: DynamicTestSettings | None = None,
 ) -> dict:
     """Write a virtual campaign: one file per pressure x speed, plus ``manifest.csv``.
 
     Deterministic for a given ``settings.seed`` (each run draws from its own seeded stream).
+    With ``tests`` naming ``"presliding"`` or ``"breakaway"`` (see :data:`TESTS`), the
+    force-controlled tests of :func:`generate_dynamic_tests` are written too and
+    ``manifest.csv`` gains the columns ``test`` and ``force_rate_N_s``.
 
     Parameters
     ----------
@@ -357,15 +373,37 @@ def generate_campaign(
         Called with the file name after each file is written.
     workers : int, optional
         Threads (default: the number of cores, at most 2 on this project's machines).
+    tests : iterable of str
+        Which tests to write (:data:`TESTS`); default the constant-velocity runs only.
+    dynamic : DynamicTestSettings, optional
+        Design of the presliding and breakaway tests.
 
     Returns
     -------
     dict
-        ``files`` (paths), ``steps`` (simulated steps), ``samples`` and ``settings``.
+        ``files`` (paths), ``steps`` (simulated steps), ``samples``, ``settings`` and, with
+        dynamic tests, ``dynamic`` (their manifest rows with the simulated runs).
     """
     s = settings or BenchSettings()
+    tests = tuple(tests)
+    unknown = [t for t in tests if t not in TESTS]
+    if unknown or not tests:
+        raise ValueError(f"unknown tests {unknown or tests}; valid: {list(TESTS)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    dynamic_tests = tuple(t for t in tests if t in DYNAMIC_TESTS)
+    if "constant-velocity" not in tests:
+        rows = generate_dynamic_tests(
+            out, s, tests=dynamic_tests, dynamic=dynamic, progress=progress
+        )
+        write_test_manifest(out / "manifest.csv", rows)
+        return {
+            "files": [out / r["file"] for r in rows],
+            "steps": 0,
+            "samples": int(sum(r["run"].time.size for r in rows)),
+            "settings": s,
+            "dynamic": rows,
+        }
     slow = set(sorted(s.speeds_mm_s)[: s.slow_speed_count])
     jobs = [
         (i, p, v) for i, (p, v) in enumerate((p, v) for p in s.pressures_bar for v in s.speeds_mm_s)
@@ -384,18 +422,360 @@ def generate_campaign(
     workers = workers or min(2, os.cpu_count() or 1)
     with ThreadPoolExecutor(max_workers=workers) as pool:
         results = list(pool.map(one, jobs))
-    write_manifest(
-        out / "manifest.csv",
-        [(path.name, p, v) for (path, _, _), (_, p, v) in zip(results, jobs, strict=True)],
-    )
-    return {
+    rows = [(path.name, p, v) for (path, _, _), (_, p, v) in zip(results, jobs, strict=True)]
+    info = {
         "files": [r[0] for r in results],
         "steps": int(sum(r[1] for r in results)),
         "samples": int(sum(r[2] for r in results)),
         "settings": s,
     }
+    if not dynamic_tests:
+        write_manifest(out / "manifest.csv", rows)
+        return info
+    extra = generate_dynamic_tests(
+        out, s, tests=dynamic_tests, dynamic=dynamic, start_index=len(rows), progress=progress
+    )
+    constant = [
+        {"file": f, "pressure_bar": p, "velocity_mm_s": v, "test": "constant-velocity"}
+        for f, p, v in rows
+    ]
+    write_test_manifest(out / "manifest.csv", constant + extra)
+    info["files"] += [out / r["file"] for r in extra]
+    info["samples"] += int(sum(r["run"].time.size for r in extra))
+    info["dynamic"] = extra
+    return info
 
 
 def with_seed(settings: BenchSettings, seed: int) -> BenchSettings:
     """A copy of ``settings`` with another seed."""
     return replace(settings, seed=seed)
+
+
+# ---------------------------------------------------------------------- dynamic tests
+TESTS = ("constant-velocity", "presliding", "breakaway")
+"""Tests the virtual bench can write: the thesis' constant-velocity strokes, and the
+force-controlled presliding and breakaway tests that identify ``sigma_0`` and ``sigma_1``."""
+
+DYNAMIC_TESTS = ("presliding", "breakaway")
+"""Force-controlled tests, told apart from constant-velocity runs by the ``test`` column of
+``manifest.csv`` (and the ``Test:`` header line)."""
+
+
+@dataclass(frozen=True)
+class DynamicTestSettings:
+    """Force-controlled tests of the virtual bench (SI units).
+
+    The testing machine holds the rod at rest (load-cell reading = the weight offset) for
+    ``hold`` seconds, then adds a net force ``F(t)`` to it:
+
+    * presliding: sinusoids of amplitude ``presliding_fraction * F_c(p)`` (below breakaway)
+      at ``presliding_frequencies`` for ``presliding_periods`` periods each, one after the
+      other (a slow cycle traces the force-displacement hysteresis; the faster ones excite
+      the bristle damping through the moving mass);
+    * breakaway: ramps ``F = rate t`` at each of ``breakaway_rates`` [N/s]; the machine stops
+      the test once the rod has travelled ``breakaway_stop``.
+
+    Both record at ``sample_interval`` (a ramp too long for the 10,001-sample budget is
+    sampled coarser, in multiples of it).
+    """
+
+    sample_interval: float = 2.5e-4  # [s]
+    hold: float = 0.05  # [s] at zero net force before the excitation
+    presliding_fraction: float = 0.5  # [-] force amplitude / F_c(p)
+    presliding_frequencies: tuple = (2.0, 20.0, 40.0, 60.0)  # [Hz]
+    presliding_periods: tuple = (1, 6, 16, 32)  # [-] periods at each frequency
+    breakaway_rates: tuple = (50.0, 200.0, 1000.0)  # [N/s]
+    breakaway_stop: float = 1.0e-3  # [m] travel at which the machine ends a ramp
+
+    def __post_init__(self):
+        if len(self.presliding_frequencies) != len(self.presliding_periods):
+            raise ValueError(
+                "presliding_frequencies and presliding_periods need the same length; got "
+                f"{len(self.presliding_frequencies)} and {len(self.presliding_periods)}"
+            )
+        checks = {
+            "sample_interval [s]": self.sample_interval,
+            "hold [s]": self.hold,
+            "presliding_fraction [-]": self.presliding_fraction,
+            "breakaway_stop [m]": self.breakaway_stop,
+            **{f"presliding_frequencies [Hz] {f}": f for f in self.presliding_frequencies},
+            **{f"presliding_periods [-] {n}": n for n in self.presliding_periods},
+            **{f"breakaway_rates [N/s] {r}": r for r in self.breakaway_rates},
+        }
+        for name, value in checks.items():
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"dynamic test setting {name} = {value}; expected a number > 0")
+        if self.presliding_fraction >= 1:
+            raise ValueError(
+                f"presliding_fraction = {self.presliding_fraction}; expected < 1 (a presliding "
+                "test stays below the breakaway force)"
+            )
+
+
+@dataclass(frozen=True)
+class DynamicRun:
+    """One simulated force-controlled run with its ground truth.
+
+    ``time`` [s], ``position`` [m] (measured, with noise), ``force`` [N] (load-cell reading:
+    weight offset + net force + noise + spikes), ``applied`` [N] (true net force),
+    ``displacement`` [m] (true), ``friction`` [N] (true LuGre force), plus ``test``
+    (``"presliding"`` or ``"breakaway"``), ``pressure_nominal`` [Pa], ``force_rate`` [N/s]
+    (breakaway; NaN otherwise) and ``sample_interval`` [s].
+    """
+
+    time: np.ndarray
+    position: np.ndarray
+    force: np.ndarray
+    applied: np.ndarray
+    displacement: np.ndarray
+    friction: np.ndarray
+    pressure: np.ndarray
+    test: str
+    pressure_nominal: float
+    force_rate: float
+    sample_interval: float
+
+
+def presliding_force(time, amplitude, settings: DynamicTestSettings):
+    """Net force [N] of the presliding test at ``time`` [s] (zero during the hold)."""
+    time = np.asarray(time, dtype=float)
+    force = np.zeros_like(time)
+    start = settings.hold
+    for frequency, periods in zip(
+        settings.presliding_frequencies, settings.presliding_periods, strict=True
+    ):
+        stop = start + periods / frequency
+        inside = (time >= start) & (time < stop)
+        force[inside] = amplitude * np.sin(2 * np.pi * frequency * (time[inside] - start))
+        start = stop
+    return force
+
+
+def presliding_duration(settings: DynamicTestSettings) -> float:
+    """Length of a presliding record [s]: hold, the sinusoids, and a final hold."""
+    cycles = sum(
+        n / f
+        for f, n in zip(settings.presliding_frequencies, settings.presliding_periods, strict=True)
+    )
+    return 2 * settings.hold + cycles
+
+
+def run_dynamic_test(
+    test: str,
+    pressure_bar: float,
+    settings: BenchSettings | None = None,
+    *,
+    force_rate: float | None = None,
+    dynamic: DynamicTestSettings | None = None,
+    rng=None,
+) -> DynamicRun:
+    """Simulate one force-controlled test of the virtual bench.
+
+    Uses the public :func:`cylfric.simulate.simulate` with an
+    :class:`~cylfric.simulate.AppliedForce` drive, the bench's friction model (its
+    ``sigma_0`` [N/m] and ``sigma_1`` [N*s/m] are the ground truth) and moving mass.
+
+    Parameters
+    ----------
+    test : {"presliding", "breakaway"}
+        Which test.
+    pressure_bar : float
+        Chamber pressure, both chambers [bar].
+    settings : BenchSettings, optional
+        Bench (friction model, cylinder, noise, weight offset).
+    force_rate : float, optional
+        Ramp rate of a breakaway test [N/s].
+    dynamic : DynamicTestSettings, optional
+        Test design.
+    rng : numpy.random.Generator, optional
+        Noise stream (default: seeded by ``settings.seed``).
+    """
+    from .plant import AppliedForce, Cylinder, simulate
+
+    s = settings or BenchSettings()
+    d = dynamic or DynamicTestSettings()
+    rng = rng if rng is not None else np.random.default_rng(s.seed)
+    if test not in DYNAMIC_TESTS:
+        raise ValueError(f"unknown dynamic test {test!r}; valid: {list(DYNAMIC_TESTS)}")
+    if not (math.isfinite(pressure_bar) and pressure_bar >= 0):
+        raise ValueError(f"pressure = {pressure_bar} bar; expected a finite pressure >= 0 bar")
+    pressure = pressure_bar * 1e5
+    params = s.friction.params_at(s.friction.operating_pressure(pressure))
+    interval = d.sample_interval
+    if test == "presliding":
+        amplitude = d.presliding_fraction * float(params["F_c"])
+        duration = presliding_duration(d)
+
+        def applied(t):
+            return presliding_force(t, amplitude, d)
+
+        rate = math.nan
+    else:
+        if force_rate is None or not (math.isfinite(force_rate) and force_rate > 0):
+            raise ValueError(f"force_rate = {force_rate} N/s; expected a rate > 0 N/s")
+        rate = float(force_rate)
+        ramp = 1.5 * max(float(params["F_s"]), float(params["F_c"])) / rate
+        duration = d.hold + ramp
+        steps = math.ceil(duration / ((MAX_SAMPLES - 1) * interval))
+        interval = interval * max(1, steps)
+
+        def applied(t):
+            return rate * np.clip(np.asarray(t) - d.hold, 0.0, None)
+
+    n = int(round(duration / interval)) + 1
+    duration = (n - 1) * interval
+    mass_cylinder = Cylinder(s.cylinder.mass)  # both chambers at one pressure: no net force
+    result = simulate(
+        mass_cylinder,
+        s.friction,
+        AppliedForce(applied),
+        duration,
+        dt=interval,
+        pressure_a=pressure,
+    )
+    time = result.time
+    displacement = result.states["position"]
+    friction = result.outputs["friction_force"]
+    net = applied(time)
+    if test == "breakaway":
+        beyond = np.nonzero(displacement > d.breakaway_stop)[0]
+        if beyond.size:
+            keep = beyond[0] + 1
+            time, displacement, friction, net = (
+                a[:keep] for a in (time, displacement, friction, net)
+            )
+    n = time.size
+    force = s.weight_offset + net + rng.normal(0.0, s.force_noise, n)
+    spikes = rng.random(n) < s.spike_probability
+    force[spikes] += rng.choice([-1.0, 1.0], spikes.sum()) * s.spike_amplitude
+    position = s.cylinder.stroke / 2 + displacement + rng.normal(0.0, s.position_noise, n)
+    return DynamicRun(
+        time=time,
+        position=position,
+        force=force,
+        applied=net,
+        displacement=displacement,
+        friction=friction,
+        pressure=pressure + rng.normal(0.0, s.pressure_noise, n),
+        test=test,
+        pressure_nominal=pressure,
+        force_rate=rate,
+        sample_interval=interval,
+    )
+
+
+def dynamic_file_name(index: int, test: str, pressure_bar: float, force_rate=None) -> str:
+    """``dyn_004_p55bar_breakaway_r200Ns.txt``: the test kind and pressure in the name."""
+    rate = "" if force_rate is None or math.isnan(force_rate) else f"_r{force_rate:g}Ns"
+    return f"dyn_{index:03d}_p{pressure_bar:g}bar_{test}{rate}.txt"
+
+
+def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int):
+    scale = _FORCE_SCALE[s.force_unit]
+    units = {"Time": "s", "Axial Displacement": "mm", "Axial Force": s.force_unit}
+    decimals = {
+        "Time": 6,
+        "Axial Displacement": 5,
+        "Axial Force": 5 if s.force_unit == "kN" else 2,
+    }
+    columns = {
+        "Time": run.time,
+        "Axial Displacement": run.position * 1e3,
+        "Axial Force": run.force * scale,
+    }
+    if s.pressure_channel:
+        units["Pressure"] = "bar"
+        decimals["Pressure"] = 2
+        columns["Pressure"] = run.pressure / 1e5
+    header = {
+        "Station Name": "858 Mini Bionix (virtual)",
+        "Test File Name": f"{run.test}_{index:03d}.tst",
+        "Test Run Name": path.stem,
+        "Test": run.test,
+        "Pressure": f"{run.pressure_nominal / 1e5:g} bar",
+        "Moving mass": f"{s.cylinder.mass:g} kg",
+        "Sample interval": f"{run.sample_interval * 1e3:g} ms",
+    }
+    if run.test == "breakaway":
+        header["Force rate"] = f"{run.force_rate:g} N/s"
+    write_mts_text(
+        path,
+        [columns],
+        header=header,
+        units=units,
+        decimals=decimals,
+        decimal_comma=s.decimal_comma,
+        newline="\r\n" if s.crlf else "\n",
+    )
+
+
+def generate_dynamic_tests(
+    out_dir,
+    settings: BenchSettings | None = None,
+    *,
+    tests=DYNAMIC_TESTS,
+    dynamic: DynamicTestSettings | None = None,
+    start_index: int = 0,
+    progress=None,
+) -> list[dict]:
+    """Write presliding and breakaway runs at each pressure of ``settings``.
+
+    Returns the manifest rows: ``file``, ``pressure_bar``, ``test``, ``force_rate_N_s``
+    (empty for presliding) and the simulated ``run`` (:class:`DynamicRun`). The noise
+    streams are seeded from ``settings.seed`` (deterministic).
+    """
+    s = settings or BenchSettings()
+    d = dynamic or DynamicTestSettings()
+    unknown = set(tests) - set(DYNAMIC_TESTS)
+    if unknown:
+        raise ValueError(f"unknown dynamic tests {sorted(unknown)}; valid: {list(DYNAMIC_TESTS)}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    jobs = []
+    for p in s.pressures_bar:
+        if "presliding" in tests:
+            jobs.append(("presliding", p, None))
+        if "breakaway" in tests:
+            jobs.extend(("breakaway", p, r) for r in d.breakaway_rates)
+    seeds = np.random.SeedSequence([s.seed, 14]).spawn(len(jobs))
+    rows = []
+    for k, (test, p, rate) in enumerate(jobs):
+        index = start_index + k
+        run = run_dynamic_test(
+            test, p, s, force_rate=rate, dynamic=d, rng=np.random.default_rng(seeds[k])
+        )
+        path = out / dynamic_file_name(index, test, p, rate)
+        _write_dynamic_run(path, run, s, index)
+        rows.append(
+            {"file": path.name, "pressure_bar": p, "test": test, "force_rate": rate, "run": run}
+        )
+        if progress is not None:
+            progress(path.name)
+    return rows
+
+
+def write_test_manifest(path, rows) -> Path:
+    """``manifest.csv`` with the test kind: ``file,pressure_bar,velocity_mm_s,test,force_rate_N_s``.
+
+    ``rows`` are dicts with ``file``, ``pressure_bar`` [bar], and ``velocity_mm_s`` [mm/s]
+    (constant-velocity runs) or ``force_rate`` [N/s] (breakaway runs); ``test`` names the
+    kind. Readers that know only the first three columns keep the others as extra metadata.
+    """
+    from ..io.writers import atomic_write_text
+
+    lines = ["file,pressure_bar,velocity_mm_s,test,force_rate_N_s"]
+    for row in rows:
+        velocity = row.get("velocity_mm_s")
+        rate = row.get("force_rate")
+        lines.append(
+            ",".join(
+                (
+                    row["file"],
+                    f"{row['pressure_bar']:g}",
+                    "" if velocity is None else f"{velocity:g}",
+                    row["test"],
+                    "" if rate is None or math.isnan(rate) else f"{rate:g}",
+                )
+            )
+        )
+    return atomic_write_text(path, "\n".join(lines) + "\n")
