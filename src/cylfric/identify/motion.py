@@ -413,7 +413,13 @@ def fit_motion(record, config=None, *, per_direction=False):
     )
     if record.pressure_a is None and record.pressure_b is None:
         return fit
-    refinement = refine_pressure_model(fit, config)
+    refinement = refine_pressure_model(
+        fit,
+        config,
+        velocity=velocity,
+        pressure_a=record.pressure_a,
+        pressure_b=record.pressure_b,
+    )
     return replace(fit, refinement=refinement)
 
 
@@ -432,16 +438,19 @@ def _least_squares(W, F, file, names):
     return theta, covariance, residual
 
 
-def refine_pressure_model(fit: MotionFit, config) -> PressureRefinement:
+def refine_pressure_model(
+    fit: MotionFit, config, *, velocity=None, pressure_a=None, pressure_b=None
+) -> PressureRefinement:
     """Refine the friction of an IDIM fit to a pressure-dependent steady-state model.
 
     Nonlinear least squares (``scipy.optimize.least_squares``) of ``force = mass *
     acceleration + offset + model.friction(velocity, p)`` on the decimated regression
     samples of ``fit``, with ``p`` the operating pressure of the chamber pressures
-    (``config.reference``). ``F_c``, ``F_s`` and ``sigma_2`` follow linear pressure laws
-    (constants when the pressures spread less than 1 bar), ``v_r`` is fitted, ``alpha`` is held
-    at ``config.alpha``. The model is refused (``model`` None, with a note) when a friction
-    level turns negative over the recorded pressure range.
+    (``config.reference``). ``F_c``, ``F_s - F_c`` and ``sigma_2`` follow linear pressure laws
+    fitted through their values at the lowest and highest recorded pressure, each bounded at
+    zero, so the model is physical over the recorded range (as :mod:`.linear_fit` does);
+    constants when the pressures spread less than 1 bar. ``v_r`` is fitted, ``alpha`` held
+    at ``config.alpha``.
 
     Parameters
     ----------
@@ -449,182 +458,202 @@ def refine_pressure_model(fit: MotionFit, config) -> PressureRefinement:
         An IDIM fit of a record with pressures (its ``signals`` hold them).
     config : MotionConfig
         ``friction_law`` (``"stribeck"`` or ``"coulomb_viscous"``), ``reference``,
-        ``alpha`` [-], ``v_r`` (starting value) [m/s].
+        ``alpha`` [-], ``v_r`` (starting value) [m/s], ``min_speed`` [m/s] (slower samples
+        are left out).
+    velocity, pressure_a, pressure_b : ndarray, optional
+        The record's full-rate velocity [m/s] and chamber pressures [Pa]. With them the
+        friction is evaluated at full rate and decimated like the regression columns (the
+        published IDIM procedure decimates every column; decimating after the nonlinear law
+        keeps the reversals consistent); without them it is evaluated on the decimated
+        samples.
 
     Returns
     -------
     PressureRefinement
+        The model carries its covariance, statistics and validity range.
     """
+    from scipy import signal
     from scipy.optimize import least_squares
 
     from ..friction import operating_pressure
 
     sig = fit.signals
-    pa = sig.get("pressure_a [Pa]")
-    pb = sig.get("pressure_b [Pa]")
+    full = velocity is not None
+    if full:
+        pa, pb = pressure_a, pressure_b
+        r, border = fit.settings["decimation"], fit.settings["border"]
+        trim = math.ceil(border / r)
+
+        def reduce(values):  # as the regression columns: decimate, drop the border
+            values = signal.decimate(values, r) if r > 1 else values
+            return values[trim : values.size - trim]
+    else:
+        pa, pb = sig.get("pressure_a [Pa]"), sig.get("pressure_b [Pa]")
+
+        def reduce(values):
+            return values
+
     if pa is None:
         pa, pb = pb, None
-    pressure = np.asarray(
-        operating_pressure(pa, pb, reference=config.reference if pb is not None else "a"),
-        dtype=float,
-    )
+    reference = config.reference if pb is not None else "a"
+    pressure = np.asarray(operating_pressure(pa, pb, reference=reference), dtype=float)
+    v_eval = velocity if full else sig["velocity [m/s]"]
     v, acc, F = sig["velocity [m/s]"], sig["acceleration [m/s^2]"], sig["force [N]"]
-    p_min, p_max = float(pressure.min()), float(pressure.max())
+    ones = reduce(np.ones_like(v_eval))
     notes = []
-    sloped = p_max - p_min >= MIN_PRESSURE_SPREAD
+    # the steady-state law does not hold while the axis sticks (presliding): leave out the
+    # samples slower than min_speed
+    moving = np.abs(v) >= config.min_speed
+    if moving.sum() < 20:
+        raise ValueError(
+            f"only {int(moving.sum())} regression samples move faster than refinement.min_speed"
+            f" = {config.min_speed * 1e3:g} mm/s; too few for the pressure refinement"
+        )
+    if not moving.all():
+        notes.append(
+            f"{int((~moving).sum())} of {moving.size} samples slower than "
+            f"{config.min_speed * 1e3:g} mm/s left out (the steady-state law does not hold "
+            "while the axis sticks)"
+        )
+    acc, F, ones = acc[moving], F[moving], ones[moving]
+    v_sel = v[moving]
+    p_sel = reduce(pressure)[moving]
+    p_lo, p_hi = float(p_sel.min()), float(p_sel.max())
+    if reference != config.reference:
+        notes.append(
+            f"only one chamber pressure recorded: the laws see it (not {config.reference})"
+        )
+    sloped = p_hi - p_lo >= MIN_PRESSURE_SPREAD
     if not sloped:
         notes.append(
-            f"pressures spread {(p_max - p_min) / 1e5:.3g} bar (< 1 bar): constant friction "
+            f"pressures spread {(p_hi - p_lo) / 1e5:.3g} bar (< 1 bar): constant friction "
             "parameters, no pressure law"
         )
-    p_scale = max(abs(p_max), 1.0)
     stribeck = config.friction_law == "stribeck"
-    friction_keys = ["F_c", "dF_s", "sigma_2"] if stribeck else ["F_c", "sigma_2"]
-    # parameter vector: mass, offset, per friction key intercept (and slope * p_scale), v_r
-    labels = ["mass", "offset"]
-    for key in friction_keys:
-        labels.append(f"{key}.intercept")
-        if sloped:
-            labels.append(f"{key}.slope")
-    if stribeck:
-        labels.append("v_r")
-    start = {
-        "mass": fit.parameters["mass"],
-        "offset": fit.parameters["offset"],
-        "F_c.intercept": max(_mean_of(fit, "F_c"), 1e-3),
-        "dF_s.intercept": 0.2 * max(_mean_of(fit, "F_c"), 1e-3),
-        "sigma_2.intercept": max(_mean_of(fit, "F_v"), 0.0),
-        "v_r": config.v_r,
-    }
-    x0 = np.array([start.get(label, 0.0) for label in labels])
+    keys = ("F_c", "dF_s", "sigma_2") if stribeck else ("F_c", "sigma_2")
+    ends = ("lo", "hi") if sloped else ("lo",)
+    labels = ["mass", "offset"] + [f"{k}@{e}" for k in keys for e in ends]
+    labels += ["v_r"] if stribeck else []
+    # starting values: the IDIM with pressure-proportional Coulomb and viscous terms, a
+    # linear least-squares problem (columns a, 1, sign(v), p sign(v), v, p v)
+    sign = np.sign(v_eval)
+    if sloped:
+        columns = [sign, pressure * sign, v_eval, pressure * v_eval]
+    else:
+        columns = [sign, v_eval]
+    W = np.column_stack([acc, ones] + [reduce(c)[moving] for c in columns])
+    theta0 = np.linalg.lstsq(W, F, rcond=None)[0]
+    if sloped:
+        level = {e: theta0[2] + theta0[3] * p for e, p in (("lo", p_lo), ("hi", p_hi))}
+        viscous = {e: theta0[4] + theta0[5] * p for e, p in (("lo", p_lo), ("hi", p_hi))}
+    else:
+        level, viscous = {"lo": theta0[2]}, {"lo": theta0[3]}
+    start = {"mass": theta0[0], "offset": theta0[1], "v_r": config.v_r}
+    for end in ends:
+        # a Stribeck hump starts at 20 % of the level: the level seen by the IDIM is the
+        # Coulomb level plus part of the hump
+        start[f"F_c@{end}"] = level[end] / (1.1 if stribeck else 1.0)
+        start[f"dF_s@{end}"] = 0.2 * level[end] / 1.1
+        start[f"sigma_2@{end}"] = viscous[end]
+    x0 = np.array([start[lab] for lab in labels])
     lower = np.array(
         [
-            1e-9
-            if lab == "mass"
-            else PARAMETER_BOUNDS["v_r"][0]
-            if lab == "v_r"
-            else 0.0
-            if lab.endswith("intercept")
-            else -np.inf
-            for lab in labels
+            1e-9 if lab == "mass" else -np.inf if lab == "offset" else 0.0
+            for lab in labels[:-1] + ([] if stribeck else labels[-1:])
         ]
+        + ([PARAMETER_BOUNDS["v_r"][0]] if stribeck else [])
     )
     upper = np.array([PARAMETER_BOUNDS["v_r"][1] if lab == "v_r" else np.inf for lab in labels])
-    x0 = np.clip(x0, lower + 1e-12 * np.abs(lower), upper)
-
-    def coefficients(x):
-        values = dict(zip(labels, x, strict=True))
-
-        def law(key):
-            if not sloped:
-                return {"intercept": values[f"{key}.intercept"]}
-            return {
-                "intercept": values[f"{key}.intercept"],
-                "slope": values[f"{key}.slope"] / p_scale,
-            }
-
-        coeffs = {"F_c": law("F_c"), "sigma_2": law("sigma_2")}
-        if stribeck:
-            dfs = law("dF_s")
-            coeffs["F_s"] = {k: coeffs["F_c"][k] + dfs[k] for k in dfs}
-            coeffs["v_r"] = values["v_r"]
-            coeffs["alpha"] = config.alpha
-        else:
-            coeffs.update(F_s=None, v_r=None, alpha=None)
-        return values, coeffs
-
-    pressure_law = "linear" if sloped else "constant"
+    x0 = np.clip(x0, lower, upper)
+    # fit vector -> model coefficients: a linear map (F_s = F_c + dF_s; the two end values
+    # -> intercept and slope), used for the coefficients and for the covariance
+    names, T = _model_transform(labels, p_lo, p_hi, stribeck, sloped)
 
     def build(x, **extra):
-        values, coeffs = coefficients(x)
-        if not sloped:
-            coeffs = {k: (c["intercept"] if isinstance(c, dict) else c) for k, c in coeffs.items()}
-        model = FrictionModel(
+        theta = T @ x
+        coeffs = {}
+        for key in ("F_c", "F_s", "sigma_2"):
+            if sloped and f"{key}.intercept" in names:
+                coeffs[key] = {
+                    "intercept": theta[names.index(f"{key}.intercept")],
+                    "slope": theta[names.index(f"{key}.slope")],
+                }
+            elif key in names:
+                coeffs[key] = theta[names.index(key)]
+        if stribeck:
+            coeffs.update(v_r=theta[names.index("v_r")], alpha=config.alpha)
+        else:
+            coeffs.update(F_s=None, v_r=None, alpha=None)
+        return FrictionModel(
             coeffs,
-            pressure_law=pressure_law,
+            pressure_law="linear" if sloped else "constant",
             friction_law=config.friction_law,
             reference=config.reference,
             **extra,
         )
-        return values, model
 
     def residual(x):
-        values, model = build(x)
-        return values["mass"] * acc + values["offset"] + model.friction(v, pressure) - F
+        friction = reduce(build(x).friction(v_eval, pressure))[moving]
+        return x[0] * acc + x[1] * ones + friction - F
 
     result = least_squares(residual, x0, bounds=(lower, upper), x_scale="jac", method="trf")
     res = result.fun
     dof = max(res.size - len(labels), 1)
-    jac = result.jac
     try:
-        cov_x = float(res @ res) / dof * np.linalg.inv(jac.T @ jac)
+        cov_x = float(res @ res) / dof * np.linalg.inv(result.jac.T @ result.jac)
     except np.linalg.LinAlgError:
         cov_x = np.full((len(labels), len(labels)), np.nan)
-    # from the fit vector to model coefficients: F_s = F_c + dF_s, slopes / p_scale
-    model_names, T = _model_transform(labels, p_scale, stribeck, sloped)
     cov_model = T @ cov_x @ T.T
-    values, coeffs = coefficients(result.x)
-    err = dict(zip(model_names, np.sqrt(np.clip(np.diag(cov_model), 0, None)), strict=True))
+    err = dict(zip(names, np.sqrt(np.clip(np.diag(cov_model), 0, None)), strict=True))
     stderr = {}
     for key in ("F_c", "F_s", "sigma_2"):
-        spec = coeffs.get(key)
-        if spec is None:
-            continue
-        if sloped:
-            stderr[key] = {c: float(err.get(f"{key}.{c}", np.nan)) for c in spec}
-        else:
-            stderr[key] = float(err.get(key, np.nan))
+        if sloped and f"{key}.intercept" in names:
+            stderr[key] = {c: float(err[f"{key}.{c}"]) for c in ("intercept", "slope")}
+        elif key in names:
+            stderr[key] = float(err[key])
     if stribeck:
         stderr["v_r"] = float(err["v_r"])
+    for label, value, low in zip(labels, result.x, lower, strict=True):
+        if label not in ("mass", "offset") and value <= low + 1e-9 * max(1.0, abs(low)):
+            key, _, end = label.partition("@")
+            at = {"lo": p_lo, "hi": p_hi}.get(end, p_lo)
+            notes.append(
+                f"{'F_s - F_c' if key == 'dF_s' else key} is at its bound "
+                f"({low:g}) at {at / 1e5:.4g} bar: the record does not resolve it"
+            )
     rmse = float(np.sqrt(np.mean(res**2)))
-    mass_err, offset_err = (float(math.sqrt(max(cov_x[i, i], 0.0))) for i in (0, 1))
-    relative = float(np.linalg.norm(res) / np.linalg.norm(F))
-    # physical over the recorded pressures?
-    _, probe = build(result.x)
-    for p in (p_min, p_max):
-        params = probe.params_at(p)
-        for key in ("F_c", "F_s", "sigma_2"):
-            if params[key] < -1e-9 * max(1.0, abs(params["F_c"])):
-                notes.append(
-                    f"{key} = {params[key]:.4g} at {p / 1e5:.4g} bar is negative: the record "
-                    "does not support a physical pressure-dependent model; refused"
-                )
-        if params["F_s"] < params["F_c"] - 1e-9:
-            notes.append(f"F_s < F_c at {p / 1e5:.4g} bar; refused")
-    speed = np.abs(v)
-    if any("refused" in n for n in notes):
-        model = None
-    else:
-        _, model = build(
-            result.x,
-            stderr=stderr,
-            fixed=("alpha",) if stribeck else (),
-            covariance=(tuple(model_names), cov_model) if np.all(np.isfinite(cov_model)) else None,
-            statistics={
-                "n_points": int(res.size),
-                "n_variables": len(labels),
-                "rmse": rmse,
-                "residual_std": float(np.sqrt(res @ res / dof)),
-                "dof": int(dof),
-            },
-            validity={
-                "pressure_min": p_min,
-                "pressure_max": p_max,
-                "velocity_min": float(np.percentile(speed[speed > 0], 5)),
-                "velocity_max": float(speed.max()),
-            },
-            provenance={
-                "method": "motion record: IDIM then nonlinear least squares on the steady-state "
-                "law (cylfric fit-motion)",
-            },
-        )
+    speed = np.abs(v_sel)
+    covariance = (tuple(names), cov_model) if np.all(np.isfinite(cov_model)) else None
+    model = build(
+        result.x,
+        stderr=stderr,
+        fixed=("alpha",) if stribeck else (),
+        covariance=covariance,
+        statistics={
+            "n_points": int(res.size),
+            "n_variables": len(labels),
+            "rmse": rmse,
+            "residual_std": float(np.sqrt(res @ res / dof)),
+            "dof": int(dof),
+        },
+        validity={
+            "pressure_min": p_lo,
+            "pressure_max": p_hi,
+            "velocity_min": float(np.percentile(speed[speed > 0], 5)),
+            "velocity_max": float(speed.max()),
+        },
+        provenance={
+            "method": "motion record: IDIM-LS, then nonlinear least squares of the steady-state "
+            "law with mass and offset (cylfric fit-motion)",
+        },
+    )
     return PressureRefinement(
         model=model,
-        mass=float(values["mass"]),
-        mass_stderr=mass_err,
-        offset=float(values["offset"]),
-        offset_stderr=offset_err,
-        relative_error=relative,
+        mass=float(result.x[0]),
+        mass_stderr=float(math.sqrt(max(cov_x[0, 0], 0.0))),
+        offset=float(result.x[1]),
+        offset_stderr=float(math.sqrt(max(cov_x[1, 1], 0.0))),
+        relative_error=float(np.linalg.norm(res) / np.linalg.norm(F)),
         rmse=rmse,
         notes=tuple(notes),
     )
@@ -637,27 +666,28 @@ def _mean_of(fit, name):
     return 0.5 * (fit.parameters[f"{name}_pos"] + fit.parameters[f"{name}_neg"])
 
 
-def _model_transform(labels, p_scale, stribeck, sloped):
-    """Linear map from the fit vector to the model's coefficient names (for the covariance)."""
-    coefficients = ("intercept", "slope") if sloped else ("intercept",)
-    names = []
-    for key in ("F_c", "F_s", "sigma_2") if stribeck else ("F_c", "sigma_2"):
-        for c in coefficients:
-            names.append(f"{key}.{c}" if sloped else key)
-    if stribeck:
-        names.append("v_r")
+def _model_transform(labels, p_lo, p_hi, stribeck, sloped):
+    """Names of the model coefficients and the linear map T from the fit vector to them."""
+    keys = ("F_c", "F_s", "sigma_2") if stribeck else ("F_c", "sigma_2")
+    coefficients = ("intercept", "slope") if sloped else ("",)
+    names = [f"{k}.{c}" if c else k for k in keys for c in coefficients]
+    names += ["v_r"] if stribeck else []
     index = {label: i for i, label in enumerate(labels)}
     T = np.zeros((len(names), len(labels)))
+    span = p_hi - p_lo
+    # value(p) = lo + (hi - lo) (p - p_lo) / span: intercept and slope of the two end values
+    weights = {
+        "intercept": {"lo": 1 + p_lo / span, "hi": -p_lo / span} if sloped else {},
+        "slope": {"lo": -1 / span, "hi": 1 / span} if sloped else {},
+        "": {"lo": 1.0},
+    }
     for row, name in enumerate(names):
-        key, _, c = name.partition(".")
-        c = c or "intercept"
-        factor = 1.0 / p_scale if c == "slope" else 1.0
-        label = f"{key}.{c}" if key != "v_r" else "v_r"
-        if key == "F_s":
-            T[row, index[f"F_c.{c}"]] = factor
-            T[row, index[f"dF_s.{c}"]] = factor
-        elif key == "v_r":
+        if name == "v_r":
             T[row, index["v_r"]] = 1.0
-        else:
-            T[row, index[label]] = factor
+            continue
+        key, _, c = name.partition(".")
+        parts = ("F_c", "dF_s") if key == "F_s" else (key,)
+        for part in parts:
+            for end, w in weights[c].items():
+                T[row, index[f"{part}@{end}"]] += w
     return names, T

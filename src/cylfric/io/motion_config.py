@@ -26,6 +26,7 @@ the identification from the record (:func:`cylfric.identify.motion.fit_motion`):
     reference = "mean"         # chamber pressure the laws see: a, b, sum, mean, max
     alpha = 1.0                # Stribeck exponent, held fixed [-]
     v_r = "10 mm/s"            # starting value of the Stribeck velocity
+    min_speed = "5 mm/s"       # slower samples left out (sticking, presliding)
 
     [validation]               # closed-loop replay of a second record (EMPS procedure)
     reference = "qg"           # position reference [m]
@@ -105,6 +106,7 @@ MOTION_SCHEMA = {
                 "reference": {"enum": ["a", "b", "sum", "mean", "max"]},
                 "alpha": {"type": "number", "exclusiveMinimum": 0},
                 "v_r": _NAME,
+                "min_speed": _NAME,
             },
         },
         "validation": {
@@ -152,6 +154,8 @@ class MotionConfig:
         Stribeck exponent of the refinement, held fixed [-].
     v_r : float
         Starting value of the Stribeck velocity of the refinement [m/s].
+    min_speed : float
+        Samples slower than this are left out of the refinement [m/s].
     validation : dict or None
         ``reference``, ``kp``, ``kv``, ``saturation``, ``disturbance`` of the closed-loop replay.
     source : str or None
@@ -169,6 +173,7 @@ class MotionConfig:
     reference: str = "mean"
     alpha: float = 1.0
     v_r: float = 0.01
+    min_speed: float = 0.005
     validation: dict | None = None
     source: str | None = None
 
@@ -239,18 +244,22 @@ def load_motion_config(path) -> MotionConfig:
     ):
         raise BenchFileError(path, "[units] gives a pressure unit but [signals] no pressure")
     filt, refine = doc.get("filter", {}), doc.get("refinement", {})
-    v_r = 0.01
-    if "v_r" in refine:
-        try:
-            v_r = parse_quantity(refine["v_r"], "velocity", default_unit="mm/s")
-        except UnitError as exc:
-            raise BenchFileError(
-                path, f"refinement.v_r: {exc}", line=_line_of(path, "v_r", "refinement")
-            ) from None
-        if not v_r > 0:
-            raise BenchFileError(
-                path, "refinement.v_r must be > 0", line=_line_of(path, "v_r", "refinement")
-            )
+    speeds = {}
+    for key, default in (("v_r", 0.01), ("min_speed", 0.005)):
+        speeds[key] = default
+        if key in refine:
+            try:
+                speeds[key] = parse_quantity(refine[key], "velocity", default_unit="mm/s")
+            except UnitError as exc:
+                raise BenchFileError(
+                    path, f"refinement.{key}: {exc}", line=_line_of(path, key, "refinement")
+                ) from None
+    if not speeds["v_r"] > 0 or not speeds["min_speed"] >= 0:
+        raise BenchFileError(
+            path,
+            "refinement.v_r must be > 0 and refinement.min_speed >= 0",
+            line=_line_of(path, "v_r" if not speeds["v_r"] > 0 else "min_speed", "refinement"),
+        )
     if refine and not ("pressure_a" in signals or "pressure_b" in signals):
         raise BenchFileError(
             path,
@@ -268,7 +277,8 @@ def load_motion_config(path) -> MotionConfig:
         friction_law=refine.get("friction_law", "stribeck"),
         reference=refine.get("reference", "mean"),
         alpha=float(refine.get("alpha", 1.0)),
-        v_r=v_r,
+        v_r=speeds["v_r"],
+        min_speed=speeds["min_speed"],
         validation=dict(doc["validation"]) if "validation" in doc else None,
         source=str(path),
     )
