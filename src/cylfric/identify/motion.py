@@ -639,7 +639,7 @@ def refine_pressure_model(
         validity={
             "pressure_min": p_lo,
             "pressure_max": p_hi,
-            "velocity_min": float(np.percentile(speed[speed > 0], 5)),
+            "velocity_min": float(speed.min()),
             "velocity_max": float(speed.max()),
         },
         provenance={

@@ -327,7 +327,7 @@ def _validate(doc, path):
             line=_line_of(path, where) if where else None,
         )
     key = str(error.path[-1]) if error.path else ""
-    table_of_key = ".".join(str(p) for p in error.path[:-1]) or None
+    table_of_key = ".".join(str(p) for p in list(error.path)[:-1]) or None
     message = error.message
     if error.validator in ("type", "anyOf"):
         expected = {
