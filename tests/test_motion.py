@@ -47,13 +47,13 @@ def _idim_record(tmp_path, *, per_direction=None, seed=0, noise=0.3):
     rng = np.random.default_rng(seed)
     t, x, v, a = _motion()
     if per_direction is None:
-        force = (
-            TRUTH["mass"] * a + TRUTH["F_v"] * v + TRUTH["F_c"] * np.sign(v) + TRUTH["offset"]
-        )
+        force = TRUTH["mass"] * a + TRUTH["F_v"] * v + TRUTH["F_c"] * np.sign(v) + TRUTH["offset"]
     else:
         p = per_direction
-        force = p["mass"] * a + p["offset"] + np.where(
-            v > 0, p["F_v_pos"] * v + p["F_c_pos"], p["F_v_neg"] * v - p["F_c_neg"]
+        force = (
+            p["mass"] * a
+            + p["offset"]
+            + np.where(v > 0, p["F_v_pos"] * v + p["F_c_pos"], p["F_v_neg"] * v - p["F_c_neg"])
         )
     force = force + rng.normal(0, noise, t.size)
     position = x + rng.normal(0, 1e-7, t.size)
@@ -285,7 +285,9 @@ def test_config_errors_name_the_file_and_the_line_of_the_key_in_its_table(tmp_pa
 
 
 def test_wrong_type_names_what_was_expected(tmp_path):
-    path = _config(tmp_path, '[signals]\ntime = "t"\nposition = "q"\nforce = "u"\nforce_scale = [1]\n')
+    path = _config(
+        tmp_path, '[signals]\ntime = "t"\nposition = "q"\nforce = "u"\nforce_scale = [1]\n'
+    )
     with pytest.raises(BenchFileError, match=r"line 5: signals\.force_scale: .*wrong type"):
         load_motion_config(path)
 
@@ -294,8 +296,9 @@ def test_units_for_a_text_record_are_refused(tmp_path):
     text = tmp_path / "r.csv"
     text.write_text("Time [s],Position [mm],Force [N]\n" + "0,1,2\n" * 3)
     path = _config(
-        tmp_path, '[signals]\ntime = "time"\nposition = "position"\nforce = "force"\n'
-        '[units]\nposition = "mm"\n'
+        tmp_path,
+        '[signals]\ntime = "time"\nposition = "position"\nforce = "force"\n'
+        '[units]\nposition = "mm"\n',
     )
     with pytest.raises(BenchFileError, match=r"line 6: units\.position: a text record"):
         read_motion_record(text, load_motion_config(path))

@@ -313,9 +313,9 @@ def _draw_validation(d) -> bytes:
     from matplotlib.figure import Figure
 
     t = d["time"]
-    fig = Figure(figsize=(9, 6))
-    fig.subplots_adjust(left=0.09, right=0.98, top=0.94, bottom=0.09, hspace=0.12)
-    axes = fig.subplots(2, 1, sharex=True)
+    fig = Figure(figsize=(9, 7.5))
+    fig.subplots_adjust(left=0.09, right=0.98, top=0.95, bottom=0.07, hspace=0.12)
+    axes = fig.subplots(3, 1, sharex=True, height_ratios=(1, 0.7, 1))
     axes[0].plot(t, 1e3 * d["measured_position"], lw=0.8, label="measured (filtered)")
     axes[0].plot(t, 1e3 * d["position"], lw=0.8, ls="--", label="simulated")
     axes[0].set(ylabel="position [mm]")
@@ -324,10 +324,12 @@ def _draw_validation(d) -> bytes:
         f"force error {100 * d['errors']['force']:.3g} %"
     )
     axes[0].legend(fontsize=8)
-    axes[1].plot(t, d["measured_force"], lw=0.6, label="measured")
-    axes[1].plot(t, d["force"], lw=0.6, label="simulated")
-    axes[1].set(xlabel="time [s]", ylabel="force [N]")
-    axes[1].legend(fontsize=8)
+    axes[1].plot(t, 1e6 * (d["position"] - d["measured_position"]), lw=0.6, color="0.3")
+    axes[1].set(ylabel="simulated - measured\nposition [um]")
+    axes[2].plot(t, d["measured_force"], lw=0.6, label="measured")
+    axes[2].plot(t, d["force"], lw=0.6, label="simulated")
+    axes[2].set(xlabel="time [s]", ylabel="force [N]")
+    axes[2].legend(fontsize=8)
     return _png(fig)
 
 
