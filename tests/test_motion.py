@@ -318,3 +318,103 @@ def test_irregular_sampling_and_short_records_are_refused(tmp_path):
     savemat(tmp_path / "still.mat", {"t": t, "q": 0 * x, "u": v, "gain": 1.0})
     with pytest.raises(ValueError, match="does not change"):
         fit_motion(tmp_path / "still.mat", config)
+
+
+def test_closed_loop_record_is_identified_and_replayed():
+    """A record made by the closed-loop replay itself (EMPS-like gains and force scale, the
+    TRUTH parameters): fit_motion recovers the parameters from the closed-loop data and the
+    replay of the fit reproduces the recorded force."""
+    from cylfric.identify.motion_validation import ServoReplay, replay_closed_loop
+
+    class Truth:  # the replay needs only parameters and per_direction of a MotionFit
+        parameters = TRUTH
+        per_direction = False
+
+    t = np.arange(10001) * 1e-3
+    reference = 0.04 * (1 - np.cos(2 * np.pi * 0.3 * t)) + 0.002 * np.sin(2 * np.pi * 2.1 * t)
+    made = replay_closed_loop(
+        Truth,
+        t,
+        reference,
+        reference,
+        np.ones_like(t),
+        kp=160.0,
+        kv=243.0,
+        force_scale=GAIN * 8,
+        saturation=10.0,
+        border=0,
+    )
+    assert isinstance(made, ServoReplay)
+    record = MotionRecord(
+        time=t,
+        position=made.position,
+        force=made.force,
+        pressure_a=None,
+        pressure_b=None,
+        variables={},
+        scalars={},
+        force_scale=1.0,
+        file="closed loop",
+    )
+    fit = fit_motion(record, MotionConfig(signals={}))
+    for name, value in TRUTH.items():
+        assert_allclose(fit.parameters[name], value, rtol=0.03, atol=0.1, err_msg=name)
+    replay = replay_closed_loop(
+        fit,
+        t,
+        reference,
+        made.position,
+        made.force,
+        kp=160.0,
+        kv=243.0,
+        force_scale=GAIN * 8,
+        saturation=10.0,
+    )
+    assert replay.errors["force"] < 0.03
+    assert replay.errors["position"] < 1e-3
+
+
+FORKED = """
+import sys
+from cylfric.cli import main
+from cylfric.commands import motion
+
+original = motion._Drawer.collect
+
+
+def collect(self):
+    assert self.pid is not None, "the figure was not drawn in a forked child"
+    return original(self)
+
+
+motion._Drawer.collect = collect
+sys.argv = ["cylfric", "fit-motion", *sys.argv[1:]]
+main()
+"""
+
+
+@pytest.mark.slow
+def test_fresh_process_draws_the_figure_in_a_forked_child(tmp_path):
+    import struct
+    import subprocess
+    import sys
+
+    record, config = _idim_record(tmp_path), _config(tmp_path)
+    forked, here = tmp_path / "forked", tmp_path / "here"
+    done = subprocess.run(
+        [sys.executable, "-c", FORKED, str(record), "--config", str(config), "--out", str(forked)],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    result = runner.invoke(
+        app, ["fit-motion", str(record), "--config", str(config), "--out", str(here)]
+    )
+    assert result.exit_code == 0, result.output
+    sizes = []
+    for folder in (forked, here):
+        png = (folder / "motion_fit.png").read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"
+        sizes.append(struct.unpack(">II", png[16:24]))  # IHDR width, height
+    assert sizes[0] == sizes[1]
+    assert (forked / "motion_fit.json").read_text() == (here / "motion_fit.json").read_text()
