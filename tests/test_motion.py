@@ -418,3 +418,38 @@ def test_fresh_process_draws_the_figure_in_a_forked_child(tmp_path):
         sizes.append(struct.unpack(">II", png[16:24]))  # IHDR width, height
     assert sizes[0] == sizes[1]
     assert (forked / "motion_fit.json").read_text() == (here / "motion_fit.json").read_text()
+
+
+def test_fit_motion_with_pressures_writes_a_datasheet_of_the_refined_model(tmp_path):
+    """Coulomb + viscous friction rising with pressure (F_c = 10 + 0.2 p, sigma_2 = 100 +
+    0.5 p N*s/m, p in bar), pressures recorded in bar ([units]): the coulomb_viscous
+    refinement recovers the laws and writes a datasheet that reads back."""
+    from cylfric.model import FrictionModel
+
+    t, x, v, a = _motion()
+    p_bar = 20 + 120 * (0.5 + 0.5 * np.sin(2 * np.pi * t / t[-1] * 1.3))
+    force = 20.0 * a + (10 + 0.2 * p_bar) * np.sign(v) + (100 + 0.5 * p_bar) * v - 1.0
+    force += np.random.default_rng(5).normal(0, 0.2, t.size)
+    record = tmp_path / "pressure.mat"
+    savemat(record, {"t": t, "q": x, "u": force, "pa": p_bar})
+    config = _config(
+        tmp_path,
+        '[signals]\ntime = "t"\nposition = "q"\nforce = "u"\npressure_a = "pa"\n'
+        '[units]\npressure_a = "bar"\n[refinement]\nfriction_law = "coulomb_viscous"\n'
+        'reference = "a"\nmin_speed = "1 mm/s"\n',
+    )
+    out = tmp_path / "out"
+    done = runner.invoke(
+        app, ["fit-motion", str(record), "--config", str(config), "--out", str(out)]
+    )
+    assert done.exit_code == 0, done.output
+    doc = json.loads((out / "motion_fit.json").read_text())
+    assert doc["refinement"]["status"] == "identified"
+    assert doc["refinement"]["relative_force_error"] < 0.01 < doc["relative_force_error"]
+    model = FrictionModel.from_datasheet(out / "datasheet.json")
+    assert model.friction_law == "coulomb_viscous"
+    assert_allclose(model.parameters["F_c.intercept"].value, 10.0, atol=0.3)
+    assert_allclose(model.parameters["F_c.slope"].value, 0.2e-5, rtol=0.03)
+    assert_allclose(model.parameters["sigma_2.slope"].value, 0.5e-5, rtol=0.05)
+    assert model.dynamic_status["sigma_0"][0] == "assumed"
+    assert 130e5 < model.validity["pressure_max"] <= 140e5  # the samples used
