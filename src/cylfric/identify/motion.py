@@ -317,10 +317,15 @@ def fit_motion(record, config=None, *, per_direction=False):
 
     from ..io.motion_config import MotionConfig, read_motion_record
 
+    if not hasattr(record, "time"):
+        if config is None:
+            raise ValueError(
+                f"{record}: a record given as a path needs its config (motion.toml) to name "
+                "the signals"
+            )
+        record = read_motion_record(record, config)
     if config is None:
         config = MotionConfig(signals={})
-    if not hasattr(record, "time"):
-        record = read_motion_record(record, config)
     time, force = record.time, record.force
     step = float(np.median(np.diff(time)))
     r, border = config.decimation, config.border
