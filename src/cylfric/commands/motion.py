@@ -1,0 +1,366 @@
+"""``cylfric fit-motion``: friction identification from any logged motion (IDIM-LS)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..cli import BadInput, console, guarded
+
+SIGNALS_CSV = "motion_signals.csv"
+FIT_JSON = "motion_fit.json"
+FIGURE = "motion_fit.png"
+VALIDATION_FIGURE = "motion_validation.png"
+
+
+def register(app) -> None:
+    """Add ``fit-motion`` to the ``cylfric`` app."""
+
+    @app.command("fit-motion")
+    @guarded
+    def fit_motion_command(
+        record: Path = typer.Argument(
+            ..., help="Motion record: a .mat file or a bench text file (never modified)."
+        ),
+        config: Path = typer.Option(
+            ..., "--config", "-c", help="motion.toml naming the signals (see docs/motion.md)."
+        ),
+        out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
+        per_direction: bool = typer.Option(
+            False, "--per-direction", help="Split F_v and F_c by the direction of motion."
+        ),
+        validate: Path = typer.Option(
+            None,
+            "--validate",
+            help="A second record: replay the identified model in the [validation] servo loop.",
+        ),
+    ):
+        """Identify mass, viscous and Coulomb friction and offset from a motion record.
+
+        IDIM-LS as in the EMPS benchmark: zero-phase low-pass of the position, central
+        differences, decimated regression, least squares; then, when pressures are recorded,
+        a refinement to the pressure-dependent Stribeck model. Writes motion_fit.json,
+        motion_signals.csv and motion_fit.png (datasheet.json for a refined model).
+        """
+        drawer = _Drawer()  # first: a forked child imports matplotlib meanwhile
+        try:
+            _run(record, config, out, per_direction, validate, drawer)
+        finally:
+            drawer.close()
+
+
+def _run(record, config, out, per_direction, validate, drawer):
+    import hashlib
+    import json
+
+    from ..identify.motion import fit_motion
+    from ..io.motion_config import load_motion_config, read_motion_record
+    from ..io.writers import atomic_write_bytes, atomic_write_text
+
+    for path, what in ((record, "RECORD"), (config, "--config")) + (
+        ((validate, "--validate"),) if validate is not None else ()
+    ):
+        if not path.is_file():
+            raise BadInput(f"{what} {path}: no such file")
+    if out.exists() and not out.is_dir():
+        raise BadInput(f"--out {out}: exists and is not a folder")
+    inputs = {p.resolve() for p in (record, config, validate) if p is not None}
+    outputs = (FIT_JSON, SIGNALS_CSV, FIGURE, VALIDATION_FIGURE, "datasheet.json")
+    clash = [name for name in outputs if (out / name).resolve() in inputs]
+    if clash:
+        raise BadInput(f"--out {out}: writing {clash[0]} would overwrite an input file")
+    settings = load_motion_config(config)
+    data = read_motion_record(record, settings)
+    fit = fit_motion(data, settings, per_direction=per_direction)
+    replay = None
+    if validate is not None:
+        from ..identify.motion_validation import validate_on_record
+
+        replay = validate_on_record(fit, validate, settings)
+    document = {
+        "format": "cylfric motion fit",
+        "version": 1,
+        "units": "SI: kg, N, N*s/m, m, s, Pa; relative errors as fractions [-] and in %",
+        "record": {
+            "file": str(record),
+            "sha256": hashlib.sha256(record.read_bytes()).hexdigest(),
+            "samples": int(data.time.size),
+            "signals": dict(settings.signals),
+            "force_scale": data.force_scale,
+        },
+        "config": str(config),
+        **fit.to_dict(),
+        "validation": None,
+    }
+    if replay is not None:
+        document["validation"] = {"record": str(validate), **replay.to_dict()}
+    jobs = {FIGURE: ("fit", _fit_figure_data(fit))}
+    if replay is not None:
+        jobs[VALIDATION_FIGURE] = ("validation", _validation_figure_data(replay))
+    drawer.submit(jobs)  # the child draws while the JSON and CSV are written
+    out.mkdir(parents=True, exist_ok=True)
+    refined = fit.refinement.model if fit.refinement is not None else None
+    if refined is not None:
+        sheet = refined.to_datasheet()
+        atomic_write_text(out / "datasheet.json", json.dumps(sheet, indent=2) + "\n")
+    atomic_write_text(out / FIT_JSON, json.dumps(document, indent=2, default=float) + "\n")
+    atomic_write_text(out / SIGNALS_CSV, _csv(fit.signals))
+    pngs = drawer.collect()
+    for name, png in pngs.items():
+        atomic_write_bytes(out / name, png)
+    _print_summary(fit, replay, out)
+
+
+def _csv(columns: dict) -> str:
+    import io
+
+    import numpy as np
+
+    buffer = io.StringIO()
+    names = list(columns)
+    buffer.write(",".join(f'"{n}"' for n in names) + "\n")
+    np.savetxt(buffer, np.column_stack([columns[n] for n in names]), delimiter=",", fmt="%.9g")
+    return buffer.getvalue()
+
+
+class _Drawer:
+    """Draws the figures, in a child forked at the start of the command when it can.
+
+    A fresh ``cylfric`` process spends most of its time importing scipy.signal and
+    matplotlib. On Linux, in a process without other threads and before numpy is loaded,
+    a child forked first imports matplotlib while this process imports scipy and fits; it
+    then receives plain arrays through a pipe, draws, and sends the PNG bytes back. Anywhere
+    else, or if the child fails, the figures are drawn in this process: same bytes either way.
+    """
+
+    def __init__(self):
+        import os
+        import sys
+        import threading
+
+        self.pid = None
+        self.jobs = {}
+        if not (
+            sys.platform.startswith("linux")
+            and hasattr(os, "fork")
+            and threading.active_count() == 1
+            and "numpy" not in sys.modules
+        ):
+            return
+        job_read, self.job_write = os.pipe()
+        self.result_read, result_write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: import matplotlib now, draw what arrives, leave
+            status = 1
+            try:
+                import pickle
+
+                os.close(self.job_write)
+                os.close(self.result_read)
+                import matplotlib.backends.backend_agg  # noqa: F401
+                import matplotlib.figure  # noqa: F401
+
+                with os.fdopen(job_read, "rb") as pipe:
+                    raw = pipe.read()
+                if raw:
+                    pngs = _draw_all(pickle.loads(raw))
+                    with os.fdopen(result_write, "wb") as pipe:
+                        pickle.dump(pngs, pipe, protocol=pickle.HIGHEST_PROTOCOL)
+                status = 0
+            finally:
+                os._exit(status)
+        os.close(job_read)
+        os.close(result_write)
+        self.pid = pid
+
+    def submit(self, jobs: dict) -> None:
+        """Hand ``{name: (kind, data)}`` to the child (or keep it to draw here)."""
+        import os
+        import pickle
+
+        self.jobs = jobs
+        if self.pid is None:
+            return
+        fd, self.job_write = self.job_write, None
+        try:
+            with os.fdopen(fd, "wb") as pipe:
+                pickle.dump(jobs, pipe, protocol=pickle.HIGHEST_PROTOCOL)
+        except OSError:
+            pass  # the child is gone: collect() draws here
+
+    def collect(self) -> dict:
+        """``{name: png bytes}`` of the submitted jobs."""
+        import os
+        import pickle
+
+        if self.pid is None:
+            return _draw_all(self.jobs)
+        pngs = None
+        fd, self.result_read = self.result_read, None
+        try:
+            with os.fdopen(fd, "rb") as pipe:
+                pngs = pickle.load(pipe)
+        except (EOFError, OSError, pickle.UnpicklingError):
+            pngs = None
+        finally:
+            _, status = os.waitpid(self.pid, 0)
+            self.pid = None
+        if not isinstance(pngs, dict) or status != 0 or set(pngs) != set(self.jobs):
+            return _draw_all(self.jobs)  # the child failed: draw here
+        return pngs
+
+    def close(self):
+        """Let an unused child go (on errors before :meth:`draw`)."""
+        import os
+
+        if self.pid is not None:  # an error before collect(): the child sees EOF and exits
+            for fd in (self.job_write, self.result_read):
+                if fd is not None:
+                    os.close(fd)
+            os.waitpid(self.pid, 0)
+            self.pid = None
+
+
+def _draw_all(jobs: dict) -> dict:
+    drawers = {"fit": _draw_fit, "validation": _draw_validation}
+    return {name: drawers[kind](data) for name, (kind, data) in jobs.items()}
+
+
+def _png(fig) -> bytes:
+    import io
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    return buffer.getvalue()
+
+
+def _fit_figure_data(fit) -> dict:
+    """Plain arrays for :func:`_draw_fit` (the child imports no cylfric modules)."""
+    import numpy as np
+
+    s = fit.signals
+    v = s["velocity [m/s]"]
+    speed = np.linspace(v.min(), v.max(), 400)
+    return {
+        "time": s["time [s]"],
+        "force": s["force [N]"],
+        "predicted": s["predicted force [N]"],
+        "velocity": v,
+        "friction": s["force [N]"]
+        - fit.parameters["mass"] * s["acceleration [m/s^2]"]
+        - fit.parameters["offset"],
+        "speed": speed,
+        "model": fit.predict(speed, 0 * speed) - fit.parameters["offset"],
+        "relative_error": fit.relative_error,
+    }
+
+
+def _draw_fit(d) -> bytes:
+    """Measured against predicted force over time, and the friction against velocity."""
+    from matplotlib.figure import Figure
+
+    t, F, P = d["time"], d["force"], d["predicted"]
+    fig = Figure(figsize=(9, 6.5))  # a fixed layout: constrained layout doubles the time
+    grid = fig.add_gridspec(
+        2,
+        2,
+        height_ratios=(1.4, 1),
+        left=0.08,
+        right=0.98,
+        top=0.95,
+        bottom=0.08,
+        hspace=0.3,
+        wspace=0.25,
+    )
+    top = fig.add_subplot(grid[0, :])
+    top.plot(t, F, lw=0.8, label="measured")
+    top.plot(t, P, lw=0.8, label="predicted (IDIM-LS)")
+    top.plot(t, F - P, lw=0.6, color="0.4", label="residual")
+    top.set(xlabel="time [s]", ylabel="force [N]")
+    top.set_title(f"relative force error {100 * d['relative_error']:.2f} %")
+    top.legend(loc="upper right", fontsize=8)
+    left = fig.add_subplot(grid[1, 0])
+    left.plot(
+        1e3 * d["velocity"], d["friction"], ".", ms=1.5, alpha=0.4, label="force - mass*a - offset"
+    )
+    left.plot(1e3 * d["speed"], d["model"], "k", lw=1.2, label="identified friction")
+    left.set(xlabel="velocity [mm/s]", ylabel="friction force [N]")
+    left.legend(loc="upper left", fontsize=7)
+    right = fig.add_subplot(grid[1, 1])
+    right.plot(F, P, ".", ms=1.5, alpha=0.4)
+    lims = [min(F.min(), P.min()), max(F.max(), P.max())]
+    right.plot(lims, lims, "k", lw=0.8)
+    right.set(xlabel="measured force [N]", ylabel="predicted force [N]")
+    return _png(fig)
+
+
+def _validation_figure_data(replay) -> dict:
+    return {
+        "time": replay.time,
+        "measured_position": replay.measured_position,
+        "position": replay.position,
+        "measured_force": replay.measured_force,
+        "force": replay.force,
+        "errors": dict(replay.errors),
+    }
+
+
+def _draw_validation(d) -> bytes:
+    from matplotlib.figure import Figure
+
+    t = d["time"]
+    fig = Figure(figsize=(9, 7.5))
+    fig.subplots_adjust(left=0.09, right=0.98, top=0.95, bottom=0.07, hspace=0.12)
+    axes = fig.subplots(3, 1, sharex=True, height_ratios=(1, 0.7, 1))
+    axes[0].plot(t, 1e3 * d["measured_position"], lw=0.8, label="measured (filtered)")
+    axes[0].plot(t, 1e3 * d["position"], lw=0.8, ls="--", label="simulated")
+    axes[0].set(ylabel="position [mm]")
+    axes[0].set_title(
+        f"closed-loop replay: position error {100 * d['errors']['position']:.3g} %, "
+        f"force error {100 * d['errors']['force']:.3g} %"
+    )
+    axes[0].legend(fontsize=8)
+    axes[1].plot(t, 1e6 * (d["position"] - d["measured_position"]), lw=0.6, color="0.3")
+    axes[1].set(ylabel="simulated - measured\nposition [um]")
+    axes[2].plot(t, d["measured_force"], lw=0.6, label="measured")
+    axes[2].plot(t, d["force"], lw=0.6, label="simulated")
+    axes[2].set(xlabel="time [s]", ylabel="force [N]")
+    axes[2].legend(fontsize=8)
+    return _png(fig)
+
+
+def _print_summary(fit, replay, out) -> None:
+    from rich.table import Table
+
+    from ..identify.motion import PARAMETER_UNITS
+
+    table = Table(title="Inverse dynamic model (IDIM-LS)")
+    for column in ("parameter", "value", "std. error", "unit"):
+        table.add_column(column, justify="left" if column == "parameter" else "right")
+    for name, value in fit.parameters.items():
+        table.add_row(name, f"{value:.5g}", f"{fit.stderr[name]:.2g}", PARAMETER_UNITS[name])
+    console.print(table)
+    console.print(
+        f"relative force error {100 * fit.relative_error:.2f} % "
+        f"(RMS {fit.rmse:.3g} N over {fit.settings['regression_samples']} decimated samples)"
+    )
+    ref = fit.refinement
+    if ref is not None:
+        if ref.model is not None:
+            console.print("pressure-dependent refinement (datasheet.json):")
+            for line in ref.model.law_lines():
+                console.print(f"  {line}", markup=False)
+            console.print(f"  relative force error {100 * ref.relative_error:.2f} %")
+        for note in ref.notes:
+            console.print(f"  note: {note}", markup=False)
+    if replay is not None:
+        e = replay.errors
+        console.print(
+            f"closed-loop validation: relative errors position {100 * e['position']:.3g} %, "
+            f"velocity {100 * e['velocity']:.3g} %, force {100 * e['force']:.3g} %"
+        )
+    console.print(f"wrote {out / FIT_JSON}, {SIGNALS_CSV}, {FIGURE}", markup=False)
