@@ -600,6 +600,36 @@ class FrictionModel:
             columns.append((values[0] - values[1]) / (2 * h))
         return np.stack(columns, axis=-1)
 
+    def jacobian(self, velocity, pressure, names=None):
+        """Sensitivity of the steady-state friction to each coefficient, d F / d theta.
+
+        Central differences of :meth:`friction` (no validity check) at (velocity [m/s],
+        pressure [Pa]), broadcast; the last axis runs over ``names`` (default: the fitted
+        steady-state coefficients, :attr:`varying` without ``sigma_0``, ``sigma_1``).
+        Units: N per SI unit of each coefficient (N/N, N/(N/Pa), ...). Test design
+        (:mod:`cylfric.plan`) builds its information matrix from it.
+        """
+        if names is None:
+            names = [n for n in self.varying if n.partition(".")[0] in STEADY_PARAMETERS]
+        base = {n: p.value for n, p in self.parameters.items()}
+        missing = [n for n in names if base.get(n) is None]
+        if missing:
+            raise ValueError(f"no value for {missing}; coefficients of this model: {self.varying}")
+        columns = []
+        for name in names:
+            # the law is linear in the pressure-law coefficients: any step is exact there;
+            # v_r and alpha are bounded away from 0, so a relative step suits them
+            per_pa = 1e-7 ** {"slope": 1, "curvature": 2, "rate": 1}.get(
+                name.partition(".")[2], 0
+            )
+            h = 1e-6 * max(abs(base[name]), per_pa)
+            values = []
+            for sign in (1.0, -1.0):
+                shifted = dict(base, **{name: base[name] + sign * h})
+                values.append(self._friction(velocity, pressure, self._coefficients_from(shifted)))
+            columns.append((values[0] - values[1]) / (2 * h))
+        return np.stack(columns, axis=-1)
+
     def _coefficients_from(self, values):
         out = {}
         for name in STEADY_PARAMETERS:
