@@ -617,12 +617,14 @@ class FrictionModel:
             raise ValueError(f"no value for {missing}; coefficients of this model: {self.varying}")
         columns = []
         for name in names:
-            # the law is linear in the pressure-law coefficients: any step is exact there;
-            # v_r and alpha are bounded away from 0, so a relative step suits them
-            per_pa = 1e-7 ** {"slope": 1, "curvature": 2, "rate": 1}.get(
-                name.partition(".")[2], 0
-            )
-            h = 1e-6 * max(abs(base[name]), per_pa)
+            # friction is linear in these coefficients: a large step is exact and rounds
+            # least; v_r, alpha and an exponential rate take a small relative step
+            coefficient = name.partition(".")[2]
+            if coefficient in ("intercept", "slope", "curvature", "amplitude"):
+                floor = 1e-7 ** {"slope": 1, "curvature": 2}.get(coefficient, 0)  # per Pa
+                h = 1e-2 * max(abs(base[name]), floor)
+            else:
+                h = 1e-6 * max(abs(base[name]), 1e-12)
             values = []
             for sign in (1.0, -1.0):
                 shifted = dict(base, **{name: base[name] + sign * h})
