@@ -189,3 +189,15 @@ def test_bad_arguments(eight, tmp_path):
         fit_many(eight, tmp_path / "o", workers=0)
     done = CliRunner().invoke(app, ["fit-many", str(tmp_path / "nope"), "--out", str(tmp_path)])
     assert done.exit_code == 2 and "not a folder" in done.output
+
+
+@pytest.mark.slow
+def test_a_local_cluster(eight, tmp_path):
+    root = tmp_path / "root"
+    root.mkdir()
+    (root / "cyl03").symlink_to(eight / "cyl03")
+    result = fit_many(root, tmp_path / "out", scheduler="local-cluster", workers=1, report=False)
+    assert result.succeeded == 1
+    assert result.scheduler == "dask.distributed LocalCluster, 1 process(es)"
+    sheet = json.loads((tmp_path / "out" / "cyl03" / "datasheet.json").read_text())
+    assert sheet["name"] == "cyl03"

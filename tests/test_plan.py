@@ -285,3 +285,78 @@ def test_cli_plan_bad_input(tmp_path, args, message):
     done = CliRunner().invoke(app, base + args)
     assert done.exit_code == 2, done.output
     assert message in done.output
+
+
+def _coulomb_viscous():
+    return FrictionModel(
+        coefficients={
+            "F_c": {"intercept": 70.0, "slope": 5e-6},
+            "F_s": None,
+            "sigma_2": {"intercept": 340.0, "slope": 8e-6},
+            "v_r": None,
+            "alpha": None,
+        },
+        friction_law="coulomb_viscous",
+    )
+
+
+def test_a_bilinear_model_is_planned_at_the_corners():
+    """F = F_c(p) + sigma_2(p) v is bilinear in (v, p): with equal noise the D-optimal design
+    is the 2^2 factorial at the corners of the (v, p) box (Atkinson et al., ch. 11)."""
+    plan = make_plan(
+        (0.0, 150e5), (1e-3, 0.1), 8, model=_coulomb_viscous(), noise=FLAT, max_repeats=2
+    )
+    assert plan.uncertainty.names == (
+        "F_c.intercept",
+        "F_c.slope",
+        "sigma_2.intercept",
+        "sigma_2.slope",
+    )
+    corners = sorted(plan.points)
+    assert corners == [
+        (0, 1),
+        (0, 1),
+        (0, 100),
+        (0, 100),
+        (150, 1),
+        (150, 1),
+        (150, 100),
+        (150, 100),
+    ]
+
+
+def test_cli_plan_for_a_datasheet(tmp_path):
+    import json
+
+    (tmp_path / "sheet.json").write_text(json.dumps(_coulomb_viscous().to_datasheet()))
+    flat_points = pd.DataFrame(
+        {"velocity [m/s]": [0.001, 0.1], "friction_std [N]": [0.5, 0.5], "n [-]": [100, 100]}
+    )
+    flat_points.to_csv(tmp_path / "points.csv", index=False)
+    done = CliRunner().invoke(
+        app,
+        [
+            "plan",
+            "--model",
+            str(tmp_path / "sheet.json"),
+            "--runs",
+            "4",
+            "--pressures",
+            "0-150",
+            "--speeds",
+            "1-100",
+            "--noise-from",
+            str(tmp_path / "points.csv"),
+            "--out",
+            str(tmp_path / "o"),
+        ],
+    )
+    assert done.exit_code == 0, done.output
+    sheet = pd.read_csv(tmp_path / "o" / "plan.csv")
+    assert sorted(zip(sheet["pressure [bar]"], sheet["speed [mm/s]"], strict=True)) == [
+        (0, 1),
+        (0, 100),
+        (150, 1),
+        (150, 100),
+    ]
+    assert len(pd.read_csv(tmp_path / "o" / "uncertainty.csv")) == 4
