@@ -36,6 +36,7 @@ PRESSURES_BAR = (0.1, 20.7, 38.0, 55.0, 69.0, 83.0, 103.0, 124.0, 141.0, 159.0) 
 SPEEDS_MM_S = (1, 2, 4, 7, 10, 15, 25, 40, 70, 135)  # the README's band-study speeds
 REPEATS = 3
 GOAL = 1.6
+CPU = {}  # mode -> processor seconds of the 8 fits, per warm call
 
 
 def _generate(root: Path):
@@ -71,6 +72,9 @@ def _warm(root, out, **mode):
         result = fit_many(root, out, report=False, **mode)
     seconds = time.perf_counter() - t0
     assert result.succeeded == CAMPAIGNS, result.summary
+    CPU.setdefault(mode.get("scheduler") or "parallel", []).append(
+        float(result.summary["cpu [s]"].sum())
+    )
     return seconds
 
 
@@ -148,6 +152,7 @@ def bench_fit_many():
         "generate_seconds": generate_seconds,
         "cold_processes": cold,
         "warm_in_process": warm,
+        "warm_cpu_seconds_of_the_fits": CPU,
         "largest_relative_difference_of_datasheet_numbers": difference,
         "goal_ratio": GOAL,
         "met_cold_median": cold["ratio_median_pair"] >= GOAL,

@@ -41,10 +41,13 @@ SUMMARY_COLUMNS = (
     "runs [-]",
     "excluded [-]",
     "seconds [s]",
+    "cpu [s]",
     "catalog",
 )
 """Columns of ``fit_many.csv``: ``status`` is ``ok`` or ``failed``; ``reason`` the error;
-``catalog`` is ``added``, empty without a catalogue, or the catalogue's error."""
+``seconds`` the wall time and ``cpu`` the processor time of the fit (``cpu`` well below
+``seconds``: the machine was busy with other work); ``catalog`` is ``added``, empty
+without a catalogue, or the catalogue's error."""
 
 _CAMPAIGN_MARKERS = ("manifest.csv", "campaign.toml")
 _OUTPUT_MARKER = ".cylfric-output"
@@ -119,7 +122,7 @@ def fit_one(folder, out, name, options) -> dict:
     """Fit one campaign (what each worker runs); never raises: returns a summary row."""
     import warnings
 
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     row = {"campaign": name, "out": str(out), "catalog": ""}
     try:
         from .pipeline import fit_campaign
@@ -142,6 +145,7 @@ def fit_one(folder, out, name, options) -> dict:
             reason = f"unexpected {type(exc).__name__}: {reason}"
         row.update(status="failed", reason=reason, **{"runs [-]": None, "excluded [-]": None})
     row["seconds [s]"] = round(time.perf_counter() - t0, 3)
+    row["cpu [s]"] = round(time.process_time() - cpu0, 3)
     return row
 
 
