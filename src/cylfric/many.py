@@ -196,10 +196,6 @@ def fit_many(
         ``root`` is not a folder or holds no campaign, ``out`` lies inside a campaign,
         an unknown fit option, workers < 1.
     """
-    import pandas as pd
-
-    from .io.writers import atomic_write_text
-
     unknown = set(fit_options) - set(_FIT_OPTIONS)
     if unknown:
         raise ValueError(f"unknown fit options {sorted(unknown)}; valid: {list(_FIT_OPTIONS)}")
@@ -220,6 +216,16 @@ def fit_many(
     if distributed and workers is not None:
         raise ValueError("workers is set by the cluster behind a scheduler address; leave it out")
     workers = workers or os.cpu_count() or 1
+    context = None
+    if scheduler is None:  # the workers' server imports the pipeline while this process goes on
+        preload = ["cylfric.pipeline", "cylfric.many"]
+        if fit_options.get("report", True):
+            preload.append("cylfric.report")
+        context = _worker_context(preload)
+    import pandas as pd
+
+    from .io.writers import atomic_write_text
+
     out.mkdir(parents=True, exist_ok=True)
     jobs = [(f, out / _name(f, root), _name(f, root), dict(fit_options)) for f in campaigns]
     t0 = time.perf_counter()
@@ -238,10 +244,7 @@ def fit_many(
             done(fit_one(*job))
     elif scheduler is None:
         used = f"dask multiprocessing scheduler, {workers} process(es)"
-        preload = ["cylfric.pipeline", "cylfric.many"]
-        if fit_options.get("report", True):
-            preload.append("cylfric.report")
-        _run_processes(jobs, workers, done, preload)
+        _run_processes(jobs, workers, done, context)
     else:
         used = _run_distributed(jobs, scheduler, workers, done)
     for job in jobs:  # a worker lost with its task: reported like any failure
@@ -272,11 +275,25 @@ def _add_to_catalog(db, out: Path, name: str) -> str:
     return "added"
 
 
-def _run_processes(jobs, workers, done, preload):
-    """Dask's multiprocessing scheduler on a pool of ``workers`` processes forked from a
-    server that imported ``preload`` once (so no worker pays the import of the pipeline);
-    ``done`` sees each row as its task finishes."""
+def _worker_context(preload):
+    """A multiprocessing context whose processes fork from a server that imported
+    ``preload`` once (started now, so that its imports overlap the caller's work)."""
     import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover
+        return multiprocessing.get_context("spawn")  # Windows
+    from multiprocessing import forkserver
+
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(list(preload))
+    forkserver.ensure_running()
+    return context
+
+
+def _run_processes(jobs, workers, done, context):
+    """Dask's multiprocessing scheduler on a pool of ``workers`` processes of ``context``
+    (:func:`_worker_context`: forked from a server that imported the pipeline once, so no
+    worker pays that import); ``done`` sees each row as its task finishes."""
     from concurrent.futures import ProcessPoolExecutor
 
     import dask
@@ -287,11 +304,6 @@ def _run_processes(jobs, workers, done, preload):
             if isinstance(result, dict) and "status" in result:
                 done(result)
 
-    if "forkserver" in multiprocessing.get_all_start_methods():
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(list(preload))
-    else:  # pragma: no cover - Windows, macOS without forkserver
-        context = multiprocessing.get_context("spawn")
     tasks = [dask.delayed(fit_one, pure=False)(*job) for job in jobs]
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         try:
