@@ -623,6 +623,38 @@ class FrictionModel:
             columns.append((values[0] - values[1]) / (2 * h))
         return np.stack(columns, axis=-1)
 
+    def jacobian(self, velocity, pressure, names=None):
+        """Sensitivity of the steady-state friction to each coefficient, d F / d theta.
+
+        Central differences of :meth:`friction` (no validity check) at (velocity [m/s],
+        pressure [Pa]), broadcast; the last axis runs over ``names`` (default: the fitted
+        steady-state coefficients, :attr:`varying` without ``sigma_0``, ``sigma_1``).
+        Units: N per SI unit of each coefficient (N/N, N/(N/Pa), ...). Test design
+        (:mod:`cylfric.plan`) builds its information matrix from it.
+        """
+        if names is None:
+            names = [n for n in self.varying if n.partition(".")[0] in STEADY_PARAMETERS]
+        base = {n: p.value for n, p in self.parameters.items()}
+        missing = [n for n in names if base.get(n) is None]
+        if missing:
+            raise ValueError(f"no value for {missing}; coefficients of this model: {self.varying}")
+        columns = []
+        for name in names:
+            # friction is linear in these coefficients: a large step is exact and rounds
+            # least; v_r, alpha and an exponential rate take a small relative step
+            coefficient = name.partition(".")[2]
+            if coefficient in ("intercept", "slope", "curvature", "amplitude"):
+                floor = 1e-7 ** {"slope": 1, "curvature": 2}.get(coefficient, 0)  # per Pa
+                h = 1e-2 * max(abs(base[name]), floor)
+            else:
+                h = 1e-6 * max(abs(base[name]), 1e-12)
+            values = []
+            for sign in (1.0, -1.0):
+                shifted = dict(base, **{name: base[name] + sign * h})
+                values.append(self._friction(velocity, pressure, self._coefficients_from(shifted)))
+            columns.append((values[0] - values[1]) / (2 * h))
+        return np.stack(columns, axis=-1)
+
     def _coefficients_from(self, values):
         out = {}
         for name in STEADY_PARAMETERS:

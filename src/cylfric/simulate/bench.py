@@ -42,6 +42,7 @@ __all__ = [
     "run_dynamic_test",
     "generate_dynamic_tests",
     "write_test_manifest",
+    "run_plan",
 ]
 
 THESIS_PRESSURES_BAR = (0.1, 20.7, 38.0, 55.0, 69.0, 83.0, 103.0, 124.0, 141.0, 159.0)
@@ -118,6 +119,19 @@ class BenchSettings:
     pressure_channel: bool = False
     crlf: bool = False
     seed: int = 0
+    points: tuple | None = None  # explicit ((pressure [bar], speed [mm/s]), ...) in run order
+
+    def runs(self) -> tuple:
+        """(pressure [bar], speed [mm/s]) of every run in run order: ``points`` when given,
+        else the full grid ``pressures_bar`` x ``speeds_mm_s`` (pressure by pressure)."""
+        if self.points is not None:
+            return tuple((float(p), float(v)) for p, v in self.points)
+        return tuple((p, v) for p in self.pressures_bar for v in self.speeds_mm_s)
+
+    def slow_speeds(self) -> set:
+        """Speeds [mm/s] sampled at ``slow_interval``: the slowest ``slow_speed_count``
+        distinct speeds of the runs."""
+        return set(sorted({v for _, v in self.runs()})[: self.slow_speed_count])
 
 
 @dataclass(frozen=True)
@@ -229,6 +243,18 @@ def _stroke_plan(settings: BenchSettings, speed: float, interval: float):
     return length, n
 
 
+def run_plan(speed: float, settings: BenchSettings | None = None, *, slow=False):
+    """Stroke length [m], sample interval [s] and sample count of a run at ``speed`` [m/s].
+
+    ``slow`` selects ``slow_interval``. Raises ValueError when the speed does not fit the
+    stroke and the 10,001-sample budget (the bench cannot realise it).
+    """
+    s = settings or BenchSettings()
+    interval = s.slow_interval if slow else s.fast_interval
+    length, n = _stroke_plan(s, speed, interval)
+    return length, interval, n
+
+
 def run_virtual_test(
     pressure_bar: float,
     speed_mm_s: float,
@@ -251,7 +277,7 @@ def run_virtual_test(
             f"need pressure >= 0 bar and speed > 0 mm/s; got {pressure_bar}, {speed_mm_s}"
         )
     if slow is None:
-        slow = speed_mm_s in sorted(s.speeds_mm_s)[: s.slow_speed_count]
+        slow = speed_mm_s in s.slow_speeds()
     interval = s.slow_interval if slow else s.fast_interval
     n_sub = max(1, int(round(interval / s.internal_step)))
     h = interval / n_sub
@@ -358,6 +384,9 @@ def generate_campaign(
 ) -> dict:
     """Write a virtual campaign: one file per pressure x speed, plus ``manifest.csv``.
 
+    With ``settings.points`` the runs are those (pressure, speed) pairs in their order
+    (a test plan) instead of the full grid.
+
     Deterministic for a given ``settings.seed`` (each run draws from its own seeded stream).
     With ``tests`` naming ``"presliding"`` or ``"breakaway"`` (see :data:`TESTS`), the
     force-controlled tests of :func:`generate_dynamic_tests` are written too and
@@ -404,10 +433,8 @@ def generate_campaign(
             "settings": s,
             "dynamic": rows,
         }
-    slow = set(sorted(s.speeds_mm_s)[: s.slow_speed_count])
-    jobs = [
-        (i, p, v) for i, (p, v) in enumerate((p, v) for p in s.pressures_bar for v in s.speeds_mm_s)
-    ]
+    slow = s.slow_speeds()
+    jobs = [(i, p, v) for i, (p, v) in enumerate(s.runs())]
     seeds = np.random.SeedSequence(s.seed).spawn(len(jobs))
 
     def one(job):
