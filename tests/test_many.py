@@ -201,3 +201,27 @@ def test_a_local_cluster(eight, tmp_path):
     assert result.scheduler == "dask.distributed LocalCluster, 1 process(es)"
     sheet = json.loads((tmp_path / "out" / "cyl03" / "datasheet.json").read_text())
     assert sheet["name"] == "cyl03"
+
+
+def test_fit_many_adds_each_datasheet_to_a_real_catalogue(eight, tmp_path):
+    """The one touch point with cylfric.catalog (the two branches of issue 15 met here)."""
+    from cylfric.catalog import Catalog
+
+    root = tmp_path / "two"
+    for name in ("cyl00", "cyl01"):
+        (root / name).mkdir(parents=True)
+        for path in (eight / name).iterdir():
+            (root / name / path.name).write_bytes(path.read_bytes())
+    db = tmp_path / "seals.sqlite"
+    first = fit_many(
+        root, tmp_path / "out", workers=1, scheduler="serial", catalog=db, report=False
+    )
+    assert list(first.summary["catalog"]) == ["added", "added"]
+    assert sorted(Catalog(db).names()) == ["cyl00", "cyl01"]
+    sheet = json.loads((tmp_path / "out" / "cyl01" / "datasheet.json").read_text())
+    assert Catalog(db).get("cyl01")["parameters"] == sheet["parameters"]
+    again = fit_many(
+        root, tmp_path / "out2", workers=1, scheduler="serial", catalog=db, report=False
+    )
+    assert list(again.summary["status"]) == ["ok", "ok"]  # the fits stand ...
+    assert all(c.startswith("not added") for c in again.summary["catalog"])  # ... reported
