@@ -52,3 +52,16 @@ def test_window_velocity_is_the_savitzky_golay_derivative():
         n = max(5, int(round(window / 0.01)) | 1)
         expected = savgol_filter(x, n, 2, deriv=1, delta=0.01, mode="nearest")
         assert_allclose(smoothed_velocity(t, x, window=window), expected, rtol=0, atol=1e-10)
+
+
+def test_the_pipeline_imports_the_identification_only_while_extracting():
+    """scipy.optimize, jsonschema and the identification load in extract_campaign's
+    ``meanwhile`` (beside the second extraction worker), not when the pipeline is imported."""
+    script = (
+        "import sys\nimport cylfric.pipeline, cylfric.cli\n"
+        "print([m for m in ('scipy.optimize', 'scipy.ndimage', 'jsonschema', 'cylfric.identify')"
+        " if m in sys.modules])"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .io.campaign import discover_runs, load_config, read_run
+from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config, read_run
 from .io.writers import atomic_write_text
 from .quality import assess
 from .steady_state import extract_campaign
@@ -411,8 +411,6 @@ def _export_summary(out: Path, result) -> dict:
 
 def _dynamic_runs(folder, config):
     """Runs of the campaign that ``manifest.csv`` marks as presliding or breakaway tests."""
-    from .identify.dynamic import DYNAMIC_TESTS
-
     return [
         info
         for info in discover_runs(folder, config)

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from ..io.campaign import DYNAMIC_TESTS
 from ..model import FrictionModel
 
 __all__ = [
@@ -56,7 +57,6 @@ __all__ = [
     "identify_dynamic",
 ]
 
-DYNAMIC_TESTS = ("presliding", "breakaway")
 """Test kinds (the ``test`` column of ``manifest.csv``, or a ``Test:`` header line)."""
 
 HOLD = 0.04

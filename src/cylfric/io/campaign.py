@@ -29,10 +29,14 @@ __all__ = [
     "read_run",
     "name_tokens",
     "CONFIG_NAME",
+    "DYNAMIC_TESTS",
     "MANIFEST_NAME",
 ]
 
 CONFIG_NAME = "campaign.toml"
+DYNAMIC_TESTS = ("presliding", "breakaway")
+"""Test kinds of manifest.csv's ``test`` column that are not constant-velocity runs: they
+go to :mod:`cylfric.identify.dynamic`, never to the steady-state extraction."""
 MANIFEST_NAME = "manifest.csv"
 _SKIP_NAMES = {CONFIG_NAME, MANIFEST_NAME, "points.csv", "datasheet.json", "README.md", "LICENSE"}
 _PRESSURE_TOKEN = re.compile(

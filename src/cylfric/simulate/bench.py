@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from ..io.campaign import DYNAMIC_TESTS
 from ..io.writers import write_manifest, write_mts_text
 from . import kernels
 from .plant import THESIS_CYLINDER, Cylinder, FrictionModel
@@ -483,7 +484,6 @@ TESTS = ("constant-velocity", "presliding", "breakaway")
 """Tests the virtual bench can write: the thesis' constant-velocity strokes, and the
 force-controlled presliding and breakaway tests that identify ``sigma_0`` and ``sigma_1``."""
 
-DYNAMIC_TESTS = ("presliding", "breakaway")
 """Force-controlled tests, told apart from constant-velocity runs by the ``test`` column of
 ``manifest.csv`` (and the ``Test:`` header line)."""
 
