@@ -28,6 +28,8 @@ def g_function(speed, F_c, F_s, v_r, alpha):
     u = speed / v_r
     if alpha == 1.0:
         return F_c + (F_s - F_c) * math.exp(-u)
+    if alpha == 2.0:  # Gaussian Stribeck curve: u*u is exact and avoids pow
+        return F_c + (F_s - F_c) * math.exp(-(u * u))
     return F_c + (F_s - F_c) * math.exp(-(u**alpha))
 
 

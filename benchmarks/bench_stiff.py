@@ -1,0 +1,335 @@
+"""Stiff-bristle simulation benchmark (issue 12): cylfric's default integrator against scipy
+LSODA, Radau and BDF, numbalsoda (compiled LSODA) and the same scheme in C.
+
+Accuracy: RMS(F - F_ref)/F_c <= 1e-4 on the 1 ms output grid, F_ref from scipy Radau at
+rtol 1e-10 (atol 1e-12 m, 1e-12 m/s, 1e-10 F_c/sigma_0 m; analytic Jacobian). Every baseline
+runs at its loosest (rtol, atol) on a decade grid that meets the accuracy, with the next
+tighter rtol and the next tighter atol checked to meet it too; default options otherwise.
+cylfric runs at its default settings (no tuning). Times are the best of a few repeats, in one
+process, on a machine that may be shared: ratios, not absolute times, are the result.
+
+Sections: ``stiff`` (Canudas de Wit 1995 stick-slip 10 s over the sigma_0 sweep 1e5..1e10,
+40 s at 1e5 and 1e10, case A of benchmarks/run.py), ``stiff_batch`` (10,000 heterogeneous
+Canudas sets on 1 and 2 cores against LSODA set by set from a sample).
+Run: ``python benchmarks/run.py stiff`` (numbalsoda from ``pip install -e .[bench]``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from run import BUILD, HERE, _best, _save, _thesis_params  # noqa: E402
+
+TOL = 1e-4
+RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+ATOLS = (1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 1e-16)
+SWEEP = (1e5, 1e6, 1e7, 1e8, 1e9, 1e10)
+
+
+def canudas(sigma_0, duration):
+    """Canudas de Wit et al. 1995 stick-slip: m = 1 kg, spring 2 N/m pulled at 0.1 m/s.
+
+    sigma_1 = sqrt(sigma_0 m) (= sqrt(1e5) N*s/m of the paper at sigma_0 = 1e5 N/m).
+    """
+    from cylfric.friction.literature import CANUDAS_DE_WIT_1995
+
+    p = dict(CANUDAS_DE_WIT_1995.params)
+    p.update(sigma_0=sigma_0, sigma_1=math.sqrt(sigma_0 * 1.0))
+    return {"name": f"canudas s0={sigma_0:.0e} {duration:g}s", "mass": 1.0, "k": 2.0,
+            "speed": 0.1, "duration": duration, "params": p, "pressure": 0.0}
+
+
+def case_a():
+    """Case A of benchmarks/run.py: thesis cylinder friction at 50 bar, m = 10 kg, 2e4 N/m
+    spring at 5 mm/s, sigma_0 = 1e6 N/m, 10 s."""
+    p = {k: float(v) for k, v in _thesis_params(50e5).items()}
+    p.update(sigma_0=1e6, sigma_1=math.sqrt(1e6 * 10.0))
+    return {"name": "case A", "mass": 10.0, "k": 2e4, "speed": 5e-3, "duration": 10.0,
+            "params": p, "pressure": 50e5}
+
+
+def _grid(case):
+    return np.arange(int(round(case["duration"] / 1e-3)) + 1) * 1e-3
+
+
+def _python_rhs(case):
+    """Plain-Python right-hand side (math module: scipy's fastest) and the force on arrays."""
+    p, m, k, speed = case["params"], case["mass"], case["k"], case["speed"]
+    s0, s1, s2 = p["sigma_0"], p["sigma_1"], p["sigma_2"]
+    fc, fs, vr, al = p["F_c"], p["F_s"], p["v_r"], p["alpha"]
+
+    def rhs(t, y):
+        x, v, z = y
+        g = fc + (fs - fc) * math.exp(-((abs(v) / vr) ** al))
+        dz = v - s0 * abs(v) * z / g
+        return [v, (k * (speed * t - x) - (s0 * z + s1 * dz + s2 * v)) / m, dz]
+
+    def force(y):
+        x, v, z = y
+        g = fc + (fs - fc) * np.exp(-((np.abs(v) / vr) ** al))
+        return s0 * z + s1 * (v - s0 * np.abs(v) * z / g) + s2 * v
+
+    return rhs, force
+
+
+def reference(case):
+    """scipy Radau at rtol 1e-10 with the analytic Jacobian: friction on the grid [N]."""
+    from scipy.integrate import solve_ivp
+
+    from cylfric.simulate import kernels
+
+    p, m, k = case["params"], case["mass"], case["k"]
+    rhs, force = _python_rhs(case)
+
+    def jac(t, y):
+        d_v, d_z, _, _ = kernels.lugre_partials(
+            y[1], y[2], p["sigma_0"], p["F_c"], p["F_s"], p["v_r"], p["alpha"]
+        )
+        f_v, f_z = p["sigma_1"] * d_v + p["sigma_2"], p["sigma_0"] + p["sigma_1"] * d_z
+        return [[0, 1, 0], [-k / m, -f_v / m, -f_z / m], [0, d_v, d_z]]
+
+    t = _grid(case)
+    atol = [1e-12, 1e-12, 1e-10 * p["F_c"] / p["sigma_0"]]
+    t0 = time.perf_counter()
+    sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method="Radau", t_eval=t, rtol=1e-10,
+                    atol=atol, jac=jac)
+    assert sol.success, sol.message
+    return force(sol.y), time.perf_counter() - t0
+
+
+def _error(f, ref, case):
+    if f is None or not np.all(np.isfinite(f)):
+        return math.inf
+    return float(np.sqrt(np.mean((f - ref) ** 2)) / case["params"]["F_c"])
+
+
+def _search(run, ref, case, budget=30.0):
+    """Loosest (rtol, atol) on the decade grids meeting TOL, tighter neighbours meeting too.
+
+    ``run(rtol, atol)`` returns the friction on the grid (or None when the solver fails).
+    Gives up on a solver after ``budget`` seconds of searching.
+    """
+    start = time.perf_counter()
+    tried = {}
+
+    def ok(r, a):
+        if (r, a) not in tried:
+            tried[(r, a)] = _error(run(r, a), ref, case)
+        return tried[(r, a)] <= TOL
+
+    for i, r in enumerate(RTOLS):
+        for j, a in enumerate(ATOLS):
+            if time.perf_counter() - start > budget:
+                return {"rtol": None, "atol": None, "note": f"search over {budget} s budget",
+                        "tried": len(tried)}
+            if not ok(r, a):
+                continue
+            tighter = [(RTOLS[i + 1], a)] if i + 1 < len(RTOLS) else []
+            tighter += [(r, ATOLS[j + 1])] if j + 1 < len(ATOLS) else []
+            if all(ok(*rt) for rt in tighter):
+                seconds, _ = _best(lambda r=r, a=a: run(r, a), 3)
+                return {"rtol": r, "atol": a, "seconds": seconds, "error": tried[(r, a)],
+                        "tighter_errors": [tried[rt] for rt in tighter], "tried": len(tried)}
+            break  # this rtol's loosest passing atol has a failing neighbour: tighten rtol
+    return {"rtol": None, "atol": None, "note": "no setting met the accuracy",
+            "tried": len(tried)}
+
+
+def _scipy(method, case):
+    from scipy.integrate import solve_ivp
+
+    rhs, force = _python_rhs(case)
+    t = _grid(case)
+
+    def run(rtol, atol):
+        sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method=method, t_eval=t, rtol=rtol,
+                        atol=atol)
+        return force(sol.y) if sol.success and sol.y.shape[1] == t.size else None
+
+    return run
+
+
+def _numbalsoda(case):
+    try:
+        import numbalsoda
+        from numba import cfunc
+    except ImportError:
+        return None
+    p = case["params"]
+    data = np.array([case["mass"], case["k"], case["speed"], p["sigma_0"], p["sigma_1"],
+                     p["sigma_2"], p["F_c"], p["F_s"], p["v_r"], p["alpha"]])
+
+    @cfunc(numbalsoda.lsoda_sig)
+    def rhs(t, u, du, d):
+        m, k, speed, s0, s1, s2, fc, fs, vr, al = d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9]
+        v, z = u[1], u[2]
+        g = fc + (fs - fc) * math.exp(-((abs(v) / vr) ** al))
+        dz = v - s0 * abs(v) * z / g
+        du[0] = v
+        du[1] = (k * (speed * t - u[0]) - (s0 * z + s1 * dz + s2 * v)) / m
+        du[2] = dz
+
+    _, force = _python_rhs(case)
+    t = _grid(case)
+    address = rhs.address
+
+    def run(rtol, atol):
+        usol, success = numbalsoda.lsoda(address, np.zeros(3), t, data=data, rtol=rtol,
+                                         atol=atol)
+        return force(usol.T) if success else None
+
+    return run
+
+
+def _cylfric(case):
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, SpringPull, simulate
+
+    model = FrictionModel(case["params"], pressure_law="constant")
+    cylinder, drive = Cylinder(case["mass"]), SpringPull(case["k"], case["speed"])
+
+    def run():
+        return simulate(cylinder, model, drive, case["duration"])
+
+    run()  # compiled (or loaded from the cache) outside the timing
+    seconds, result = _best(run, 7)
+    return seconds, result
+
+
+def _c_rodas3(case):
+    """The same Rodas3 scheme in C (benchmarks/c/rodas3.c, gcc -O3): seconds and force."""
+    gcc = shutil.which("gcc") or shutil.which("cc")
+    source = HERE / "c" / "rodas3.c"
+    if gcc is None or not source.exists():
+        return None
+    BUILD.mkdir(exist_ok=True)
+    exe = BUILD / "rodas3"
+    subprocess.run([gcc, "-O3", "-o", str(exe), str(source), "-lm"], check=True)
+    from cylfric.simulate.plant import ROSENBROCK_RTOL, rosenbrock_tolerances
+
+    p = case["params"]
+    out = BUILD / "rodas3_force.bin"
+    args = [case["duration"], 1e-3, case["mass"], case["k"], case["speed"], p["F_c"], p["F_s"],
+            p["sigma_2"], p["sigma_0"], p["sigma_1"], p["v_r"], p["alpha"], ROSENBROCK_RTOL,
+            *rosenbrock_tolerances(ROSENBROCK_RTOL, p), 7]
+    text = subprocess.run([str(exe), *map(repr, map(float, args)), str(out)], check=True,
+                          capture_output=True, text=True).stdout
+    return float(text.split()[0]), np.fromfile(out, dtype=np.float64)
+
+
+def _one_case(case, baselines=("LSODA", "Radau", "BDF", "numbalsoda")):
+    ref, ref_seconds = reference(case)
+    seconds, result = _cylfric(case)
+    row = {"case": case["name"], "reference_seconds": ref_seconds,
+           "cylfric": {"seconds": seconds, "error": _error(result.outputs["friction_force"],
+                                                           ref, case),
+                       "steps": result.info.get("accepted"), "rtol": result.info.get("rtol")}}
+    c = _c_rodas3(case)
+    if c is not None:
+        row["c_rodas3"] = {"seconds": c[0], "error": _error(c[1], ref, case),
+                           "max_abs_difference_to_numba_N": float(
+                               np.max(np.abs(c[1] - result.outputs["friction_force"])))}
+        row["ratio_numba_over_c"] = seconds / c[0]
+    for name in baselines:
+        run = _numbalsoda(case) if name == "numbalsoda" else _scipy(name, case)
+        if run is None:
+            row[name] = {"note": "not installed (pip install -e .[bench])"}
+            continue
+        if name == "numbalsoda":
+            run(1e-6, 1e-6)  # compile the right-hand side outside the timing
+        row[name] = _search(run, ref, case)
+        if row[name].get("seconds"):
+            row[f"ratio_{name}_over_cylfric"] = row[name]["seconds"] / seconds
+    print(f"  {case['name']}: cylfric {seconds * 1e3:.2f} ms (err {row['cylfric']['error']:.1e})"
+          + "".join(f", {n} x{row.get(f'ratio_{n}_over_cylfric', math.nan):.1f}"
+                    for n in baselines), flush=True)
+    return row
+
+
+def bench_stiff(sweep=SWEEP):
+    cases = [canudas(s0, 10.0) for s0 in sweep]
+    cases += [canudas(1e5, 40.0), canudas(1e10, 40.0), case_a()]
+    rows = [_one_case(c) for c in cases]
+    by = {r["case"]: r for r in rows}
+    t40 = (by["canudas s0=1e+10 40s"]["cylfric"]["seconds"]
+           / by["canudas s0=1e+05 40s"]["cylfric"]["seconds"])
+    sweep_rows = [by[canudas(s0, 10.0)["name"]] for s0 in sweep]
+    payload = {
+        "accuracy": f"RMS(F - F_ref)/F_c <= {TOL} against Radau rtol 1e-10",
+        "rows": rows,
+        "goals": {
+            "sweep_min_ratio_LSODA (>= 20)": min(r.get("ratio_LSODA_over_cylfric", 0)
+                                                 for r in sweep_rows),
+            "sweep_min_ratio_numbalsoda (>= 3)": min(r.get("ratio_numbalsoda_over_cylfric", 0)
+                                                     for r in sweep_rows),
+            "max_ratio_numba_over_C (<= 1.3)": max(r.get("ratio_numba_over_c", math.nan)
+                                                   for r in rows),
+            "40s_1e10_over_1e5 (< 10)": t40,
+        },
+    }
+    return _save("simulate_stiff", payload)
+
+
+def bench_stiff_batch(n_sets=10_000, sample=5):
+    """10,000 Canudas-like sets: sigma_0 1e5..1e10, spring 1..4 N/m, speed 0.05..0.2 m/s."""
+    import numba
+
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, SpringPull, simulate_batch
+
+    rng = np.random.default_rng(12)
+    sigma_0 = 10 ** rng.uniform(5, 10, n_sets)
+    k = rng.uniform(1, 4, n_sets)
+    speed = rng.uniform(0.05, 0.2, n_sets)
+    base = canudas(1e5, 10.0)["params"]
+    models = [FrictionModel({**base, "sigma_0": s, "sigma_1": math.sqrt(s)},
+                            pressure_law="constant") for s in sigma_0]
+    drives = [SpringPull(float(ki), float(si)) for ki, si in zip(k, speed, strict=True)]
+
+    def run(sl):
+        return simulate_batch(Cylinder(1.0), models[sl], drives[sl], 10.0, record_every=1)
+
+    run(slice(0, 2))  # compile or load from the cache
+    times = {}
+    for threads in (1, numba.config.NUMBA_NUM_THREADS):
+        numba.set_num_threads(threads)
+        t0 = time.perf_counter()
+        batch = run(slice(0, n_sets))
+        times[threads] = time.perf_counter() - t0
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    idx = rng.choice(n_sets, sample, replace=False)
+    lsoda, errors = [], []
+    for i in idx:
+        case = canudas(float(sigma_0[i]), 10.0)
+        case.update(k=float(k[i]), speed=float(speed[i]))
+        ref, _ = reference(case)
+        errors.append(_error(batch.friction_force[i], ref, case))
+        found = _search(_scipy("LSODA", case), ref, case)
+        lsoda.append(found.get("seconds") or math.nan)
+    cores = max(times)
+    payload = {
+        "sets": n_sets,
+        "seconds_by_threads": times,
+        "speedup_second_core": times[1] / times[cores] if cores > 1 else None,
+        "lsoda_seconds_per_set_sample": lsoda,
+        "lsoda_estimate_seconds": float(np.nanmean(lsoda)) * n_sets,
+        "ratio_lsoda_over_batch": float(np.nanmean(lsoda)) * n_sets / times[cores],
+        "sample_error_rms_over_F_c": errors,
+        "goals": "ratio >= 100, second core >= 1.7x",
+        "cores": os.cpu_count(),
+    }
+    print(f"  batch: {times}, LSODA x{payload['ratio_lsoda_over_batch']:.0f}, "
+          f"second core x{payload['speedup_second_core']}", flush=True)
+    return _save("simulate_stiff_batch", payload)
+
+
+SECTIONS = {"stiff": bench_stiff, "stiff_batch": bench_stiff_batch}
