@@ -114,7 +114,7 @@ def test_linear_viscous_only_matches_mass_damper(method):
         sigma_0=1.0,
         sigma_1=0.0,
     )
-    # Rodas3's default rtol (1e-5) gives 1e-5 m/s here (local order 3, steps of 3 ms over a
+    # Rodas3's default rtol (1e-6) gives 1.8e-6 m/s here (local order 3, steps of 1.3 ms over a
     # 20 ms time constant); at rtol 1e-8 it meets the closed form like the others
     rtol = 1e-8 if method == "rosenbrock" else None
     result = simulate(

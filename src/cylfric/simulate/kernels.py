@@ -705,6 +705,9 @@ def rosenbrock_core(
     accepted = 0
     rejected = 0
     exponent = -1.0 / order
+    reuse = np.zeros(stages, dtype=np.bool_)  # stage evaluates f(t_n, y_n) again: reuse f0
+    for s in range(stages):
+        reuse[s] = s == 0 or (ALPHA[s] == 0.0 and not np.any(A[s] != 0.0))
     while next_out < n and accepted + rejected < max_steps:
         h = min(h, h_max)
         if t + h > t_end:
@@ -719,16 +722,20 @@ def rosenbrock_core(
         f_z = s0 + s1 * d_z  # dF/dz
         # Breakaway guards. An implicit step damps growing modes it steps over, and a stuck
         # contact shows no error until it breaks loose, so (1) while the drive loads the
-        # contact towards the slip limit g(v), a step
-        # covers at most half the force margin at the present loading rate (the threshold is
-        # approached geometrically, like an event location); (2) a growing mode of the (v, z)
-        # block (breakaway under way) limits h to 1/(its rate).
+        # contact towards the slip limit g(v), a step covers at most half the force margin at
+        # the present loading rate (the threshold is approached geometrically, like an event
+        # location); (2) a growing mode of the (v, z) block (breakaway under way) limits h to
+        # 1/(its rate).
         load = k * (xr - y[0]) + c * (vr - v) + ki * y[3] + fe
         rate = k * (sxr - v) + c * svr + sfe + ki * (xr - y[0])
         if load * rate > 0.0:
             margin = g_function(abs(v), fc, fs, v_r, alpha) - abs(load)
             if margin > 0.0:
                 h = min(h, max(0.5 * margin / abs(rate), 1e-3 * dt))
+        # (3) a slip that decelerates towards v = 0 (where |v| makes the Jacobian jump) is
+        # followed to the sticking instant geometrically too
+        if v * f0[1] < 0.0 and abs(v) > 1e-3 * v_r:
+            h = min(h, max(0.5 * abs(v / f0[1]), 1e-3 * dt))
         trace = -(c + f_v) / mass + d_z
         det = -(c + f_v) / mass * d_z + f_z * d_v / mass
         disc = 0.25 * trace * trace - det
@@ -752,7 +759,7 @@ def rosenbrock_core(
         inv_gz = 1.0 / (gi - d_z)
         inv_den = 1.0 / (a_ * inv_g + gi + b_ + cz * d_v * inv_gz + d_ * inv_g * inv_g)
         for s in range(stages):
-            if s == 0 or (ALPHA[s] == 0.0 and not np.any(A[s] != 0.0)):
+            if reuse[s]:
                 f_stage[:] = f0  # Rodas3's second stage re-uses f(t_n, y_n)
             else:
                 for q in range(4):
