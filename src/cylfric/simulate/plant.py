@@ -13,6 +13,7 @@ shrink as 1/sqrt(sigma_0)), ``"scipy"`` (``solve_ivp``, the validation backend, 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -208,9 +209,14 @@ def rosenbrock_tolerances(rtol, params):
     scale, so one ``rtol`` means the same accuracy however stiff the bristles are. Returns
     (atol position [m], velocity [m/s], z [m], force [N]).
     """
-    f_c = float(np.min(params["F_c"]))
-    sigma_0 = float(np.max(params["sigma_0"]))
-    v_r = float(np.min(params["v_r"]))
+    f_c, sigma_0, v_r = (
+        float(value) if np.ndim(value) == 0 else float(reduce(value))
+        for value, reduce in (
+            (params["F_c"], np.min),
+            (params["sigma_0"], np.max),
+            (params["v_r"], np.min),
+        )
+    )
     return rtol * 1e-3, rtol * v_r, rtol * f_c / sigma_0, rtol * f_c
 
 
@@ -280,24 +286,33 @@ def simulate(
         raise ValueError(f"step = {step} s is out of range; expected a finite step > 0 s")
     n = int(round(duration / dt)) + 1
     time = np.arange(n) * dt
-    pa = _on_grid(pressure_a, time, "pressure_a")
-    pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
-    for name, values in (("pressure_a", pa), ("pressure_b", pb)):
-        if values.min() < 0:
-            raise ValueError(
-                f"{name} goes down to {values.min():.4g} Pa; expected pressures >= 0 Pa"
-            )
-    # warns outside the model's validity pressures, or for pressures that look like bar
-    friction.check(None, friction.operating_pressure(pa, pb), strict=strict)
-    if (
+    constant = (
         np.ndim(pressure_a) == 0
         and (pressure_b is None or np.ndim(pressure_b) == 0)
         and not callable(pressure_a)
         and not callable(pressure_b)
-    ):
-        params = _friction_params(friction, float(pa[0]), float(pb[0]))  # constant pressures
+    )
+    if constant:  # the common case, checked on the two numbers (no arrays)
+        p_a = float(pressure_a)
+        p_b = p_a if pressure_b is None else float(pressure_b)
+        for name, value in (("pressure_a", p_a), ("pressure_b", p_b)):
+            if not math.isfinite(value):
+                raise ValueError(f"{name} contains NaN or inf; expected finite values")
+        pa = np.full(n, p_a)
+        pb = pa if pressure_b is None else np.full(n, p_b)
+        checked_a, checked_b = p_a, p_b
     else:
-        params = _friction_params(friction, pa, pb)
+        pa = _on_grid(pressure_a, time, "pressure_a")
+        pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
+        checked_a, checked_b = pa, pb
+    for name, values in (("pressure_a", checked_a), ("pressure_b", checked_b)):
+        if np.min(values) < 0:
+            raise ValueError(
+                f"{name} goes down to {np.min(values):.4g} Pa; expected pressures >= 0 Pa"
+            )
+    # warns outside the model's validity pressures, or for pressures that look like bar
+    friction.check(None, friction.operating_pressure(checked_a, checked_b), strict=strict)
+    params = _friction_params(friction, checked_a, checked_b)
     _check_friction(friction, params)
     f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
     info = {"method": method, "dt": dt}
@@ -450,13 +465,28 @@ def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_re
     )
 
 
+_LUGRE_NAMES = ("sigma_0", "sigma_1", "sigma_2", "F_c", "F_s", "v_r", "alpha")
+
+
 def _check_friction(friction, params):
     """Clear errors for friction parameters the integrators cannot use (checked once)."""
     if friction.simulation_law != "lugre":
         return
+    if all(np.ndim(params[name]) == 0 for name in _LUGRE_NAMES):
+        _check_lugre_numbers(*(float(params[name]) for name in _LUGRE_NAMES))
+    else:
+        _check_lugre_arrays({name: np.asarray(params[name], dtype=float) for name in params})
+
+
+@functools.lru_cache(maxsize=4096)
+def _check_lugre_numbers(*values):
+    """The check of constant parameters, remembered: sweeps re-use the same sets."""
+    _check_lugre_arrays(dict(zip(_LUGRE_NAMES, values, strict=True)))
+
+
+def _check_lugre_arrays(shape):
     from ..friction import lugre_force
 
-    shape = {name: np.asarray(params[name], dtype=float) for name in params}
     try:
         lugre_force(
             0.0,
