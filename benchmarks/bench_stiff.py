@@ -8,10 +8,12 @@ tighter rtol and the next tighter atol checked to meet it too; default options o
 cylfric runs at its default settings (no tuning). Times are the best of a few repeats, in one
 process, on a machine that may be shared: ratios, not absolute times, are the result.
 
-Sections: ``stiff`` (Canudas de Wit 1995 stick-slip 10 s over the sigma_0 sweep 1e5..1e10,
-40 s at 1e5 and 1e10, case A of benchmarks/run.py), ``stiff_batch`` (10,000 heterogeneous
-Canudas sets on 1 and 2 cores against LSODA set by set from a sample).
-Run: ``python benchmarks/run.py stiff`` (numbalsoda from ``pip install -e .[bench]``).
+Sections: ``simulate`` (Canudas de Wit 1995 stick-slip 10 s over the sigma_0 sweep
+1e5..1e10, 40 s at 1e5 and 1e10, case A: thesis friction at 50 bar on a 10 kg rod pulled by a
+2e4 N/m spring at 5 mm/s, sigma_0 = 1e6; case B: prescribed 50 mm/s sin(2 pi t),
+sigma_0 = 1e7), ``batch`` (10,000 heterogeneous Canudas sets on 1 and 2 cores against LSODA
+set by set from a sample).
+Run: ``python benchmarks/run.py simulate`` (numbalsoda from ``pip install -e .[bench]``).
 """
 
 from __future__ import annotations
@@ -44,8 +46,15 @@ def canudas(sigma_0, duration):
 
     p = dict(CANUDAS_DE_WIT_1995.params)
     p.update(sigma_0=sigma_0, sigma_1=math.sqrt(sigma_0 * 1.0))
-    return {"name": f"canudas s0={sigma_0:.0e} {duration:g}s", "mass": 1.0, "k": 2.0,
-            "speed": 0.1, "duration": duration, "params": p, "pressure": 0.0}
+    return {
+        "name": f"canudas s0={sigma_0:.0e} {duration:g}s",
+        "mass": 1.0,
+        "k": 2.0,
+        "speed": 0.1,
+        "duration": duration,
+        "params": p,
+        "pressure": 0.0,
+    }
 
 
 def case_a():
@@ -53,8 +62,15 @@ def case_a():
     spring at 5 mm/s, sigma_0 = 1e6 N/m, 10 s."""
     p = {k: float(v) for k, v in _thesis_params(50e5).items()}
     p.update(sigma_0=1e6, sigma_1=math.sqrt(1e6 * 10.0))
-    return {"name": "case A", "mass": 10.0, "k": 2e4, "speed": 5e-3, "duration": 10.0,
-            "params": p, "pressure": 50e5}
+    return {
+        "name": "case A",
+        "mass": 10.0,
+        "k": 2e4,
+        "speed": 5e-3,
+        "duration": 10.0,
+        "params": p,
+        "pressure": 50e5,
+    }
 
 
 def _grid(case):
@@ -100,8 +116,9 @@ def reference(case):
     t = _grid(case)
     atol = [1e-12, 1e-12, 1e-10 * p["F_c"] / p["sigma_0"]]
     t0 = time.perf_counter()
-    sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method="Radau", t_eval=t, rtol=1e-10,
-                    atol=atol, jac=jac)
+    sol = solve_ivp(
+        rhs, (0, t[-1]), [0, 0, 0], method="Radau", t_eval=t, rtol=1e-10, atol=atol, jac=jac
+    )
     assert sol.success, sol.message
     return force(sol.y), time.perf_counter() - t0
 
@@ -129,19 +146,28 @@ def _search(run, ref, case, budget=30.0):
     for i, r in enumerate(RTOLS):
         for j, a in enumerate(ATOLS):
             if time.perf_counter() - start > budget:
-                return {"rtol": None, "atol": None, "note": f"search over {budget} s budget",
-                        "tried": len(tried)}
+                return {
+                    "rtol": None,
+                    "atol": None,
+                    "note": f"search over {budget} s budget",
+                    "tried": len(tried),
+                }
             if not ok(r, a):
                 continue
             tighter = [(RTOLS[i + 1], a)] if i + 1 < len(RTOLS) else []
             tighter += [(r, ATOLS[j + 1])] if j + 1 < len(ATOLS) else []
             if all(ok(*rt) for rt in tighter):
                 seconds, _ = _best(lambda r=r, a=a: run(r, a), 3)
-                return {"rtol": r, "atol": a, "seconds": seconds, "error": tried[(r, a)],
-                        "tighter_errors": [tried[rt] for rt in tighter], "tried": len(tried)}
+                return {
+                    "rtol": r,
+                    "atol": a,
+                    "seconds": seconds,
+                    "error": tried[(r, a)],
+                    "tighter_errors": [tried[rt] for rt in tighter],
+                    "tried": len(tried),
+                }
             break  # this rtol's loosest passing atol has a failing neighbour: tighten rtol
-    return {"rtol": None, "atol": None, "note": "no setting met the accuracy",
-            "tried": len(tried)}
+    return {"rtol": None, "atol": None, "note": "no setting met the accuracy", "tried": len(tried)}
 
 
 def _scipy(method, case):
@@ -151,8 +177,7 @@ def _scipy(method, case):
     t = _grid(case)
 
     def run(rtol, atol):
-        sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method=method, t_eval=t, rtol=rtol,
-                        atol=atol)
+        sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method=method, t_eval=t, rtol=rtol, atol=atol)
         return force(sol.y) if sol.success and sol.y.shape[1] == t.size else None
 
     return run
@@ -165,12 +190,25 @@ def _numbalsoda(case):
     except ImportError:
         return None
     p = case["params"]
-    data = np.array([case["mass"], case["k"], case["speed"], p["sigma_0"], p["sigma_1"],
-                     p["sigma_2"], p["F_c"], p["F_s"], p["v_r"], p["alpha"]])
+    data = np.array(
+        [
+            case["mass"],
+            case["k"],
+            case["speed"],
+            p["sigma_0"],
+            p["sigma_1"],
+            p["sigma_2"],
+            p["F_c"],
+            p["F_s"],
+            p["v_r"],
+            p["alpha"],
+        ]
+    )
 
     @cfunc(numbalsoda.lsoda_sig)
     def rhs(t, u, du, d):
-        m, k, speed, s0, s1, s2, fc, fs, vr, al = d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9]
+        m, k, speed, s0, s1 = d[0], d[1], d[2], d[3], d[4]
+        s2, fc, fs, vr, al = d[5], d[6], d[7], d[8], d[9]
         v, z = u[1], u[2]
         g = fc + (fs - fc) * math.exp(-((abs(v) / vr) ** al))
         dz = v - s0 * abs(v) * z / g
@@ -183,8 +221,7 @@ def _numbalsoda(case):
     address = rhs.address
 
     def run(rtol, atol):
-        usol, success = numbalsoda.lsoda(address, np.zeros(3), t, data=data, rtol=rtol,
-                                         atol=atol)
+        usol, success = numbalsoda.lsoda(address, np.zeros(3), t, data=data, rtol=rtol, atol=atol)
         return force(usol.T) if success else None
 
     return run
@@ -209,10 +246,31 @@ def _cylfric(case):
     p, t = case["params"], _grid(case)
     ones = np.ones(t.size)
     rtol = result.info["rtol"]
-    args = (1e-3, 0.0, 0.0, 0.0, case["mass"], case["k"], 0.0, 0.0, case["speed"] * t,
-            case["speed"] * ones, 0 * ones, p["F_c"] * ones, p["F_s"] * ones,
-            p["sigma_2"] * ones, p["sigma_0"], p["sigma_1"], p["v_r"], p["alpha"], rtol,
-            *rosenbrock_tolerances(rtol, p), MAX_STEPS, math.inf, kernels.RODAS3)
+    args = (
+        1e-3,
+        0.0,
+        0.0,
+        0.0,
+        case["mass"],
+        case["k"],
+        0.0,
+        0.0,
+        case["speed"] * t,
+        case["speed"] * ones,
+        0 * ones,
+        p["F_c"] * ones,
+        p["F_s"] * ones,
+        p["sigma_2"] * ones,
+        p["sigma_0"],
+        p["sigma_1"],
+        p["v_r"],
+        p["alpha"],
+        rtol,
+        *rosenbrock_tolerances(rtol, p),
+        MAX_STEPS,
+        math.inf,
+        kernels.RODAS3,
+    )
     kernel_seconds, _ = _best(lambda: kernels.rosenbrock(*args), 7)
     return seconds, result, kernel_seconds
 
@@ -230,26 +288,55 @@ def _c_rodas3(case):
 
     p = case["params"]
     out = BUILD / "rodas3_force.bin"
-    args = [case["duration"], 1e-3, case["mass"], case["k"], case["speed"], p["F_c"], p["F_s"],
-            p["sigma_2"], p["sigma_0"], p["sigma_1"], p["v_r"], p["alpha"], ROSENBROCK_RTOL,
-            *rosenbrock_tolerances(ROSENBROCK_RTOL, p), 7]
-    text = subprocess.run([str(exe), *map(repr, map(float, args)), str(out)], check=True,
-                          capture_output=True, text=True).stdout
+    args = [
+        case["duration"],
+        1e-3,
+        case["mass"],
+        case["k"],
+        case["speed"],
+        p["F_c"],
+        p["F_s"],
+        p["sigma_2"],
+        p["sigma_0"],
+        p["sigma_1"],
+        p["v_r"],
+        p["alpha"],
+        ROSENBROCK_RTOL,
+        *rosenbrock_tolerances(ROSENBROCK_RTOL, p),
+        7,
+    ]
+    text = subprocess.run(
+        [str(exe), *map(repr, map(float, args)), str(out)],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     return float(text.split()[0]), np.fromfile(out, dtype=np.float64)
 
 
 def _one_case(case, baselines=("LSODA", "Radau", "BDF", "numbalsoda")):
     ref, ref_seconds = reference(case)
     seconds, result, kernel_seconds = _cylfric(case)
-    row = {"case": case["name"], "reference_seconds": ref_seconds,
-           "cylfric": {"seconds": seconds, "kernel_seconds": kernel_seconds,
-                       "error": _error(result.outputs["friction_force"], ref, case),
-                       "steps": result.info.get("accepted"), "rtol": result.info.get("rtol")}}
+    row = {
+        "case": case["name"],
+        "reference_seconds": ref_seconds,
+        "cylfric": {
+            "seconds": seconds,
+            "kernel_seconds": kernel_seconds,
+            "error": _error(result.outputs["friction_force"], ref, case),
+            "steps": result.info.get("accepted"),
+            "rtol": result.info.get("rtol"),
+        },
+    }
     c = _c_rodas3(case)
     if c is not None:
-        row["c_rodas3"] = {"seconds": c[0], "error": _error(c[1], ref, case),
-                           "max_abs_difference_to_numba_N": float(
-                               np.max(np.abs(c[1] - result.outputs["friction_force"])))}
+        row["c_rodas3"] = {
+            "seconds": c[0],
+            "error": _error(c[1], ref, case),
+            "max_abs_difference_to_numba_N": float(
+                np.max(np.abs(c[1] - result.outputs["friction_force"]))
+            ),
+        }
         row["ratio_simulate_over_c"] = seconds / c[0]
         row["ratio_numba_kernel_over_c"] = kernel_seconds / c[0]
     for name in baselines:
@@ -262,11 +349,14 @@ def _one_case(case, baselines=("LSODA", "Radau", "BDF", "numbalsoda")):
         row[name] = _search(run, ref, case)
         if row[name].get("seconds"):
             row[f"ratio_{name}_over_cylfric"] = row[name]["seconds"] / seconds
-    print(f"  {case['name']}: cylfric {seconds * 1e3:.2f} ms (kernel {kernel_seconds * 1e3:.2f},"
-          f" C {row.get('c_rodas3', {}).get('seconds', math.nan) * 1e3:.2f}; err "
-          f"{row['cylfric']['error']:.1e}, C err {row.get('c_rodas3', {}).get('error', math.nan):.1e})"
-          + "".join(f", {n} x{row.get(f'ratio_{n}_over_cylfric', math.nan):.1f}"
-                    for n in baselines), flush=True)
+    c_row = row.get("c_rodas3", {})
+    print(
+        f"  {case['name']}: cylfric {seconds * 1e3:.2f} ms (kernel {kernel_seconds * 1e3:.2f},"
+        f" C {c_row.get('seconds', math.nan) * 1e3:.2f}; err "
+        f"{row['cylfric']['error']:.1e}, C err {c_row.get('error', math.nan):.1e})"
+        + "".join(f", {n} x{row.get(f'ratio_{n}_over_cylfric', math.nan):.1f}" for n in baselines),
+        flush=True,
+    )
     return row
 
 
@@ -275,21 +365,27 @@ def bench_stiff(sweep=SWEEP):
     cases += [canudas(1e5, 40.0), canudas(1e10, 40.0), case_a()]
     rows = [_one_case(c) for c in cases]
     by = {r["case"]: r for r in rows}
-    t40 = (by["canudas s0=1e+10 40s"]["cylfric"]["seconds"]
-           / by["canudas s0=1e+05 40s"]["cylfric"]["seconds"])
+    t40 = (
+        by["canudas s0=1e+10 40s"]["cylfric"]["seconds"]
+        / by["canudas s0=1e+05 40s"]["cylfric"]["seconds"]
+    )
     sweep_rows = [by[canudas(s0, 10.0)["name"]] for s0 in sweep]
     payload = {
         "accuracy": f"RMS(F - F_ref)/F_c <= {TOL} against Radau rtol 1e-10",
         "rows": rows,
         "goals": {
-            "sweep_min_ratio_LSODA (>= 20)": min(r.get("ratio_LSODA_over_cylfric", 0)
-                                                 for r in sweep_rows),
-            "sweep_min_ratio_numbalsoda (>= 3)": min(r.get("ratio_numbalsoda_over_cylfric", 0)
-                                                     for r in sweep_rows),
+            "sweep_min_ratio_LSODA (>= 20)": min(
+                r.get("ratio_LSODA_over_cylfric", 0) for r in sweep_rows
+            ),
+            "sweep_min_ratio_numbalsoda (>= 3)": min(
+                r.get("ratio_numbalsoda_over_cylfric", 0) for r in sweep_rows
+            ),
             "max_ratio_numba_kernel_over_C (<= 1.3)": max(
-                r.get("ratio_numba_kernel_over_c", math.nan) for r in rows),
-            "max_ratio_simulate_over_C": max(r.get("ratio_simulate_over_c", math.nan)
-                                             for r in rows),
+                r.get("ratio_numba_kernel_over_c", math.nan) for r in rows
+            ),
+            "max_ratio_simulate_over_C": max(
+                r.get("ratio_simulate_over_c", math.nan) for r in rows
+            ),
             "40s_1e10_over_1e5 (< 10)": t40,
         },
     }
@@ -308,8 +404,10 @@ def bench_stiff_batch(n_sets=10_000, sample=5):
     k = rng.uniform(1, 4, n_sets)
     speed = rng.uniform(0.05, 0.2, n_sets)
     base = canudas(1e5, 10.0)["params"]
-    models = [FrictionModel({**base, "sigma_0": s, "sigma_1": math.sqrt(s)},
-                            pressure_law="constant") for s in sigma_0]
+    models = [
+        FrictionModel({**base, "sigma_0": s, "sigma_1": math.sqrt(s)}, pressure_law="constant")
+        for s in sigma_0
+    ]
     drives = [SpringPull(float(ki), float(si)) for ki, si in zip(k, speed, strict=True)]
 
     def run(sl):
@@ -344,9 +442,104 @@ def bench_stiff_batch(n_sets=10_000, sample=5):
         "goals": "ratio >= 100, second core >= 1.7x",
         "cores": os.cpu_count(),
     }
-    print(f"  batch: {times}, LSODA x{payload['ratio_lsoda_over_batch']:.0f}, "
-          f"second core x{payload['speedup_second_core']}", flush=True)
+    print(
+        f"  batch: {times}, LSODA x{payload['ratio_lsoda_over_batch']:.0f}, "
+        f"second core x{payload['speedup_second_core']}",
+        flush=True,
+    )
     return _save("simulate_stiff_batch", payload)
 
 
-SECTIONS = {"stiff": bench_stiff, "stiff_batch": bench_stiff_batch}
+def bench_case_b():
+    """Case B: prescribed 50 mm/s sin(2 pi t) for 10 s, thesis friction at 50 bar, sigma_0 =
+    1e7 N/m: simulate() (exact z update) against the bristle ODE in scipy and numbalsoda."""
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, PrescribedMotion, simulate
+
+    p = {k: float(v) for k, v in _thesis_params(50e5).items()}
+    s0, s1 = 1e7, math.sqrt(1e7 * 10.0)
+    p.update(sigma_0=s0, sigma_1=s1)
+    model = FrictionModel(p, pressure_law="constant")
+    drive = PrescribedMotion(lambda t: 0.05 * np.sin(2 * np.pi * t))
+    case = {"name": "case B", "duration": 10.0, "params": p}
+    t = _grid(case)
+    ref = simulate(Cylinder(10.0), model, drive, 10.0, method="scipy", rtol=1e-10)
+    ref = ref.outputs["friction_force"]
+
+    def run():
+        return simulate(Cylinder(10.0), model, drive, 10.0)
+
+    run()
+    seconds, result = _best(run, 7)
+    row = {
+        "case": "case B",
+        "cylfric": {
+            "seconds": seconds,
+            "error": _error(result.outputs["friction_force"], ref, case),
+            "info": result.info,
+        },
+    }
+    fc, fs, vr, s2 = p["F_c"], p["F_s"], p["v_r"], p["sigma_2"]
+    v_grid = 0.05 * np.sin(2 * np.pi * t)
+    g_grid = fc + (fs - fc) * np.exp(-np.abs(v_grid) / vr)
+
+    def force(z):
+        return s0 * z + s1 * (v_grid - s0 * np.abs(v_grid) * z / g_grid) + s2 * v_grid
+
+    def rhs(t_, y):
+        v = 0.05 * math.sin(2 * math.pi * t_)
+        return [v - s0 * abs(v) * y[0] / (fc + (fs - fc) * math.exp(-abs(v) / vr))]
+
+    from scipy.integrate import solve_ivp
+
+    for name in ("LSODA", "Radau", "BDF"):
+
+        def run_scipy(rtol, atol, name=name):
+            sol = solve_ivp(rhs, (0, 10.0), [0.0], method=name, t_eval=t, rtol=rtol, atol=atol)
+            return force(sol.y[0]) if sol.success and sol.y.shape[1] == t.size else None
+
+        row[name] = _search(run_scipy, ref, case)
+        if row[name].get("seconds"):
+            row[f"ratio_{name}_over_cylfric"] = row[name]["seconds"] / seconds
+    try:
+        import numbalsoda
+        from numba import cfunc
+
+        @cfunc(numbalsoda.lsoda_sig)
+        def rhs_nb(t_, u, du, d):
+            v = 0.05 * math.sin(2 * math.pi * t_)
+            g = d[0] + (d[1] - d[0]) * math.exp(-abs(v) / d[2])
+            du[0] = v - d[3] * abs(v) * u[0] / g
+
+        data = np.array([fc, fs, vr, s0])
+
+        def run_nb(rtol, atol):
+            usol, ok = numbalsoda.lsoda(
+                rhs_nb.address, np.zeros(1), t, data=data, rtol=rtol, atol=atol
+            )
+            return force(usol[:, 0]) if ok else None
+
+        run_nb(1e-6, 1e-6)
+        row["numbalsoda"] = _search(run_nb, ref, case)
+        if row["numbalsoda"].get("seconds"):
+            row["ratio_numbalsoda_over_cylfric"] = row["numbalsoda"]["seconds"] / seconds
+    except ImportError:
+        row["numbalsoda"] = {"note": "not installed (pip install -e .[bench])"}
+    print(
+        f"  case B: cylfric {seconds * 1e3:.2f} ms (err {row['cylfric']['error']:.1e})"
+        + "".join(
+            f", {n} x{row.get(f'ratio_{n}_over_cylfric', math.nan):.1f}"
+            for n in ("LSODA", "Radau", "BDF", "numbalsoda")
+        ),
+        flush=True,
+    )
+    return _save("simulate_case_b", row)
+
+
+def bench_simulate():
+    """All single-run cases: the stiff sweep, the 40 s runs, case A and case B."""
+    stiff = bench_stiff()
+    return {"stiff": stiff, "case_b": bench_case_b()}
+
+
+SECTIONS = {"simulate": bench_simulate, "batch": bench_stiff_batch}

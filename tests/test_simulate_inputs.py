@@ -109,9 +109,7 @@ def test_the_literature_set_as_coefficients_keeps_sigma_0_and_sigma_1():
             r"need 0 < dt <= duration and record_every >= 1 \(duration < inf\)",
         ),
         (
-            lambda: simulate_batch(
-                [Cylinder(1.0)] * 2, _canudas(), [SpringPull(2, 0.1)] * 3, 1.0
-            ),
+            lambda: simulate_batch([Cylinder(1.0)] * 2, _canudas(), [SpringPull(2, 0.1)] * 3, 1.0),
             r"2 cylinders for 3 sets; expected one per set \(or a single one\)",
         ),
     ],

@@ -35,8 +35,15 @@ def _radau(params, duration, dt=1e-3):
         return [v, (K * (SPEED * t - x) - force) / MASS, dz]
 
     t = np.arange(int(round(duration / dt)) + 1) * dt
-    sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method="Radau", t_eval=t, rtol=1e-10,
-                    atol=[1e-12, 1e-12, 1e-10 * p["F_c"] / p["sigma_0"]])
+    sol = solve_ivp(
+        rhs,
+        (0, t[-1]),
+        [0, 0, 0],
+        method="Radau",
+        t_eval=t,
+        rtol=1e-10,
+        atol=[1e-12, 1e-12, 1e-10 * p["F_c"] / p["sigma_0"]],
+    )
     assert sol.success
     x, v, z = sol.y
     return t, v, np.array([_force_dz(vi, zi, p)[0] for vi, zi in zip(v, z, strict=True)])
@@ -45,8 +52,19 @@ def _radau(params, duration, dt=1e-3):
 def _force_dz(v, z, p):
     """LuGre force and dz/dt from the model's law (eq. 2.5): dz/dt from the force identity
     F = sigma_0 z + sigma_1 dz + sigma_2 v."""
-    force = float(lugre_force(v, z, p["sigma_0"], p["sigma_1"], p["sigma_2"], p["F_c"],
-                              p["F_s"], p["v_r"], alpha=p["alpha"]))
+    force = float(
+        lugre_force(
+            v,
+            z,
+            p["sigma_0"],
+            p["sigma_1"],
+            p["sigma_2"],
+            p["F_c"],
+            p["F_s"],
+            p["v_r"],
+            alpha=p["alpha"],
+        )
+    )
     return force, (force - p["sigma_0"] * z - p["sigma_2"] * v) / p["sigma_1"]
 
 
@@ -90,14 +108,19 @@ def test_sigma_0_sweep_finishes_without_nan_within_the_force_error_bound(sigma_0
 def test_analytic_jacobian_matches_finite_differences_of_the_law():
     rng = np.random.default_rng(3)
     for _ in range(200):
-        p = {"sigma_0": 10 ** rng.uniform(4, 10), "F_c": rng.uniform(1, 100),
-             "v_r": 10 ** rng.uniform(-4, -1), "alpha": rng.choice([1.0, 2.0, 1.5])}
+        p = {
+            "sigma_0": 10 ** rng.uniform(4, 10),
+            "F_c": rng.uniform(1, 100),
+            "v_r": 10 ** rng.uniform(-4, -1),
+            "alpha": rng.choice([1.0, 2.0, 1.5]),
+        }
         p["F_s"] = p["F_c"] * rng.uniform(1, 2)
         p["sigma_1"], p["sigma_2"] = 1.0, 0.0
         v = rng.choice([-1, 1]) * 10 ** rng.uniform(-5, 0)
         z = rng.uniform(-1, 1) * p["F_c"] / p["sigma_0"]
-        d_v, d_z, _, _ = kernels.lugre_partials(v, z, p["sigma_0"], p["F_c"], p["F_s"],
-                                                p["v_r"], p["alpha"])
+        d_v, d_z, _, _ = kernels.lugre_partials(
+            v, z, p["sigma_0"], p["F_c"], p["F_s"], p["v_r"], p["alpha"]
+        )
         hv, hz = 1e-6 * abs(v), 1e-6 * p["F_c"] / p["sigma_0"]
         fd_v = (_force_dz(v + hv, z, p)[1] - _force_dz(v - hv, z, p)[1]) / (2 * hv)
         fd_z = (_force_dz(v, z + hz, p)[1] - _force_dz(v, z - hz, p)[1]) / (2 * hz)

@@ -655,8 +655,9 @@ def _inputs(t, dt, ramp, x_ref, v_ref, f_ext, F_c, F_s, sigma_2):
 
 
 @njit(cache=True, inline="always")
-def _plant(t, y, out, dt, ramp, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1,
-           v_r, alpha):
+def _plant(
+    t, y, out, dt, ramp, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1, v_r, alpha
+):
     """Right-hand side of the plant; returns the friction force (eq. 2.5) [N]."""
     xr, vr, fe, fc, fs, s2, _, _, _, _, _, _ = _inputs(
         t, dt, ramp, x_ref, v_ref, f_ext, F_c, F_s, sigma_2
@@ -674,8 +675,34 @@ def _plant(t, y, out, dt, ramp, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, s
 
 @njit(cache=True)
 def rosenbrock_core(
-    dt, ramp, x0, v0, z0, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1, v_r,
-    alpha, rtol, atol_x, atol_v, atol_z, atol_f, max_steps, h_max, tables, out_y,
+    dt,
+    ramp,
+    x0,
+    v0,
+    z0,
+    mass,
+    k,
+    c,
+    ki,
+    x_ref,
+    v_ref,
+    f_ext,
+    F_c,
+    F_s,
+    sigma_2,
+    s0,
+    s1,
+    v_r,
+    alpha,
+    rtol,
+    atol_x,
+    atol_v,
+    atol_z,
+    atol_f,
+    max_steps,
+    h_max,
+    tables,
+    out_y,
 ):
     """Adaptive Rosenbrock integration of the plant; states written to ``out_y`` (n, 4).
 
@@ -696,8 +723,27 @@ def rosenbrock_core(
     y_new = np.empty(4)
     f0 = np.empty(4)
     f1 = np.empty(4)
-    _plant(0.0, y, f0, dt, ramp, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1,
-           v_r, alpha)
+    _plant(
+        0.0,
+        y,
+        f0,
+        dt,
+        ramp,
+        mass,
+        k,
+        c,
+        ki,
+        x_ref,
+        v_ref,
+        f_ext,
+        F_c,
+        F_s,
+        sigma_2,
+        s0,
+        s1,
+        v_r,
+        alpha,
+    )
     out_y[0, :] = y
     t = 0.0
     h = min(dt, 1e-5)
@@ -767,8 +813,27 @@ def rosenbrock_core(
                     for j in range(s):
                         acc += A[s, j] * K[j, q]
                     stage[q] = y[q] + acc
-                _plant(t + ALPHA[s] * h, stage, f_stage, dt, ramp, mass, k, c, ki, x_ref, v_ref,
-                       f_ext, F_c, F_s, sigma_2, s0, s1, v_r, alpha)
+                _plant(
+                    t + ALPHA[s] * h,
+                    stage,
+                    f_stage,
+                    dt,
+                    ramp,
+                    mass,
+                    k,
+                    c,
+                    ki,
+                    x_ref,
+                    v_ref,
+                    f_ext,
+                    F_c,
+                    F_s,
+                    sigma_2,
+                    s0,
+                    s1,
+                    v_r,
+                    alpha,
+                )
             for q in range(4):
                 acc = 0.0
                 for j in range(s):
@@ -780,11 +845,7 @@ def rosenbrock_core(
             rz = rhs_[2] + hg * dzdt_t
             re = rhs_[3] + hg * sxr
             kv = (
-                rv
-                - a_ * rx * inv_g
-                - cz * rz * inv_gz
-                + d_ * re * inv_g
-                - d_ * rx * inv_g * inv_g
+                rv - a_ * rx * inv_g - cz * rz * inv_gz + d_ * re * inv_g - d_ * rx * inv_g * inv_g
             ) * inv_den
             kx = (rx + kv) * inv_g
             K[s, 0] = kx
@@ -812,8 +873,27 @@ def rosenbrock_core(
         err = math.sqrt(err / 5)
         if err <= 1.0 and math.isfinite(err):
             t_new = t + h
-            _plant(t_new, y_new, f1, dt, ramp, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s,
-                   sigma_2, s0, s1, v_r, alpha)
+            _plant(
+                t_new,
+                y_new,
+                f1,
+                dt,
+                ramp,
+                mass,
+                k,
+                c,
+                ki,
+                x_ref,
+                v_ref,
+                f_ext,
+                F_c,
+                F_s,
+                sigma_2,
+                s0,
+                s1,
+                v_r,
+                alpha,
+            )
             while next_out < n and next_out * dt <= t_new + 1e-12 * dt:
                 theta = (next_out * dt - t) / h
                 t2 = theta * theta
@@ -826,9 +906,7 @@ def rosenbrock_core(
                     if stiff and (q == 1 or q == 2):  # slopes of stiff states carry their error
                         out_y[next_out, q] = y[q] + theta * (y_new[q] - y[q])
                     else:
-                        out_y[next_out, q] = (
-                            h00 * y[q] + h10 * f0[q] + h01 * y_new[q] + h11 * f1[q]
-                        )
+                        out_y[next_out, q] = h00 * y[q] + h10 * f0[q] + h01 * y_new[q] + h11 * f1[q]
                 next_out += 1
             t = t_new
             y[:] = y_new
@@ -844,8 +922,32 @@ def rosenbrock_core(
 
 @njit(cache=True)
 def rosenbrock(
-    dt, x0, v0, z0, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, sigma_0, sigma_1,
-    v_r, alpha, rtol, atol_x, atol_v, atol_z, atol_f, max_steps, h_max, tables,
+    dt,
+    x0,
+    v0,
+    z0,
+    mass,
+    k,
+    c,
+    ki,
+    x_ref,
+    v_ref,
+    f_ext,
+    F_c,
+    F_s,
+    sigma_2,
+    sigma_0,
+    sigma_1,
+    v_r,
+    alpha,
+    rtol,
+    atol_x,
+    atol_v,
+    atol_z,
+    atol_f,
+    max_steps,
+    h_max,
+    tables,
 ):
     """Adaptive L-stable Rosenbrock integration with output on the input grid.
 
@@ -855,8 +957,34 @@ def rosenbrock(
     n = x_ref.shape[0]
     out_y = np.empty((n, 4))
     accepted, rejected, reached = rosenbrock_core(
-        dt, 0.0, x0, v0, z0, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, sigma_0,
-        sigma_1, v_r, alpha, rtol, atol_x, atol_v, atol_z, atol_f, max_steps, h_max, tables, out_y,
+        dt,
+        0.0,
+        x0,
+        v0,
+        z0,
+        mass,
+        k,
+        c,
+        ki,
+        x_ref,
+        v_ref,
+        f_ext,
+        F_c,
+        F_s,
+        sigma_2,
+        sigma_0,
+        sigma_1,
+        v_r,
+        alpha,
+        rtol,
+        atol_x,
+        atol_v,
+        atol_z,
+        atol_f,
+        max_steps,
+        h_max,
+        tables,
+        out_y,
     )
     for i in range(reached, n):
         out_y[i] = np.nan
@@ -878,9 +1006,34 @@ def rosenbrock(
 
 @njit(cache=True, parallel=True)
 def rosenbrock_batch(
-    dt, record_every, x0, v0, rows, ramp, mass, k, c, ki, f_offset, x_ref, v_ref, f_ext, F_c,
-    F_s, sigma_2, sigma_0, sigma_1, v_r, alpha, rtol, atol_x, atol_v, atol_z, atol_f,
-    max_steps, tables,
+    dt,
+    record_every,
+    x0,
+    v0,
+    rows,
+    ramp,
+    mass,
+    k,
+    c,
+    ki,
+    f_offset,
+    x_ref,
+    v_ref,
+    f_ext,
+    F_c,
+    F_s,
+    sigma_2,
+    sigma_0,
+    sigma_1,
+    v_r,
+    alpha,
+    rtol,
+    atol_x,
+    atol_v,
+    atol_z,
+    atol_f,
+    max_steps,
+    tables,
 ):
     """Many heterogeneous sets with the Rosenbrock kernel (``prange``: all cores).
 
@@ -901,10 +1054,34 @@ def rosenbrock_batch(
         row = rows[s]
         fe = f_ext[row] + f_offset[s]
         accepted, rejected, got = rosenbrock_core(
-            dt, ramp[s], x0, v0, 0.0, mass[s], k[s], c[s], ki[s], x_ref[row], v_ref[row], fe,
-            np.full(n, F_c[s]), np.full(n, F_s[s]), np.full(n, sigma_2[s]), sigma_0[s],
-            sigma_1[s], v_r[s], alpha[s], rtol, atol_x[s], atol_v[s], atol_z[s], atol_f[s],
-            max_steps, math.inf, tables, out_y,
+            dt,
+            ramp[s],
+            x0,
+            v0,
+            0.0,
+            mass[s],
+            k[s],
+            c[s],
+            ki[s],
+            x_ref[row],
+            v_ref[row],
+            fe,
+            np.full(n, F_c[s]),
+            np.full(n, F_s[s]),
+            np.full(n, sigma_2[s]),
+            sigma_0[s],
+            sigma_1[s],
+            v_r[s],
+            alpha[s],
+            rtol,
+            atol_x[s],
+            atol_v[s],
+            atol_z[s],
+            atol_f[s],
+            max_steps,
+            math.inf,
+            tables,
+            out_y,
         )
         for r in range(n_rec):
             for q in range(4):
@@ -922,7 +1099,14 @@ def lugre_instant_array(v, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha):
     for s in range(v.shape[0]):
         for i in range(v.shape[1]):
             out[s, i] = lugre_instant(
-                v[s, i], z[s, i], sigma_0[s, 0], sigma_1[s, 0], sigma_2[s, 0], F_c[s, 0],
-                F_s[s, 0], v_r[s, 0], alpha[s, 0],
+                v[s, i],
+                z[s, i],
+                sigma_0[s, 0],
+                sigma_1[s, 0],
+                sigma_2[s, 0],
+                F_c[s, 0],
+                F_s[s, 0],
+                v_r[s, 0],
+                alpha[s, 0],
             )
     return out

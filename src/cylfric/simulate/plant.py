@@ -663,8 +663,7 @@ def simulate_batch(
     rows_x, rows_v, rows_f = [x0 + zeros], [zeros], [zeros]
     row_of = {}
     columns = {
-        name: np.zeros(n_sets)
-        for name in ("row", "ramp", "mass", "k", "c", "ki", "f_offset")
+        name: np.zeros(n_sets) for name in ("row", "ramp", "mass", "k", "c", "ki", "f_offset")
     }
     friction = {
         name: np.empty(n_sets)
@@ -684,9 +683,7 @@ def simulate_batch(
                 rows_x.append(x_r)
                 rows_v.append(v_r_)
                 rows_f.append(f_e)
-            columns["row"][i], columns["k"][i], columns["c"][i], columns["ki"][i] = row_of[
-                id(drv)
-            ]
+            columns["row"][i], columns["k"][i], columns["c"][i], columns["ki"][i] = row_of[id(drv)]
         columns["mass"][i] = cyl.mass
         # both chambers at the set's pressure: net pressure force (A_a - A_b) p
         columns["f_offset"][i] = (cyl.area_a - cyl.area_b) * p
@@ -727,15 +724,20 @@ def simulate_batch(
     )
     if (reached < n).any():
         raise RuntimeError(
-            f"{int((reached < n).sum())} set(s) stopped after {MAX_STEPS:.0e} steps; "
-            "loosen rtol"
+            f"{int((reached < n).sum())} set(s) stopped after {MAX_STEPS:.0e} steps; loosen rtol"
         )
     rec = time[::record_every]
     position, velocity, z, integral = (states[:, :, q] for q in range(4))
     force = kernels.lugre_instant_array(
-        velocity, z, friction["sigma_0"][:, None], friction["sigma_1"][:, None],
-        friction["sigma_2"][:, None], friction["F_c"][:, None], friction["F_s"][:, None],
-        friction["v_r"][:, None], friction["alpha"][:, None],
+        velocity,
+        z,
+        friction["sigma_0"][:, None],
+        friction["sigma_1"][:, None],
+        friction["sigma_2"][:, None],
+        friction["F_c"][:, None],
+        friction["F_s"][:, None],
+        friction["v_r"][:, None],
+        friction["alpha"][:, None],
     )
     rows = columns["row"].astype(int)
     x_ref = np.array(rows_x)[:, ::record_every][rows] + columns["ramp"][:, None] * rec
@@ -755,6 +757,12 @@ def simulate_batch(
         velocity=velocity,
         z=z,
         drive_force=drive_force,
-        info={"method": "rosenbrock", "scheme": "Rodas3", "rtol": rtol, "dt": dt,
-              "record_every": record_every, "steps": steps},
+        info={
+            "method": "rosenbrock",
+            "scheme": "Rodas3",
+            "rtol": rtol,
+            "dt": dt,
+            "record_every": record_every,
+            "steps": steps,
+        },
     )
