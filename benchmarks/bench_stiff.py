@@ -360,36 +360,67 @@ def _one_case(case, baselines=("LSODA", "Radau", "BDF", "numbalsoda")):
     return row
 
 
-def bench_stiff(sweep=SWEEP):
-    cases = [canudas(s0, 10.0) for s0 in sweep]
-    cases += [canudas(1e5, 40.0), canudas(1e10, 40.0), case_a()]
-    rows = [_one_case(c) for c in cases]
+def _goals(rows, sweep=SWEEP):
+    """Issue 12's goals from the rows; a baseline that found no setting is listed, not hidden."""
     by = {r["case"]: r for r in rows}
+    sweep_rows = [by[canudas(s0, 10.0)["name"]] for s0 in sweep]
+
+    def ratios(name):
+        return {r["case"]: r.get(f"ratio_{name}_over_cylfric") for r in sweep_rows}
+
+    lsoda, nb = ratios("LSODA"), ratios("numbalsoda")
     t40 = (
         by["canudas s0=1e+10 40s"]["cylfric"]["seconds"]
         / by["canudas s0=1e+05 40s"]["cylfric"]["seconds"]
     )
-    sweep_rows = [by[canudas(s0, 10.0)["name"]] for s0 in sweep]
+    return {
+        "sweep_min_ratio_LSODA (>= 20)": min(v for v in lsoda.values() if v),
+        "sweep_LSODA_found_no_setting": [k for k, v in lsoda.items() if not v],
+        "sweep_min_ratio_numbalsoda (>= 3)": min(v for v in nb.values() if v),
+        "sweep_numbalsoda_found_no_setting": [k for k, v in nb.items() if not v],
+        "max_ratio_numba_kernel_over_C (<= 1.3)": max(
+            r.get("ratio_numba_kernel_over_c", math.nan) for r in rows
+        ),
+        "max_ratio_simulate_over_C": max(r.get("ratio_simulate_over_c", math.nan) for r in rows),
+        "40s_1e10_over_1e5 (< 10)": t40,
+    }
+
+
+def bench_stiff(sweep=SWEEP):
+    cases = [canudas(s0, 10.0) for s0 in sweep]
+    cases += [canudas(1e5, 40.0), canudas(1e10, 40.0), case_a()]
+    rows = [_one_case(c) for c in cases]
     payload = {
         "accuracy": f"RMS(F - F_ref)/F_c <= {TOL} against Radau rtol 1e-10",
         "rows": rows,
-        "goals": {
-            "sweep_min_ratio_LSODA (>= 20)": min(
-                r.get("ratio_LSODA_over_cylfric", 0) for r in sweep_rows
-            ),
-            "sweep_min_ratio_numbalsoda (>= 3)": min(
-                r.get("ratio_numbalsoda_over_cylfric", 0) for r in sweep_rows
-            ),
-            "max_ratio_numba_kernel_over_C (<= 1.3)": max(
-                r.get("ratio_numba_kernel_over_c", math.nan) for r in rows
-            ),
-            "max_ratio_simulate_over_C": max(
-                r.get("ratio_simulate_over_c", math.nan) for r in rows
-            ),
-            "40s_1e10_over_1e5 (< 10)": t40,
-        },
+        "goals": _goals(rows, sweep),
     }
     return _save("simulate_stiff", payload)
+
+
+def _parallel_control():
+    """Speed-up of a trivially parallel numba loop from 1 to all threads, measured now: what
+    the machine (shared with other jobs) gives a second thread at all."""
+    import numba
+    from numba import njit, prange
+
+    @njit(parallel=True)
+    def work(n):
+        out = np.empty(n)
+        for i in prange(n):
+            acc = 0.0
+            for j in range(200_000):
+                acc += math.sin(j * 1e-3 + i)
+            out[i] = acc
+        return out
+
+    work(2)
+    times = {}
+    for threads in (1, numba.config.NUMBA_NUM_THREADS):
+        numba.set_num_threads(threads)
+        times[threads] = _best(lambda: work(64), 3)[0]
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return times[1] / times[max(times)]
 
 
 def bench_stiff_batch(n_sets=10_000, sample=5):
@@ -411,7 +442,7 @@ def bench_stiff_batch(n_sets=10_000, sample=5):
     drives = [SpringPull(float(ki), float(si)) for ki, si in zip(k, speed, strict=True)]
 
     def run(sl):
-        return simulate_batch(Cylinder(1.0), models[sl], drives[sl], 10.0, record_every=1)
+        return simulate_batch(Cylinder(1.0), models[sl], drives[sl], 10.0, record_every=10)
 
     run(slice(0, 2))  # compile or load from the cache
     times = {}
@@ -421,13 +452,14 @@ def bench_stiff_batch(n_sets=10_000, sample=5):
         batch = run(slice(0, n_sets))
         times[threads] = time.perf_counter() - t0
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    control = _parallel_control()
     idx = rng.choice(n_sets, sample, replace=False)
     lsoda, errors = [], []
     for i in idx:
         case = canudas(float(sigma_0[i]), 10.0)
         case.update(k=float(k[i]), speed=float(speed[i]))
         ref, _ = reference(case)
-        errors.append(_error(batch.friction_force[i], ref, case))
+        errors.append(_error(batch.friction_force[i], ref[::10], case))
         found = _search(_scipy("LSODA", case), ref, case)
         lsoda.append(found.get("seconds") or math.nan)
     cores = max(times)
@@ -439,12 +471,13 @@ def bench_stiff_batch(n_sets=10_000, sample=5):
         "lsoda_estimate_seconds": float(np.nanmean(lsoda)) * n_sets,
         "ratio_lsoda_over_batch": float(np.nanmean(lsoda)) * n_sets / times[cores],
         "sample_error_rms_over_F_c": errors,
+        "control_trivially_parallel_loop_speedup": control,
         "goals": "ratio >= 100, second core >= 1.7x",
         "cores": os.cpu_count(),
     }
     print(
         f"  batch: {times}, LSODA x{payload['ratio_lsoda_over_batch']:.0f}, "
-        f"second core x{payload['speedup_second_core']}",
+        f"second core x{payload['speedup_second_core']} (control x{control:.2f})",
         flush=True,
     )
     return _save("simulate_stiff_batch", payload)

@@ -1034,6 +1034,7 @@ def rosenbrock_batch(
     atol_f,
     max_steps,
     tables,
+    chunks,
 ):
     """Many heterogeneous sets with the Rosenbrock kernel (``prange``: all cores).
 
@@ -1042,6 +1043,7 @@ def rosenbrock_batch(
     tolerances. ``rows[s]`` picks the set's input signals from the (n_signals, n) arrays
     ``x_ref``, ``v_ref``, ``f_ext``. Returns the states (n_sets, n_records, 4) every
     ``record_every`` grid points, step counts (n_sets, 2) and grid points reached.
+    ``chunks`` work packages share the sets (a few per thread).
     """
     n_sets = F_c.shape[0]
     n = x_ref.shape[1]
@@ -1049,46 +1051,35 @@ def rosenbrock_batch(
     states = np.empty((n_sets, n_rec, 4))
     steps = np.empty((n_sets, 2), dtype=np.int64)
     reached = np.empty(n_sets, dtype=np.int64)
-    for s in prange(n_sets):
+    # sets go in chunks, each with its own work arrays allocated once (allocating per set
+    # serialises the threads on the allocator)
+    n_chunks = max(1, min(n_sets, chunks))
+    for chunk in prange(n_chunks):
         out_y = np.empty((n, 4))
-        row = rows[s]
-        fe = f_ext[row] + f_offset[s]
-        accepted, rejected, got = rosenbrock_core(
-            dt,
-            ramp[s],
-            x0,
-            v0,
-            0.0,
-            mass[s],
-            k[s],
-            c[s],
-            ki[s],
-            x_ref[row],
-            v_ref[row],
-            fe,
-            np.full(n, F_c[s]),
-            np.full(n, F_s[s]),
-            np.full(n, sigma_2[s]),
-            sigma_0[s],
-            sigma_1[s],
-            v_r[s],
-            alpha[s],
-            rtol,
-            atol_x[s],
-            atol_v[s],
-            atol_z[s],
-            atol_f[s],
-            max_steps,
-            math.inf,
-            tables,
-            out_y,
-        )
-        for r in range(n_rec):
-            for q in range(4):
-                states[s, r, q] = out_y[r * record_every, q] if r * record_every < got else np.nan
-        steps[s, 0] = accepted
-        steps[s, 1] = rejected
-        reached[s] = got
+        fe = np.empty(n)
+        fc = np.empty(n)
+        fs = np.empty(n)
+        s2 = np.empty(n)
+        for s in range(chunk * n_sets // n_chunks, (chunk + 1) * n_sets // n_chunks):
+            row = rows[s]
+            for i in range(n):
+                fe[i] = f_ext[row, i] + f_offset[s]
+            fc[:] = F_c[s]
+            fs[:] = F_s[s]
+            s2[:] = sigma_2[s]
+            accepted, rejected, got = rosenbrock_core(
+                dt, ramp[s], x0, v0, 0.0, mass[s], k[s], c[s], ki[s], x_ref[row], v_ref[row],
+                fe, fc, fs, s2, sigma_0[s], sigma_1[s], v_r[s], alpha[s], rtol, atol_x[s],
+                atol_v[s], atol_z[s], atol_f[s], max_steps, math.inf, tables, out_y,
+            )  # fmt: skip
+            for r in range(n_rec):
+                for q in range(4):
+                    states[s, r, q] = (
+                        out_y[r * record_every, q] if r * record_every < got else np.nan
+                    )
+            steps[s, 0] = accepted
+            steps[s, 1] = rejected
+            reached[s] = got
     return states, steps, reached
 
 

@@ -18,6 +18,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from ..friction import get_law, law_params
@@ -721,6 +722,7 @@ def simulate_batch(
         np.ascontiguousarray(atol[:, 3]),
         MAX_STEPS,
         kernels.RODAS3,
+        8 * numba.get_num_threads(),
     )
     if (reached < n).any():
         raise RuntimeError(
