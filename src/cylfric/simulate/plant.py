@@ -218,7 +218,13 @@ def rosenbrock_tolerances(rtol, params):
             (params["v_r"], np.min),
         )
     )
-    return rtol * 1e-3, rtol * v_r, rtol * f_c / sigma_0, rtol * f_c
+    return _rosenbrock_scales(rtol, {"F_c": f_c, "sigma_0": sigma_0, "v_r": v_r})
+
+
+def _rosenbrock_scales(rtol, params):
+    """The tolerances of :func:`rosenbrock_tolerances`, elementwise (one set per element)."""
+    f_c, sigma_0, v_r = params["F_c"], params["sigma_0"], params["v_r"]
+    return rtol * 1e-3 + 0 * f_c, rtol * v_r, rtol * f_c / sigma_0, rtol * f_c
 
 
 def simulate(
@@ -670,7 +676,7 @@ def simulate_batch(
         name: np.empty(n_sets)
         for name in ("F_c", "F_s", "sigma_2", "v_r", "alpha", "sigma_0", "sigma_1")
     }
-    atol = np.empty((n_sets, 4))
+    params_of = {}
     for i, (cyl, model, drv, p) in enumerate(
         zip(cylinders, models, drives, pressures, strict=True)
     ):
@@ -688,11 +694,20 @@ def simulate_batch(
         columns["mass"][i] = cyl.mass
         # both chambers at the set's pressure: net pressure force (A_a - A_b) p
         columns["f_offset"][i] = (cyl.area_a - cyl.area_b) * p
-        params = _friction_params(model, p)
-        _check_friction(model, params)
+        key = (id(model), float(p))
+        if key not in params_of:  # a model at a pressure is evaluated once
+            params_of[key] = _friction_params(model, p)
         for name in friction:
-            friction[name][i] = float(params[name])
-        atol[i] = rosenbrock_tolerances(rtol, params)
+            friction[name][i] = float(params_of[key][name])
+    try:  # all sets checked at once; on a failure, set by set to name the first bad one
+        _check_lugre_arrays(friction)
+    except ValueError:
+        for i, model in enumerate(models):
+            try:
+                _check_friction(model, {name: friction[name][i] for name in friction})
+            except ValueError as exc:
+                raise ValueError(f"set {i}: {exc}") from None
+    atol = np.column_stack(_rosenbrock_scales(rtol, friction))
     states, steps, reached = kernels.rosenbrock_batch(
         dt,
         record_every,
