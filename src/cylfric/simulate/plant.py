@@ -224,7 +224,8 @@ def rosenbrock_tolerances(rtol, params):
 def _rosenbrock_scales(rtol, params):
     """The tolerances of :func:`rosenbrock_tolerances`, elementwise (one set per element)."""
     f_c, sigma_0, v_r = params["F_c"], params["sigma_0"], params["v_r"]
-    return rtol * 1e-3 + 0 * f_c, rtol * v_r, rtol * f_c / sigma_0, rtol * f_c
+    position = rtol * 1e-3 + 0 * f_c  # 1 mm scale, shaped like the others
+    return position, rtol * v_r, rtol * f_c / sigma_0, rtol * f_c
 
 
 def simulate(
