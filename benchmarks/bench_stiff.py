@@ -569,10 +569,97 @@ def bench_case_b():
     return _save("simulate_case_b", row)
 
 
+def bench_candidates(sweep=(1e5, 1e8, 1e10)):
+    """The candidates for the default integrator at their loosest decade rtol (the next tighter
+    one meeting 1e-4 too): Rodas3 and Rodas4 kernels, DOPRI5 (up to 1e7) and the fixed step."""
+    rows = []
+    for s0 in sweep:
+        found = _candidates_at(s0)
+        print(
+            f"  sigma_0 = {s0:.0e}: "
+            + ", ".join(f"{r['candidate']} {r['seconds'] * 1e3:.2f} ms" for r in found),
+            flush=True,
+        )
+        rows += found
+    return _save("simulate_candidates", {"accuracy": f"RMS(F - F_ref)/F_c <= {TOL}", "rows": rows})
+
+
+def _candidates_at(s0):
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, SpringPull, kernels, simulate
+    from cylfric.simulate.plant import rosenbrock_tolerances
+
+    rows = []
+    case = canudas(s0, 10.0)
+    ref, _ = reference(case)
+    p, t = case["params"], _grid(case)
+    ones = np.ones(t.size)
+
+    def rosenbrock(rtol, tables):
+        return kernels.rosenbrock(
+            1e-3, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.1 * t, 0.1 * ones, 0 * ones,
+            p["F_c"] * ones, p["F_s"] * ones, p["sigma_2"] * ones, p["sigma_0"],
+            p["sigma_1"], p["v_r"], p["alpha"], rtol, *rosenbrock_tolerances(rtol, p),
+            10**8, math.inf, tables,
+        )  # fmt: skip
+
+    for name, tables in (("rodas3", kernels.RODAS3), ("rodas4", kernels.RODAS4)):
+        rosenbrock(1e-6, tables)
+        for rtol in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8):
+            errors = [_error(rosenbrock(r, tables)[3], ref, case) for r in (rtol, rtol / 10)]
+            if max(errors) <= TOL:
+                seconds, out = _best(lambda r=rtol, tb=tables: rosenbrock(r, tb), 5)
+                rows.append(
+                    {
+                        "sigma_0": s0,
+                        "candidate": name,
+                        "rtol": rtol,
+                        "seconds": seconds,
+                        "steps": int(out[4]),
+                        "error": errors[0],
+                    }
+                )
+                break
+    model = FrictionModel(p, pressure_law="constant")
+
+    def run(**options):
+        return simulate(Cylinder(1.0), model, SpringPull(2.0, 0.1), 10.0, **options)
+
+    settings = [("dopri", {"method": "dopri", "rtol": r}) for r in (1e-4, 1e-5, 1e-6, 1e-7)]
+    settings = settings if s0 <= 1e7 else []  # DOPRI5's steps shrink as 1/sqrt(sigma_0)
+    settings += [
+        ("fixed", {"method": "fixed", "step": h})
+        for h in (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5)
+    ]
+    done = set()
+    for name, options in settings:
+        if name in done:
+            continue
+        error = _error(run(**options).outputs["friction_force"], ref, case)
+        if error <= TOL:
+            seconds, result = _best(lambda o=options: run(**o), 3)
+            rows.append(
+                {
+                    "sigma_0": s0,
+                    "candidate": name,
+                    **options,
+                    "seconds": seconds,
+                    "steps": result.info.get("accepted", result.info.get("steps")),
+                    "error": error,
+                }
+            )
+            done.add(name)
+    return rows
+
+
 def bench_simulate():
     """All single-run cases: the stiff sweep, the 40 s runs, case A and case B."""
     stiff = bench_stiff()
     return {"stiff": stiff, "case_b": bench_case_b()}
 
 
-SECTIONS = {"simulate": bench_simulate, "batch": bench_stiff_batch}
+SECTIONS = {
+    "simulate": bench_simulate,
+    "batch": bench_stiff_batch,
+    "candidates": bench_candidates,
+}
