@@ -53,7 +53,11 @@ def table() -> str:
 
 def _ratio(row, name):
     value = row.get(f"ratio_{name}_over_cylfric")
-    return f"{value:.0f}x" if value and value >= 10 else (f"{value:.1f}x" if value else "failed")
+    return (
+        f"{value:.0f}x"
+        if value and value >= 10
+        else (f"{value:.1f}x" if value else "no setting met 1e-4 for")
+    )
 
 
 def _simulation_rows():
