@@ -73,3 +73,47 @@ def test_canudas_set_keeps_its_bristle_parameters():
 def test_bad_inputs_give_a_clear_value_error(run, message):
     with pytest.raises(ValueError, match=message):
         run()
+
+
+def test_the_literature_set_as_coefficients_keeps_sigma_0_and_sigma_1():
+    # the exact call of issue 12: no pressure law named
+    params = FrictionModel(coefficients=CANUDAS_DE_WIT_1995.params).params_at(0.0)
+    assert params["sigma_0"] == 1e5 and params["sigma_1"] == pytest.approx(math.sqrt(1e5))
+
+
+@pytest.mark.parametrize(
+    "run, message",
+    [
+        (
+            lambda: simulate(Cylinder(1.0), _canudas(), SpringPull(2, 0.1), 1.0, rtol=0.0),
+            r"rtol = 0.0 is out of range; expected 0 < rtol < 1",
+        ),
+        (
+            lambda: simulate_batch(Cylinder(1.0), _canudas(), SpringPull(2, 0.1), 1.0, rtol=2.0),
+            r"rtol = 2.0 is out of range",
+        ),
+        (
+            lambda: simulate_batch(
+                Cylinder(1.0), _canudas(), SpringPull(2, 0.1), 1.0, pressures=[1e5, -1.0]
+            ),
+            r"pressures go down to -1 Pa or are not finite; expected finite pressures >= 0 Pa",
+        ),
+        (
+            lambda: simulate_batch(
+                Cylinder(1.0), _canudas(), SpringPull(2, 0.1), 1.0, pressures=[math.nan]
+            ),
+            r"not finite",
+        ),
+        (
+            lambda: simulate_batch(Cylinder(1.0), _canudas(), SpringPull(2, 0.1), math.inf),
+            r"need 0 < dt <= duration and record_every >= 1 \(duration < inf\)",
+        ),
+        (
+            lambda: simulate_batch([Cylinder(1.0)] * 2, _canudas(), [SpringPull(2, 0.1)] * 3, 1.0),
+            r"2 cylinders for 3 sets; expected one per set \(or a single one\)",
+        ),
+    ],
+)
+def test_bad_tolerances_and_batch_inputs_give_a_clear_value_error(run, message):
+    with pytest.raises(ValueError, match=message):
+        run()

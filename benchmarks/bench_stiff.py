@@ -1,0 +1,665 @@
+"""Stiff-bristle simulation benchmark (issue 12): cylfric's default integrator against scipy
+LSODA, Radau and BDF, numbalsoda (compiled LSODA) and the same scheme in C.
+
+Accuracy: RMS(F - F_ref)/F_c <= 1e-4 on the 1 ms output grid, F_ref from scipy Radau at
+rtol 1e-10 (atol 1e-12 m, 1e-12 m/s, 1e-10 F_c/sigma_0 m; analytic Jacobian). Every baseline
+runs at its loosest (rtol, atol) on a decade grid that meets the accuracy, with the next
+tighter rtol and the next tighter atol checked to meet it too; default options otherwise.
+cylfric runs at its default settings (no tuning). Times are the best of a few repeats, in one
+process, on a machine that may be shared: ratios, not absolute times, are the result.
+
+Sections: ``simulate`` (Canudas de Wit 1995 stick-slip 10 s over the sigma_0 sweep
+1e5..1e10, 40 s at 1e5 and 1e10, case A: thesis friction at 50 bar on a 10 kg rod pulled by a
+2e4 N/m spring at 5 mm/s, sigma_0 = 1e6; case B: prescribed 50 mm/s sin(2 pi t),
+sigma_0 = 1e7), ``batch`` (10,000 heterogeneous Canudas sets on 1 and 2 cores against LSODA
+set by set from a sample).
+Run: ``python benchmarks/run.py simulate`` (numbalsoda from ``pip install -e .[bench]``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from run import BUILD, HERE, _best, _save, _thesis_params  # noqa: E402
+
+TOL = 1e-4
+RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+ATOLS = (1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 1e-16)
+SWEEP = (1e5, 1e6, 1e7, 1e8, 1e9, 1e10)
+
+
+def canudas(sigma_0, duration):
+    """Canudas de Wit et al. 1995 stick-slip: m = 1 kg, spring 2 N/m pulled at 0.1 m/s.
+
+    sigma_1 = sqrt(sigma_0 m) (= sqrt(1e5) N*s/m of the paper at sigma_0 = 1e5 N/m).
+    """
+    from cylfric.friction.literature import CANUDAS_DE_WIT_1995
+
+    p = dict(CANUDAS_DE_WIT_1995.params)
+    p.update(sigma_0=sigma_0, sigma_1=math.sqrt(sigma_0 * 1.0))
+    return {
+        "name": f"canudas s0={sigma_0:.0e} {duration:g}s",
+        "mass": 1.0,
+        "k": 2.0,
+        "speed": 0.1,
+        "duration": duration,
+        "params": p,
+        "pressure": 0.0,
+    }
+
+
+def case_a():
+    """Case A of benchmarks/run.py: thesis cylinder friction at 50 bar, m = 10 kg, 2e4 N/m
+    spring at 5 mm/s, sigma_0 = 1e6 N/m, 10 s."""
+    p = {k: float(v) for k, v in _thesis_params(50e5).items()}
+    p.update(sigma_0=1e6, sigma_1=math.sqrt(1e6 * 10.0))
+    return {
+        "name": "case A",
+        "mass": 10.0,
+        "k": 2e4,
+        "speed": 5e-3,
+        "duration": 10.0,
+        "params": p,
+        "pressure": 50e5,
+    }
+
+
+def _grid(case):
+    return np.arange(int(round(case["duration"] / 1e-3)) + 1) * 1e-3
+
+
+def _python_rhs(case):
+    """Plain-Python right-hand side (math module: scipy's fastest) and the force on arrays."""
+    p, m, k, speed = case["params"], case["mass"], case["k"], case["speed"]
+    s0, s1, s2 = p["sigma_0"], p["sigma_1"], p["sigma_2"]
+    fc, fs, vr, al = p["F_c"], p["F_s"], p["v_r"], p["alpha"]
+
+    def rhs(t, y):
+        x, v, z = y
+        g = fc + (fs - fc) * math.exp(-((abs(v) / vr) ** al))
+        dz = v - s0 * abs(v) * z / g
+        return [v, (k * (speed * t - x) - (s0 * z + s1 * dz + s2 * v)) / m, dz]
+
+    def force(y):
+        x, v, z = y
+        g = fc + (fs - fc) * np.exp(-((np.abs(v) / vr) ** al))
+        return s0 * z + s1 * (v - s0 * np.abs(v) * z / g) + s2 * v
+
+    return rhs, force
+
+
+def reference(case):
+    """scipy Radau at rtol 1e-10 with the analytic Jacobian: friction on the grid [N]."""
+    from scipy.integrate import solve_ivp
+
+    from cylfric.simulate import kernels
+
+    p, m, k = case["params"], case["mass"], case["k"]
+    rhs, force = _python_rhs(case)
+
+    def jac(t, y):
+        d_v, d_z, _, _ = kernels.lugre_partials(
+            y[1], y[2], p["sigma_0"], p["F_c"], p["F_s"], p["v_r"], p["alpha"]
+        )
+        f_v, f_z = p["sigma_1"] * d_v + p["sigma_2"], p["sigma_0"] + p["sigma_1"] * d_z
+        return [[0, 1, 0], [-k / m, -f_v / m, -f_z / m], [0, d_v, d_z]]
+
+    t = _grid(case)
+    atol = [1e-12, 1e-12, 1e-10 * p["F_c"] / p["sigma_0"]]
+    t0 = time.perf_counter()
+    sol = solve_ivp(
+        rhs, (0, t[-1]), [0, 0, 0], method="Radau", t_eval=t, rtol=1e-10, atol=atol, jac=jac
+    )
+    assert sol.success, sol.message
+    return force(sol.y), time.perf_counter() - t0
+
+
+def _error(f, ref, case):
+    if f is None or not np.all(np.isfinite(f)):
+        return math.inf
+    return float(np.sqrt(np.mean((f - ref) ** 2)) / case["params"]["F_c"])
+
+
+def _search(run, ref, case, budget=30.0):
+    """Loosest (rtol, atol) on the decade grids meeting TOL, tighter neighbours meeting too.
+
+    ``run(rtol, atol)`` returns the friction on the grid (or None when the solver fails).
+    Gives up on a solver after ``budget`` seconds of searching.
+    """
+    start = time.perf_counter()
+    tried = {}
+
+    def ok(r, a):
+        if (r, a) not in tried:
+            tried[(r, a)] = _error(run(r, a), ref, case)
+        return tried[(r, a)] <= TOL
+
+    for i, r in enumerate(RTOLS):
+        for j, a in enumerate(ATOLS):
+            if time.perf_counter() - start > budget:
+                return {
+                    "rtol": None,
+                    "atol": None,
+                    "note": f"search over {budget} s budget",
+                    "tried": len(tried),
+                }
+            if not ok(r, a):
+                continue
+            tighter = [(RTOLS[i + 1], a)] if i + 1 < len(RTOLS) else []
+            tighter += [(r, ATOLS[j + 1])] if j + 1 < len(ATOLS) else []
+            if all(ok(*rt) for rt in tighter):
+                seconds, _ = _best(lambda r=r, a=a: run(r, a), 3)
+                return {
+                    "rtol": r,
+                    "atol": a,
+                    "seconds": seconds,
+                    "error": tried[(r, a)],
+                    "tighter_errors": [tried[rt] for rt in tighter],
+                    "tried": len(tried),
+                }
+            break  # this rtol's loosest passing atol has a failing neighbour: tighten rtol
+    return {"rtol": None, "atol": None, "note": "no setting met the accuracy", "tried": len(tried)}
+
+
+def _scipy(method, case):
+    from scipy.integrate import solve_ivp
+
+    rhs, force = _python_rhs(case)
+    t = _grid(case)
+
+    def run(rtol, atol):
+        sol = solve_ivp(rhs, (0, t[-1]), [0, 0, 0], method=method, t_eval=t, rtol=rtol, atol=atol)
+        return force(sol.y) if sol.success and sol.y.shape[1] == t.size else None
+
+    return run
+
+
+def _numbalsoda(case):
+    try:
+        import numbalsoda
+        from numba import cfunc
+    except ImportError:
+        return None
+    p = case["params"]
+    data = np.array(
+        [
+            case["mass"],
+            case["k"],
+            case["speed"],
+            p["sigma_0"],
+            p["sigma_1"],
+            p["sigma_2"],
+            p["F_c"],
+            p["F_s"],
+            p["v_r"],
+            p["alpha"],
+        ]
+    )
+
+    @cfunc(numbalsoda.lsoda_sig)
+    def rhs(t, u, du, d):
+        m, k, speed, s0, s1 = d[0], d[1], d[2], d[3], d[4]
+        s2, fc, fs, vr, al = d[5], d[6], d[7], d[8], d[9]
+        v, z = u[1], u[2]
+        g = fc + (fs - fc) * math.exp(-((abs(v) / vr) ** al))
+        dz = v - s0 * abs(v) * z / g
+        du[0] = v
+        du[1] = (k * (speed * t - u[0]) - (s0 * z + s1 * dz + s2 * v)) / m
+        du[2] = dz
+
+    _, force = _python_rhs(case)
+    t = _grid(case)
+    address = rhs.address
+
+    def run(rtol, atol):
+        usol, success = numbalsoda.lsoda(address, np.zeros(3), t, data=data, rtol=rtol, atol=atol)
+        return force(usol.T) if success else None
+
+    return run
+
+
+def _cylfric(case):
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, SpringPull, simulate
+
+    model = FrictionModel(case["params"], pressure_law="constant")
+    cylinder, drive = Cylinder(case["mass"]), SpringPull(case["k"], case["speed"])
+
+    def run():
+        return simulate(cylinder, model, drive, case["duration"])
+
+    run()  # compiled (or loaded from the cache) outside the timing
+    seconds, result = _best(run, 7)
+    # the compiled kernel alone, on the arrays simulate() builds (what the C program times)
+    from cylfric.simulate import kernels
+    from cylfric.simulate.plant import MAX_STEPS, rosenbrock_tolerances
+
+    p, t = case["params"], _grid(case)
+    ones = np.ones(t.size)
+    rtol = result.info["rtol"]
+    args = (
+        1e-3,
+        0.0,
+        0.0,
+        0.0,
+        case["mass"],
+        case["k"],
+        0.0,
+        0.0,
+        case["speed"] * t,
+        case["speed"] * ones,
+        0 * ones,
+        p["F_c"] * ones,
+        p["F_s"] * ones,
+        p["sigma_2"] * ones,
+        p["sigma_0"],
+        p["sigma_1"],
+        p["v_r"],
+        p["alpha"],
+        rtol,
+        *rosenbrock_tolerances(rtol, p),
+        MAX_STEPS,
+        math.inf,
+        kernels.RODAS3,
+    )
+    kernel_seconds, _ = _best(lambda: kernels.rosenbrock(*args), 7)
+    return seconds, result, kernel_seconds
+
+
+def _c_rodas3(case):
+    """The same Rodas3 scheme in C (benchmarks/c/rodas3.c, gcc -O3): seconds and force."""
+    gcc = shutil.which("gcc") or shutil.which("cc")
+    source = HERE / "c" / "rodas3.c"
+    if gcc is None or not source.exists():
+        return None
+    BUILD.mkdir(exist_ok=True)
+    exe = BUILD / "rodas3"
+    subprocess.run([gcc, "-O3", "-o", str(exe), str(source), "-lm"], check=True)
+    from cylfric.simulate.plant import ROSENBROCK_RTOL, rosenbrock_tolerances
+
+    p = case["params"]
+    out = BUILD / "rodas3_force.bin"
+    args = [
+        case["duration"],
+        1e-3,
+        case["mass"],
+        case["k"],
+        case["speed"],
+        p["F_c"],
+        p["F_s"],
+        p["sigma_2"],
+        p["sigma_0"],
+        p["sigma_1"],
+        p["v_r"],
+        p["alpha"],
+        ROSENBROCK_RTOL,
+        *rosenbrock_tolerances(ROSENBROCK_RTOL, p),
+        7,
+    ]
+    text = subprocess.run(
+        [str(exe), *map(repr, map(float, args)), str(out)],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    return float(text.split()[0]), np.fromfile(out, dtype=np.float64)
+
+
+def _one_case(case, baselines=("LSODA", "Radau", "BDF", "numbalsoda")):
+    ref, ref_seconds = reference(case)
+    seconds, result, kernel_seconds = _cylfric(case)
+    row = {
+        "case": case["name"],
+        "reference_seconds": ref_seconds,
+        "cylfric": {
+            "seconds": seconds,
+            "kernel_seconds": kernel_seconds,
+            "error": _error(result.outputs["friction_force"], ref, case),
+            "steps": result.info.get("accepted"),
+            "rtol": result.info.get("rtol"),
+        },
+    }
+    c = _c_rodas3(case)
+    if c is not None:
+        row["c_rodas3"] = {
+            "seconds": c[0],
+            "error": _error(c[1], ref, case),
+            "max_abs_difference_to_numba_N": float(
+                np.max(np.abs(c[1] - result.outputs["friction_force"]))
+            ),
+        }
+        row["ratio_simulate_over_c"] = seconds / c[0]
+        row["ratio_numba_kernel_over_c"] = kernel_seconds / c[0]
+    for name in baselines:
+        run = _numbalsoda(case) if name == "numbalsoda" else _scipy(name, case)
+        if run is None:
+            row[name] = {"note": "not installed (pip install -e .[bench])"}
+            continue
+        if name == "numbalsoda":
+            run(1e-6, 1e-6)  # compile the right-hand side outside the timing
+        row[name] = _search(run, ref, case)
+        if row[name].get("seconds"):
+            row[f"ratio_{name}_over_cylfric"] = row[name]["seconds"] / seconds
+    c_row = row.get("c_rodas3", {})
+    print(
+        f"  {case['name']}: cylfric {seconds * 1e3:.2f} ms (kernel {kernel_seconds * 1e3:.2f},"
+        f" C {c_row.get('seconds', math.nan) * 1e3:.2f}; err "
+        f"{row['cylfric']['error']:.1e}, C err {c_row.get('error', math.nan):.1e})"
+        + "".join(f", {n} x{row.get(f'ratio_{n}_over_cylfric', math.nan):.1f}" for n in baselines),
+        flush=True,
+    )
+    return row
+
+
+def _goals(rows, sweep=SWEEP):
+    """Issue 12's goals from the rows; a baseline that found no setting is listed, not hidden."""
+    by = {r["case"]: r for r in rows}
+    sweep_rows = [by[canudas(s0, 10.0)["name"]] for s0 in sweep]
+
+    def ratios(name):
+        return {r["case"]: r.get(f"ratio_{name}_over_cylfric") for r in sweep_rows}
+
+    lsoda, nb = ratios("LSODA"), ratios("numbalsoda")
+    t40 = (
+        by["canudas s0=1e+10 40s"]["cylfric"]["seconds"]
+        / by["canudas s0=1e+05 40s"]["cylfric"]["seconds"]
+    )
+    return {
+        "sweep_min_ratio_LSODA (>= 20)": min(v for v in lsoda.values() if v),
+        "sweep_LSODA_found_no_setting": [k for k, v in lsoda.items() if not v],
+        "sweep_min_ratio_numbalsoda (>= 3)": min(v for v in nb.values() if v),
+        "sweep_numbalsoda_found_no_setting": [k for k, v in nb.items() if not v],
+        "max_ratio_numba_kernel_over_C (<= 1.3)": max(
+            r.get("ratio_numba_kernel_over_c", math.nan) for r in rows
+        ),
+        "max_ratio_simulate_over_C": max(r.get("ratio_simulate_over_c", math.nan) for r in rows),
+        "40s_1e10_over_1e5 (< 10)": t40,
+    }
+
+
+def bench_stiff(sweep=SWEEP):
+    cases = [canudas(s0, 10.0) for s0 in sweep]
+    cases += [canudas(1e5, 40.0), canudas(1e10, 40.0), case_a()]
+    rows = [_one_case(c) for c in cases]
+    payload = {
+        "accuracy": f"RMS(F - F_ref)/F_c <= {TOL} against Radau rtol 1e-10",
+        "rows": rows,
+        "goals": _goals(rows, sweep),
+    }
+    return _save("simulate_stiff", payload)
+
+
+def _parallel_control():
+    """Speed-up of a trivially parallel numba loop from 1 to all threads, measured now: what
+    the machine (shared with other jobs) gives a second thread at all."""
+    import numba
+    from numba import njit, prange
+
+    @njit(parallel=True)
+    def work(n):
+        out = np.empty(n)
+        for i in prange(n):
+            acc = 0.0
+            for j in range(200_000):
+                acc += math.sin(j * 1e-3 + i)
+            out[i] = acc
+        return out
+
+    work(2)
+    times = {}
+    for threads in (1, numba.config.NUMBA_NUM_THREADS):
+        numba.set_num_threads(threads)
+        times[threads] = _best(lambda: work(64), 3)[0]
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return times[1] / times[max(times)]
+
+
+def bench_stiff_batch(n_sets=10_000, sample=5):
+    """10,000 Canudas-like sets: sigma_0 1e5..1e10, spring 1..4 N/m, speed 0.05..0.2 m/s."""
+    import numba
+
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, SpringPull, simulate_batch
+
+    rng = np.random.default_rng(12)
+    sigma_0 = 10 ** rng.uniform(5, 10, n_sets)
+    k = rng.uniform(1, 4, n_sets)
+    speed = rng.uniform(0.05, 0.2, n_sets)
+    base = canudas(1e5, 10.0)["params"]
+    models = [
+        FrictionModel({**base, "sigma_0": s, "sigma_1": math.sqrt(s)}, pressure_law="constant")
+        for s in sigma_0
+    ]
+    drives = [SpringPull(float(ki), float(si)) for ki, si in zip(k, speed, strict=True)]
+
+    def run(sl):
+        return simulate_batch(Cylinder(1.0), models[sl], drives[sl], 10.0, record_every=10)
+
+    run(slice(0, 2))  # compile or load from the cache
+    times = {}
+    for threads in (1, numba.config.NUMBA_NUM_THREADS):
+        numba.set_num_threads(threads)
+        t0 = time.perf_counter()
+        batch = run(slice(0, n_sets))
+        times[threads] = time.perf_counter() - t0
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    control = _parallel_control()
+    idx = rng.choice(n_sets, sample, replace=False)
+    lsoda, errors = [], []
+    for i in idx:
+        case = canudas(float(sigma_0[i]), 10.0)
+        case.update(k=float(k[i]), speed=float(speed[i]))
+        ref, _ = reference(case)
+        errors.append(_error(batch.friction_force[i], ref[::10], case))
+        found = _search(_scipy("LSODA", case), ref, case)
+        lsoda.append(found.get("seconds") or math.nan)
+    cores = max(times)
+    payload = {
+        "sets": n_sets,
+        "seconds_by_threads": times,
+        "speedup_second_core": times[1] / times[cores] if cores > 1 else None,
+        "lsoda_seconds_per_set_sample": lsoda,
+        "lsoda_estimate_seconds": float(np.nanmean(lsoda)) * n_sets,
+        "ratio_lsoda_over_batch": float(np.nanmean(lsoda)) * n_sets / times[cores],
+        "sample_error_rms_over_F_c": errors,
+        "control_trivially_parallel_loop_speedup": control,
+        "goals": "ratio >= 100, second core >= 1.7x",
+        "cores": os.cpu_count(),
+    }
+    print(
+        f"  batch: {times}, LSODA x{payload['ratio_lsoda_over_batch']:.0f}, "
+        f"second core x{payload['speedup_second_core']} (control x{control:.2f})",
+        flush=True,
+    )
+    return _save("simulate_stiff_batch", payload)
+
+
+def bench_case_b():
+    """Case B: prescribed 50 mm/s sin(2 pi t) for 10 s, thesis friction at 50 bar, sigma_0 =
+    1e7 N/m: simulate() (exact z update) against the bristle ODE in scipy and numbalsoda."""
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, PrescribedMotion, simulate
+
+    p = {k: float(v) for k, v in _thesis_params(50e5).items()}
+    s0, s1 = 1e7, math.sqrt(1e7 * 10.0)
+    p.update(sigma_0=s0, sigma_1=s1)
+    model = FrictionModel(p, pressure_law="constant")
+    drive = PrescribedMotion(lambda t: 0.05 * np.sin(2 * np.pi * t))
+    case = {"name": "case B", "duration": 10.0, "params": p}
+    t = _grid(case)
+    ref = simulate(Cylinder(10.0), model, drive, 10.0, method="scipy", rtol=1e-10)
+    ref = ref.outputs["friction_force"]
+
+    def run():
+        return simulate(Cylinder(10.0), model, drive, 10.0)
+
+    run()
+    seconds, result = _best(run, 7)
+    row = {
+        "case": "case B",
+        "cylfric": {
+            "seconds": seconds,
+            "error": _error(result.outputs["friction_force"], ref, case),
+            "info": result.info,
+        },
+    }
+    fc, fs, vr, s2 = p["F_c"], p["F_s"], p["v_r"], p["sigma_2"]
+    v_grid = 0.05 * np.sin(2 * np.pi * t)
+    g_grid = fc + (fs - fc) * np.exp(-np.abs(v_grid) / vr)
+
+    def force(z):
+        return s0 * z + s1 * (v_grid - s0 * np.abs(v_grid) * z / g_grid) + s2 * v_grid
+
+    def rhs(t_, y):
+        v = 0.05 * math.sin(2 * math.pi * t_)
+        return [v - s0 * abs(v) * y[0] / (fc + (fs - fc) * math.exp(-abs(v) / vr))]
+
+    from scipy.integrate import solve_ivp
+
+    for name in ("LSODA", "Radau", "BDF"):
+
+        def run_scipy(rtol, atol, name=name):
+            sol = solve_ivp(rhs, (0, 10.0), [0.0], method=name, t_eval=t, rtol=rtol, atol=atol)
+            return force(sol.y[0]) if sol.success and sol.y.shape[1] == t.size else None
+
+        row[name] = _search(run_scipy, ref, case)
+        if row[name].get("seconds"):
+            row[f"ratio_{name}_over_cylfric"] = row[name]["seconds"] / seconds
+    try:
+        import numbalsoda
+        from numba import cfunc
+
+        @cfunc(numbalsoda.lsoda_sig)
+        def rhs_nb(t_, u, du, d):
+            v = 0.05 * math.sin(2 * math.pi * t_)
+            g = d[0] + (d[1] - d[0]) * math.exp(-abs(v) / d[2])
+            du[0] = v - d[3] * abs(v) * u[0] / g
+
+        data = np.array([fc, fs, vr, s0])
+
+        def run_nb(rtol, atol):
+            usol, ok = numbalsoda.lsoda(
+                rhs_nb.address, np.zeros(1), t, data=data, rtol=rtol, atol=atol
+            )
+            return force(usol[:, 0]) if ok else None
+
+        run_nb(1e-6, 1e-6)
+        row["numbalsoda"] = _search(run_nb, ref, case)
+        if row["numbalsoda"].get("seconds"):
+            row["ratio_numbalsoda_over_cylfric"] = row["numbalsoda"]["seconds"] / seconds
+    except ImportError:
+        row["numbalsoda"] = {"note": "not installed (pip install -e .[bench])"}
+    print(
+        f"  case B: cylfric {seconds * 1e3:.2f} ms (err {row['cylfric']['error']:.1e})"
+        + "".join(
+            f", {n} x{row.get(f'ratio_{n}_over_cylfric', math.nan):.1f}"
+            for n in ("LSODA", "Radau", "BDF", "numbalsoda")
+        ),
+        flush=True,
+    )
+    return _save("simulate_case_b", row)
+
+
+def bench_candidates(sweep=(1e5, 1e8, 1e10)):
+    """The candidates for the default integrator at their loosest decade rtol (the next tighter
+    one meeting 1e-4 too): Rodas3 and Rodas4 kernels, DOPRI5 (up to 1e7) and the fixed step."""
+    rows = []
+    for s0 in sweep:
+        found = _candidates_at(s0)
+        print(
+            f"  sigma_0 = {s0:.0e}: "
+            + ", ".join(f"{r['candidate']} {r['seconds'] * 1e3:.2f} ms" for r in found),
+            flush=True,
+        )
+        rows += found
+    return _save("simulate_candidates", {"accuracy": f"RMS(F - F_ref)/F_c <= {TOL}", "rows": rows})
+
+
+def _candidates_at(s0):
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, SpringPull, kernels, simulate
+    from cylfric.simulate.plant import rosenbrock_tolerances
+
+    rows = []
+    case = canudas(s0, 10.0)
+    ref, _ = reference(case)
+    p, t = case["params"], _grid(case)
+    ones = np.ones(t.size)
+
+    def rosenbrock(rtol, tables):
+        return kernels.rosenbrock(
+            1e-3, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.1 * t, 0.1 * ones, 0 * ones,
+            p["F_c"] * ones, p["F_s"] * ones, p["sigma_2"] * ones, p["sigma_0"],
+            p["sigma_1"], p["v_r"], p["alpha"], rtol, *rosenbrock_tolerances(rtol, p),
+            10**8, math.inf, tables,
+        )  # fmt: skip
+
+    for name, tables in (("rodas3", kernels.RODAS3), ("rodas4", kernels.RODAS4)):
+        rosenbrock(1e-6, tables)
+        for rtol in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8):
+            errors = [_error(rosenbrock(r, tables)[3], ref, case) for r in (rtol, rtol / 10)]
+            if max(errors) <= TOL:
+                seconds, out = _best(lambda r=rtol, tb=tables: rosenbrock(r, tb), 5)
+                rows.append(
+                    {
+                        "sigma_0": s0,
+                        "candidate": name,
+                        "rtol": rtol,
+                        "seconds": seconds,
+                        "steps": int(out[4]),
+                        "error": errors[0],
+                    }
+                )
+                break
+    model = FrictionModel(p, pressure_law="constant")
+
+    def run(**options):
+        return simulate(Cylinder(1.0), model, SpringPull(2.0, 0.1), 10.0, **options)
+
+    settings = [("dopri", {"method": "dopri", "rtol": r}) for r in (1e-4, 1e-5, 1e-6, 1e-7)]
+    settings = settings if s0 <= 1e7 else []  # DOPRI5's steps shrink as 1/sqrt(sigma_0)
+    settings += [
+        ("fixed", {"method": "fixed", "step": h})
+        for h in (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5)
+    ]
+    done = set()
+    for name, options in settings:
+        if name in done:
+            continue
+        error = _error(run(**options).outputs["friction_force"], ref, case)
+        if error <= TOL:
+            seconds, result = _best(lambda o=options: run(**o), 3)
+            rows.append(
+                {
+                    "sigma_0": s0,
+                    "candidate": name,
+                    **options,
+                    "seconds": seconds,
+                    "steps": result.info.get("accepted", result.info.get("steps")),
+                    "error": error,
+                }
+            )
+            done.add(name)
+    return rows
+
+
+def bench_simulate():
+    """All single-run cases: the stiff sweep, the 40 s runs, case A and case B."""
+    stiff = bench_stiff()
+    return {"stiff": stiff, "case_b": bench_case_b()}
+
+
+SECTIONS = {
+    "simulate": bench_simulate,
+    "batch": bench_stiff_batch,
+    "candidates": bench_candidates,
+}
