@@ -218,7 +218,15 @@ def fit_many(
     workers = workers or os.cpu_count() or 1
     context = None
     if scheduler is None:  # the workers' server imports the pipeline while this process goes on
-        preload = ["cylfric.pipeline", "cylfric.many"]
+        # the whole fit (the pipeline imports identify and datasheet lazily) and the
+        # compiled reader, loaded once in the server the workers fork from
+        preload = [
+            "cylfric.pipeline",
+            "cylfric.many",
+            "cylfric.identify",
+            "cylfric.datasheet",
+            "cylfric._warm",
+        ]
         if fit_options.get("report", True):
             preload.append("cylfric.report")
         context = _worker_context(preload)
@@ -227,6 +235,9 @@ def fit_many(
     from .io.writers import atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
+    if scheduler != "serial" and (distributed or workers > 1):
+        # fits side by side: each on one core (a fit alone reads files on two)
+        fit_options.setdefault("workers", 1)
     jobs = [(f, out / _name(f, root), _name(f, root), dict(fit_options)) for f in campaigns]
     t0 = time.perf_counter()
     rows = {}

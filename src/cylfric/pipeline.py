@@ -69,6 +69,7 @@ def fit_campaign(
     glob=None,
     strict=False,
     export=(),
+    workers=None,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -113,6 +114,10 @@ def fit_campaign(
         Export targets (``"fmu"``, ``"simscape"``, ...; :data:`cylfric.export.TARGETS`)
         written into ``out/export/<target>/`` after the datasheet; lossy targets' loss
         reports are summarised in ``report.html``.
+    workers : int, optional
+        Processes for the extraction and the figures (default 2 on Linux, else 1; see
+        :func:`~cylfric.steady_state.extract_campaign`); 1 keeps the fit on one core, as
+        the workers of :func:`cylfric.many.fit_many` do when several fits run at once.
     """
     folder, out = Path(folder), Path(out)
     if export:
@@ -142,6 +147,7 @@ def fit_campaign(
                 glob,
                 strict,
                 export or (),
+                workers,
             )
             _swap_in(staging, out)
         except BaseException:
@@ -285,6 +291,7 @@ def _fit(
     glob,
     strict,
     export=(),
+    workers=None,
 ):
     timings = {}
     t0 = time.perf_counter()
@@ -300,6 +307,7 @@ def _fit(
             progress=progress,
             meanwhile=_import_next_stages,
             exclude=[info.path.name for info in dynamic_runs],
+            workers=workers,
         )
     finally:
         if after_extraction is not None:
@@ -379,6 +387,7 @@ def _fit(
                 quality.excluded,
                 exports=summaries,
                 dynamic=dynamic,
+                workers=2 if workers is None else workers,
             )
         )
         timings["report"] = time.perf_counter() - t0
