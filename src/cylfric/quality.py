@@ -61,31 +61,33 @@ class QualityReport:
 def _runs_table(extraction):
     """Per run: file, nominal and measured speed [m/s], pressure [Pa], friction [N]."""
     ok = extraction.points[extraction.points["flag"].eq("ok")]
-    measured = ok.groupby("run").agg(
-        speed=("velocity [m/s]", lambda v: float(np.median(np.abs(v)))),
-        friction=("friction [N]", "median"),
-        pressure=("pressure [Pa]", "median"),
+    measured = (
+        ok.assign(speed=ok["velocity [m/s]"].abs())
+        .groupby("run")
+        .agg(
+            speed=("speed", "median"),
+            friction=("friction [N]", "median"),
+            pressure=("pressure [Pa]", "median"),
+        )
     )
     extra = [
         c
         for c in extraction.points.columns
         if c not in _POINT_NAMES and extraction.points[c].dtype == object and c != "flag"
     ]
-    groups = ok.groupby("run")[extra].first() if extra else None
-    rows = []
-    for info in extraction.runs:
-        run = info.get("run")
-        row = {
-            "run": run,
-            "file": info["file"],
-            "nominal_speed": abs(info.get("velocity [m/s]", math.nan)),
+    runs = pd.DataFrame(
+        {
+            "run": [info.get("run") for info in extraction.runs],
+            "file": [info["file"] for info in extraction.runs],
+            "nominal_speed": [
+                abs(info.get("velocity [m/s]", math.nan)) for info in extraction.runs
+            ],
         }
-        if run in measured.index:
-            row.update(measured.loc[run].to_dict())
-            if groups is not None:
-                row["group"] = tuple(groups.loc[run])
-        rows.append(row)
-    return pd.DataFrame(rows)
+    )
+    if extra:
+        first = ok.groupby("run")[extra].first()
+        measured["group"] = list(zip(*(first[c] for c in extra), strict=True))
+    return runs.join(measured, on="run")
 
 
 _POINT_NAMES = {
@@ -195,18 +197,18 @@ def assess(
         excluded.append({"file": row["file"], "run": row["run"], "check": check, "reason": reason})
 
     usable = table.dropna(subset=["friction"]) if "friction" in table else table.iloc[:0]
-    for _, row in table.iterrows():
-        if "friction" not in table or pd.isna(row.get("friction")):
-            exclude(row, "motion", "no usable constant-velocity window (no motion, or too short)")
-    for _, row in usable.iterrows():
-        nominal = row["nominal_speed"]
-        if nominal > 0 and abs(row["speed"] / nominal - 1) > speed_tolerance:
-            exclude(
-                row,
-                "speed",
-                f"measured speed {row['speed'] * 1e3:.4g} mm/s against nominal "
-                f"{nominal * 1e3:.4g} mm/s (a position unit, m or mm?)",
-            )
+    no_window = table["friction"].isna() if "friction" in table else np.ones(len(table), bool)
+    for row in table[no_window].to_dict("records"):
+        exclude(row, "motion", "no usable constant-velocity window (no motion, or too short)")
+    nominal = usable["nominal_speed"]
+    off = (nominal > 0) & ((usable["speed"] / nominal - 1).abs() > speed_tolerance)
+    for row in usable[off].to_dict("records"):
+        exclude(
+            row,
+            "speed",
+            f"measured speed {row['speed'] * 1e3:.4g} mm/s against nominal "
+            f"{row['nominal_speed'] * 1e3:.4g} mm/s (a position unit, m or mm?)",
+        )
     flagged = {e["run"] for e in excluded}
     rest = usable[~usable["run"].isin(flagged)].copy()
     if len(rest):
@@ -214,16 +216,19 @@ def assess(
         if "group" not in rest:
             rest["group"] = 0
         for _, level in rest.groupby(["level", "group"], dropna=False):
+            if len(level) < 3:
+                continue
             median = float(np.median(level["friction"]))
-            for _, row in level.iterrows():
-                ratio = abs(row["friction"]) / max(abs(median), 1e-12)
-                if len(level) >= 3 and (ratio > scale_factor or ratio < 1 / scale_factor):
-                    exclude(
-                        row,
-                        "scale",
-                        f"friction {row['friction']:.4g} N against {median:.4g} N for the "
-                        f"runs at {row['pressure'] / 1e5:.3g} bar (a force unit, N or kN?)",
-                    )
+            ratio = level["friction"].abs() / max(abs(median), 1e-12)
+            for row in level[(ratio > scale_factor) | (ratio < 1 / scale_factor)].to_dict(
+                "records"
+            ):
+                exclude(
+                    row,
+                    "scale",
+                    f"friction {row['friction']:.4g} N against {median:.4g} N for the "
+                    f"runs at {row['pressure'] / 1e5:.3g} bar (a force unit, N or kN?)",
+                )
         flagged = {e["run"] for e in excluded}
         rest = rest[~rest["run"].isin(flagged)]
         groups = [
