@@ -1,0 +1,643 @@
+"""Identification of the pressure-dependent friction model from steady-state points (ch. 4).
+
+:func:`identify` runs the thesis method and more on a points table (from
+:func:`cylfric.steady_state.extract_campaign`): per-pressure Stribeck fits (Table 4.1), the
+pressure laws two ways (regression of the per-pressure parameters, and one global surface
+fit), information criteria across laws, the alpha / v_r sensitivity study (Tables 4.2-4.4),
+and per-direction fits on request.
+
+The package :mod:`cylfric.identify` re-exports every public name of this module.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
+from ..levels import pressure_levels
+from ..model import FrictionModel
+from .linear_fit import fit_linear_surface
+from .pressure_fit import (
+    FITTED_LAWS,
+    PRESSURE_DEPENDENT,
+    PressureLawFit,
+    SurfaceFit,
+    fit_surface,
+    information_criteria,
+    regress_parameters,
+)
+from .sensitivity import sensitivity_grid, sensitivity_refits, thesis_tables
+from .stribeck_fit import (
+    MIN_POINTS,
+    PARAMETERS,
+    IdentificationWarning,
+    StribeckFit,
+    fit_stribeck,
+)
+
+__all__ = [
+    "identify",
+    "add_sensitivity",
+    "Identification",
+    "sensitivity_refits",
+    "fit_stribeck",
+    "StribeckFit",
+    "fit_surface",
+    "SurfaceFit",
+    "regress_parameters",
+    "PressureLawFit",
+    "sensitivity_grid",
+    "thesis_tables",
+    "pressure_levels",
+    "UnphysicalFrictionError",
+    "validity_of",
+    "point_errors",
+    "unphysical",
+    "fit_linear_surface",
+    "IdentificationWarning",
+    "PARAMETERS",
+]
+
+LAWS_COMPARED = FITTED_LAWS
+
+
+def _distinct_speeds(speed, relative=0.1):
+    s = np.sort(np.abs(speed))
+    return 1 + int(np.sum(np.diff(s) > relative * s[1:])) if s.size else 0
+
+
+def validity_of(points) -> dict:
+    """The ranges a points table covers: ``pressure_min/max`` [Pa], ``velocity_min/max`` [m/s]."""
+    speed = points["velocity [m/s]"].abs()
+    return {
+        "pressure_min": float(points["pressure [Pa]"].min()),
+        "pressure_max": float(points["pressure [Pa]"].max()),
+        "velocity_min": float(speed.min()),
+        "velocity_max": float(speed.max()),
+    }
+
+
+class UnphysicalFrictionError(ValueError):
+    """The data push the friction level to 0 N: a force-balance sign or a unit is wrong."""
+
+
+@dataclass
+class Identification:
+    """Everything :func:`identify` found (SI units); the report draws from it, fitting nothing.
+
+    Attributes
+    ----------
+    model : FrictionModel
+        The datasheet's model: the global surface fit with the chosen pressure law, its
+        covariance, statistics and validity ranges.
+    models : dict
+        Pressure law -> FrictionModel for every compared law.
+    residuals : ndarray
+        Data minus ``model`` [N], in the order of ``points``.
+    points : pandas.DataFrame
+        The points used (flag ``"ok"``), with their pressure ``level`` (index into ``levels``).
+    levels : ndarray
+        Mean pressure of each level [Pa] (computed once, here).
+    per_pressure : pandas.DataFrame
+        Table 4.1 layout: one row per pressure level with ``pressure [Pa]``, ``F_c [N]``,
+        ``F_s [N]``, ``sigma_2 [N*s/m]``, ``v_r [m/s]``, ``alpha [-]``,
+        ``stribeck_velocity [m/s]``, ``rmse [N]``, ``n_points [-]`` and ``*_stderr`` columns
+        (NaN where a parameter is not identified).
+    per_pressure_fits : list of StribeckFit
+        The per-pressure fits.
+    regressions : dict
+        Parameter -> pressure law -> :class:`PressureLawFit` (route a).
+    comparison : pandas.DataFrame
+        ``law``, ``coefficients [-]``, ``rmse [N]``, ``aic``, ``bic`` of the surface fits.
+    pressure_law : str
+        Pressure law of ``model``.
+    fixed : dict
+        Parameters held fixed in every fit (SI).
+    stribeck_identifiable : bool
+        False when the data has too few speeds per pressure (e.g. one speed per direction).
+    sensitivity, grid, recommended, sensitivity_refits
+        The alpha / v_r study (:func:`add_sensitivity`): Tables 4.2-4.4, the RMSE grid, its
+        minimum, and the refits of Figs. 4.4-4.12 (dicts with a ``model``).
+    directions : dict
+        ``"extension"``/``"retraction"`` -> Identification.
+    notes : list of str
+        Warnings raised on the way, in words, for the report.
+    """
+
+    model: FrictionModel
+    models: dict
+    residuals: np.ndarray
+    points: pd.DataFrame
+    levels: np.ndarray
+    per_pressure: pd.DataFrame
+    per_pressure_fits: list
+    regressions: dict
+    comparison: pd.DataFrame
+    pressure_law: str
+    fixed: dict
+    stribeck_identifiable: bool = True
+    sensitivity: pd.DataFrame | None = None
+    grid: pd.DataFrame | None = None
+    recommended: dict = field(default_factory=dict)
+    sensitivity_refits: list | None = None
+    directions: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+
+    def summary(self) -> pd.DataFrame:
+        """Pressure laws in engineering units: parameter, coefficient, value, stderr, unit."""
+        rows = []
+        for p in self.model.parameters.values():
+            value, stderr, unit = p.engineering()
+            rows.append(
+                {
+                    "parameter": p.name,
+                    "value": value,
+                    "stderr": stderr,
+                    "unit": unit,
+                    "vary": p.vary,
+                }
+            )
+        return pd.DataFrame(rows)
+
+
+_TABLE_UNITS = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
+
+
+def _per_pressure(points, levels, fixed):
+    rows, fits = [], []
+    for k in range(len(levels)):
+        sel = points[points["level"] == k]
+        if len(sel) < MIN_POINTS:
+            continue
+        fit = fit_stribeck(sel["velocity [m/s]"], sel["friction [N]"], fixed=fixed)
+        fits.append(fit)
+        row = {"pressure [Pa]": float(sel["pressure [Pa]"].mean())}
+        for p in PARAMETERS:
+            row[f"{p} [{_TABLE_UNITS[p]}]"] = fit.params[p]
+        row["stribeck_velocity [m/s]"] = fit.stribeck_velocity
+        row["rmse [N]"] = fit.rmse
+        row["n_points [-]"] = fit.n_points
+        for p in PARAMETERS:
+            row[f"{p}_stderr [{_TABLE_UNITS[p]}]"] = fit.stderr[p]
+        rows.append(row)
+    return pd.DataFrame(rows), fits
+
+
+def _check_per_pressure(per_pressure, fits):
+    """Warn about failed fits and parameters that fall significantly as pressure rises."""
+    for fit, (_, row) in zip(fits, per_pressure.iterrows(), strict=True):
+        if not fit.success:
+            warnings.warn(
+                f"the Stribeck fit at {row['pressure [Pa]'] / 1e5:.3g} bar did not "
+                f"converge ({fit.message}); its row of the table is unreliable",
+                IdentificationWarning,
+                stacklevel=3,
+            )
+    table = per_pressure.sort_values("pressure [Pa]")
+    for par in ("F_c", "F_s"):
+        values = table[f"{par} [N]"].to_numpy()
+        errors = table[f"{par}_stderr [N]"].to_numpy()
+        drops = np.diff(values) < -2 * np.hypot(errors[1:], errors[:-1])
+        for i in np.flatnonzero(drops):
+            p0, p1 = table["pressure [Pa]"].to_numpy()[[i, i + 1]] / 1e5
+            warnings.warn(
+                f"{par} is not monotonic in pressure: it falls from "
+                f"{values[i]:.1f} N at {p0:.3g} bar to {values[i + 1]:.1f} N at "
+                f"{p1:.3g} bar; the pressure law may not describe this level "
+                "(temperature, seal run-in?)",
+                IdentificationWarning,
+                stacklevel=3,
+            )
+
+
+def point_errors(points):
+    """(sigma [N], groups) of a points table for the weighted, run-clustered surface fit.
+
+    ``sigma`` is each window's standard error ``friction_std / sqrt(n)`` (floored at a tenth
+    of the median, so that no window weighs without bound), or None when the table lacks
+    those columns; ``groups`` is the ``run`` column (the points of one run share its
+    offset) or None.
+    """
+    sigma = None
+    if {"friction_std [N]", "n [-]"} <= set(points.columns):
+        sem = points["friction_std [N]"].to_numpy(float) / np.sqrt(points["n [-]"].to_numpy(float))
+        valid = np.isfinite(sem) & (sem > 0)
+        if valid.any():
+            typical = float(np.median(sem[valid]))
+            sigma = np.where(valid, np.maximum(sem, 0.1 * typical), typical)
+    groups = points["run"].to_numpy() if "run" in points.columns else None
+    return sigma, groups
+
+
+STRONG_EVIDENCE_BIC = 10.0
+"""BIC gain [-] the Stribeck law must show over Coulomb + viscous to be kept ("very strong"
+evidence on the scale of Kass & Raftery 1995)."""
+
+
+def unphysical(model, validity, *, points=41):
+    """Why a model is unphysical within the validity pressures, or None.
+
+    Checks F_c >= 0, F_s >= F_c and sigma_2 >= 0 at ``points`` pressures over the range.
+    """
+    p = np.linspace(validity["pressure_min"], validity["pressure_max"], points)
+    k = model.params_at(p)
+    tol = 1e-9 * max(float(np.max(np.abs(k["F_s"]))), 1.0)  # rounding of a value at a bound
+    tol_2 = 1e-9 * max(float(np.max(np.abs(k["sigma_2"]))), 1.0)
+    checks = (
+        (k["F_c"] < -tol, "F_c < 0"),
+        (k["F_s"] < k["F_c"] - tol, "F_s < F_c"),
+        (np.asarray(k["sigma_2"]) < -tol_2, "sigma_2 < 0"),
+    )
+    for bad, what in checks:
+        bad = np.broadcast_to(bad, p.shape)
+        if bad.any():
+            return f"it gives {what} at {p[bad][0] / 1e5:.4g} bar"
+    return None
+
+
+def _linear_model(args, fixed, weights, notes):
+    """The linear-law model the data support: Stribeck, else Coulomb + viscous, else Coulomb.
+
+    Returns (chosen SurfaceFit, the Coulomb + viscous alternative or None). Raises
+    ValueError when even the friction level is pushed to 0 N (a sign or unit error).
+    """
+    stribeck = fit_linear_surface(*args, friction_law="stribeck", fixed=fixed, **weights)
+    reduced_fixed = {k: v for k, v in fixed.items() if k in ("F_c", "sigma_2")}
+    gain = None
+    shape_bounds = [b for b in stribeck.at_bounds if b.split()[0] in ("amplitude", "v_r", "alpha")]
+    alternative = None
+    if not {"F_s", "v_r", "alpha"} & set(fixed) or shape_bounds:
+        alternative = fit_linear_surface(
+            *args, friction_law="coulomb_viscous", fixed=reduced_fixed, **weights
+        )
+        gain = alternative.model.statistics["bic"] - stribeck.model.statistics["bic"]
+    if shape_bounds or (gain is not None and gain <= STRONG_EVIDENCE_BIC):
+        why = (
+            "the fit pushes " + ", ".join(shape_bounds) + " to its physical bound"
+            if shape_bounds
+            else f"the Stribeck law improves BIC by only {gain:.3g} (<= "
+            f"{STRONG_EVIDENCE_BIC:g}) over Coulomb + viscous friction"
+        )
+        reason = f"no identifiable Stribeck dip: {why}"
+        notes.append(
+            f"{reason}; the datasheet gives the Coulomb + viscous model F_c(p) + "
+            "sigma_2(p) |v| and marks F_s, v_r and alpha not identified"
+        )
+        chosen = fit_linear_surface(
+            *args,
+            friction_law="coulomb_viscous",
+            fixed=reduced_fixed,
+            not_identified={n: reason for n in ("F_s", "v_r", "alpha")},
+            **weights,
+        )
+        alternative = stribeck
+        if sum(b.startswith("sigma_2") for b in chosen.at_bounds) == 2 and "sigma_2" not in fixed:
+            reason = "the data ask for a negative viscous coefficient at every pressure"
+            notes.append(f"{reason}: the datasheet gives the Coulomb level F_c(p) only")
+            chosen = fit_linear_surface(
+                *args,
+                friction_law="coulomb",
+                fixed={k: v for k, v in fixed.items() if k == "F_c"},
+                not_identified={"F_s": reason, "sigma_2": reason, "v_r": reason, "alpha": reason},
+                **weights,
+            )
+    else:
+        chosen = stribeck
+    level = [b for b in chosen.at_bounds if b.startswith("F_c")]
+    if level:
+        raise UnphysicalFrictionError(
+            f"the friction level is pushed to 0 N ({', '.join(level)}): the data contradict a "
+            "positive friction force; check the force-balance signs (load_cell_sign, "
+            "position_sign), the offset and the force and position units"
+        )
+    for bound in chosen.at_bounds:
+        if bound.startswith("sigma_2"):
+            notes.append(
+                f"sigma_2 is held at its bound 0 N*s/m ({bound}): the data ask for a negative "
+                "viscous coefficient there"
+            )
+    return chosen, alternative
+
+
+def _core(points, levels, *, pressure_law, fixed, notes, validity):
+    per_pressure, fits = _per_pressure(points, levels, fixed)
+    _check_per_pressure(per_pressure, fits)
+    regressions = {}
+    if len(per_pressure) >= 2:
+        for par in PRESSURE_DEPENDENT:
+            unit = _TABLE_UNITS[par]
+            regressions[par] = regress_parameters(
+                per_pressure["pressure [Pa]"],
+                per_pressure[f"{par} [{unit}]"],
+                per_pressure[f"{par}_stderr [{unit}]"],
+                parameter=par,
+                laws=LAWS_COMPARED,
+            )
+    else:
+        notes.append(
+            "fewer than two pressure levels with enough points: the pressure "
+            "dependence rests on the surface fit alone"
+        )
+    sigma, groups = point_errors(points)
+    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
+    weights = {"sigma": sigma, "groups": groups}
+    linear, alternative = _linear_model(args, fixed, weights, notes)
+    fits_by_law = {"linear": linear}
+    shape_only = set(fixed) <= {"v_r", "alpha"}
+    for name in LAWS_COMPARED[1:]:
+        if linear.model.friction_law != "stribeck" or not shape_only:
+            notes.append(
+                f"the {name} pressure law was not fitted: cylfric fits it only for the "
+                "Stribeck law with at most v_r and alpha held"
+            )
+            continue
+        if len(PRESSURE_LAW_COEFFICIENTS[name]) > len(levels):
+            continue
+        try:
+            fit = fit_surface(*args, pressure_law=name, fixed=fixed, start=linear.model, **weights)
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            notes.append(f"surface fit with the {name} pressure law failed: {exc}")
+            continue
+        problem = unphysical(fit.model, validity)
+        if problem:
+            notes.append(f"the {name} pressure law was left out: {problem}")
+            continue
+        fits_by_law[name] = fit
+    if pressure_law not in fits_by_law:
+        raise ValueError(
+            f"the {pressure_law} pressure law cannot be used on these data ({len(levels)} "
+            "pressure level(s); see the notes above); use --pressure-law linear"
+            + ("" if len(levels) > 2 else " or measure more pressures")
+        )
+    models = {n: f.model.replace(validity=validity) for n, f in fits_by_law.items()}
+    rows = [(n, m) for n, m in models.items()]
+    if alternative is not None:
+        rows.insert(1, ("linear", alternative.model))
+    comparison = pd.DataFrame(
+        [
+            {
+                "law": n,
+                "friction_law": m.friction_law,
+                "coefficients [-]": m.statistics["n_variables"],
+                "rmse [N]": m.statistics["rmse"],
+                "aic": m.statistics["aic"],
+                "bic": m.statistics["bic"],
+            }
+            for n, m in rows
+        ]
+    )
+    for name, f in fits_by_law.items():
+        if not f.success:
+            notes.append(f"surface fit with the {name} pressure law: {f.message}")
+    return per_pressure, fits, regressions, models, fits_by_law, comparison
+
+
+def identify(
+    points: pd.DataFrame,
+    *,
+    fixed=None,
+    pressure_law="linear",
+    per_direction=False,
+    sensitivity=True,
+) -> Identification:
+    """Identify the pressure-dependent friction model from a points table.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        Points with ``velocity [m/s]``, ``pressure [Pa]``, ``friction [N]`` and, when present,
+        ``flag`` (only ``"ok"`` rows are used) and ``direction [-]``.
+    fixed : dict, optional
+        Parameters held fixed in every fit (SI), e.g. ``{"alpha": 1, "v_r": 0.010}`` as the
+        thesis chose.
+    pressure_law : {"linear", "quadratic", "exponential"}
+        Pressure law of the datasheet model; all three are fitted and compared.
+    per_direction : bool
+        Also identify extension and retraction separately.
+    sensitivity : bool
+        Run the alpha / v_r sensitivity study (see :func:`add_sensitivity`).
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    ValueError
+        Missing columns, NaN values, too few points, unknown law or fixed names.
+    """
+    fixed = dict(fixed or {})
+    unknown = set(fixed) - set(PARAMETERS)
+    if unknown:
+        raise ValueError(f"unknown fixed parameters {sorted(unknown)}; valid: {list(PARAMETERS)}")
+    if pressure_law not in LAWS_COMPARED:
+        raise ValueError(f"unknown pressure law {pressure_law!r}; valid: {list(LAWS_COMPARED)}")
+    needed = {"velocity [m/s]", "pressure [Pa]", "friction [N]"}
+    missing = needed - set(points.columns)
+    if missing:
+        raise ValueError(f"points table lacks columns {sorted(missing)}")
+    used = points[points["flag"].eq("ok")] if "flag" in points else points
+    data = used[list(needed)].to_numpy(dtype=float)
+    if np.isnan(data).any():
+        raise ValueError("points contain NaN in velocity, pressure or friction; drop or flag them")
+    if len(used) < MIN_POINTS:
+        raise ValueError(
+            f"{len(used)} usable points are too few; expected at least "
+            f"{MIN_POINTS} (check the flags of the points table)"
+        )
+    notes = []
+    labels, levels = pressure_levels(used["pressure [Pa]"])
+    used = used.assign(level=labels)
+    validity = validity_of(used)
+    speeds_per_level = [
+        _distinct_speeds(used["velocity [m/s]"].to_numpy()[labels == k]) for k in range(len(levels))
+    ]
+    if max(speeds_per_level) < 4:
+        if pressure_law != "linear":
+            raise ValueError(
+                f"at most {max(speeds_per_level)} distinct speed(s) per pressure: only the "
+                "friction level against pressure can be identified, and cylfric fits it with "
+                f"the linear law; the {pressure_law} pressure law is not available for it"
+            )
+        message = (
+            f"at most {max(speeds_per_level)} distinct speed(s) per pressure: the "
+            "Stribeck shape (F_s, v_r, alpha, sigma_2) cannot be identified; the datasheet "
+            "gives the Coulomb friction level against pressure, F_c(p), and marks the rest "
+            "not identified"
+        )
+        warnings.warn(message, IdentificationWarning, stacklevel=2)
+        result = _level_only(used, levels, fixed, notes + [message], validity)
+    else:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            core = _core(
+                used,
+                levels,
+                pressure_law=pressure_law,
+                fixed=fixed,
+                notes=notes,
+                validity=validity,
+            )
+        notes += [str(w.message) for w in caught]
+        for w in caught:  # recorded for the report, and still shown to the caller
+            warnings.warn(w.message, w.category, stacklevel=2)
+        per_pressure, fits, regressions, models, fits_by_law, comparison = core
+        model = models[pressure_law]
+        shape = model.friction_law == "stribeck"
+        for par in PRESSURE_DEPENDENT:
+            spec = model.coefficients()[par]
+            slope = spec.get("slope") if isinstance(spec, dict) else None
+            if slope is not None and slope < 0:
+                notes.append(
+                    f"{par} falls with pressure (slope {slope * 1e5:.3g} per bar): check "
+                    "the pressure column and the force-balance signs"
+                )
+        result = Identification(
+            model=model,
+            models=models,
+            residuals=fits_by_law[pressure_law].residuals,
+            points=used,
+            levels=levels,
+            per_pressure=per_pressure,
+            per_pressure_fits=fits,
+            regressions=regressions,
+            comparison=comparison,
+            pressure_law=pressure_law,
+            fixed=fixed,
+            stribeck_identifiable=shape,
+            notes=notes,
+        )
+        if sensitivity and shape:
+            result = add_sensitivity(result)
+    if per_direction and "direction [-]" in used:
+        for name, sign in (("extension", 1), ("retraction", -1)):
+            subset = used[used["direction [-]"] == sign].drop(columns="level")
+            if len(subset) >= MIN_POINTS:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", IdentificationWarning)
+                    result.directions[name] = identify(
+                        subset, fixed=fixed, pressure_law=pressure_law, sensitivity=False
+                    )
+    return result
+
+
+def add_sensitivity(ident: Identification) -> Identification:
+    """A copy of ``ident`` with the alpha / v_r sensitivity study (thesis 4.1.1-4.1.2).
+
+    Fills ``sensitivity`` (Tables 4.2-4.4), ``grid``, ``recommended`` and
+    ``sensitivity_refits`` (the refits of Figs. 4.4-4.12); warnings raised on the way are
+    added to ``notes``. :func:`identify` calls it unless ``sensitivity=False``. An
+    identification without a Stribeck shape is returned unchanged.
+    """
+    if not ident.stribeck_identifiable:
+        return ident
+    points = ident.points
+    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = thesis_tables(*args)
+        grid, recommended = sensitivity_grid(*args)
+        refits = sensitivity_refits(*args, reference=ident.model.reference)
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
+    return replace(
+        ident,
+        sensitivity=table,
+        grid=grid,
+        recommended=recommended,
+        sensitivity_refits=refits,
+        directions=dict(ident.directions),
+        notes=ident.notes + [str(w.message) for w in caught],
+    )
+
+
+def _level_only(points, levels, fixed, notes, validity):
+    """Coulomb friction level against pressure when the Stribeck shape is not identifiable."""
+    labels = points["level"].to_numpy()
+    level_rows = []
+    for k in range(len(levels)):
+        sel = points[labels == k]
+        f = sel["friction [N]"].to_numpy()
+        row = {
+            "pressure [Pa]": float(sel["pressure [Pa]"].mean()),
+            **{f"{p} [{_TABLE_UNITS[p]}]": math.nan for p in PARAMETERS},
+            "stribeck_velocity [m/s]": math.nan,
+            "rmse [N]": float(f.std()),
+            "n_points [-]": int(f.size),
+            **{f"{p}_stderr [{_TABLE_UNITS[p]}]": math.nan for p in PARAMETERS},
+        }
+        row["F_c [N]"] = float(f.mean())
+        if f.size > 1:
+            row["F_c_stderr [N]"] = float(f.std(ddof=1) / math.sqrt(f.size))
+        level_rows.append(row)
+    per_pressure = pd.DataFrame(level_rows)
+    p = points["pressure [Pa]"].to_numpy()
+    f = points["friction [N]"].to_numpy()
+    if len(levels) >= 2:
+        design = np.column_stack([np.ones_like(p), p])
+        names = ["F_c.intercept", "F_c.slope"]
+    else:
+        design = np.ones((p.size, 1))
+        names = ["F_c"]
+    coef, *_ = np.linalg.lstsq(design, f, rcond=None)
+    res = f - design @ coef
+    dof = max(f.size - len(coef), 1)
+    cov = np.linalg.pinv(design.T @ design) * float(res @ res) / dof
+    se = np.sqrt(np.diag(cov))
+    if len(coef) == 2:
+        F_c = {"intercept": float(coef[0]), "slope": float(coef[1])}
+        F_c_se = {"intercept": float(se[0]), "slope": float(se[1])}
+    else:
+        F_c = {"law": "constant", "intercept": float(coef[0])}
+        F_c_se = {"intercept": float(se[0])}
+    aic, bic = information_criteria(float(res @ res), f.size, len(coef))
+    reason = "one speed per direction: the Stribeck shape cannot be identified"
+    model = FrictionModel(
+        {"F_c": F_c, "F_s": None, "sigma_2": None, "v_r": None, "alpha": None},
+        friction_law="coulomb",
+        stderr={"F_c": F_c_se},
+        covariance=(names, cov),
+        statistics={
+            "n_points": int(f.size),
+            "n_variables": len(coef),
+            "rmse": float(np.sqrt(np.mean(res**2))),
+            "residual_std": float(np.sqrt(float(res @ res) / dof)),
+            "dof": int(dof),
+            "aic": aic,
+            "bic": bic,
+        },
+        validity=validity,
+        provenance={"method": "friction level versus pressure (Stribeck shape not identifiable)"},
+        not_identified={n: reason for n in ("F_s", "sigma_2", "v_r", "alpha")},
+    )
+    comparison = pd.DataFrame(
+        [
+            {
+                "law": "linear" if len(coef) == 2 else "constant",
+                "coefficients [-]": len(coef),
+                "rmse [N]": model.statistics["rmse"],
+                "aic": aic,
+                "bic": bic,
+            }
+        ]
+    )
+    return Identification(
+        model=model,
+        models={"linear": model},
+        residuals=res,
+        points=points,
+        levels=levels,
+        per_pressure=per_pressure,
+        per_pressure_fits=[],
+        regressions={},
+        comparison=comparison,
+        pressure_law="linear",
+        fixed=fixed,
+        stribeck_identifiable=False,
+        notes=notes,
+    )
