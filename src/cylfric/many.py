@@ -195,6 +195,13 @@ def fit_many(
     ValueError
         ``root`` is not a folder or holds no campaign, ``out`` lies inside a campaign,
         an unknown fit option, workers < 1.
+
+    Notes
+    -----
+    The local workers start from a fork server, which, as Python's ``spawn`` and
+    ``forkserver`` start methods do, runs the calling script's main module again: call
+    ``fit_many`` from a script under ``if __name__ == "__main__":`` (notebooks and the
+    ``cylfric fit-many`` command need nothing).
     """
     unknown = set(fit_options) - set(_FIT_OPTIONS)
     if unknown:
