@@ -278,3 +278,22 @@ def test_batch_includes_the_net_pressure_force_of_an_asymmetric_cylinder():
     single = simulate(cylinder, _model(mass=2.5), AppliedForce(0.0), 0.5, pressure_a=20e5)
     assert batch.position[0, -1] == 0.0 and batch.position[1, -1] > 1e-3  # pushed out
     assert_allclose(batch.position[1], single.states["position"][::10], atol=1e-9)
+
+
+def test_prescribed_motion_with_a_pressure_signal_on_the_scipy_reference():
+    """Regression: the Radau reference broke (jac of shape (1, 1, n)) when a pressure signal
+    made sigma_0 an array; it now agrees with the compiled prescribed-velocity kernel."""
+    import warnings
+
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import Cylinder, PrescribedMotion, simulate
+
+    drive = PrescribedMotion(lambda t: 0.01 * np.sin(20 * t))
+    kwargs = {"pressure_a": lambda t: 50e5 + 100e5 * t}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scipy_run = simulate(Cylinder(10.0), FrictionModel(), drive, 0.2, method="scipy", **kwargs)
+        compiled = simulate(Cylinder(10.0), FrictionModel(), drive, 0.2, **kwargs)
+    force = scipy_run.outputs["friction_force"]
+    assert np.ptp(force) > 150  # a real stroke: -70 to +130 N
+    np.testing.assert_allclose(force, compiled.outputs["friction_force"], atol=1e-3)

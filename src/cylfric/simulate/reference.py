@@ -116,8 +116,10 @@ def params_const(params, name):
 
 def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
     """Radau solution of the LuGre bristle equation along a prescribed velocity record."""
-    s0, s1 = params["sigma_0"], params["sigma_1"]
     v_r, alpha = params_const(params, "v_r"), params_const(params, "alpha")
+    # every pressure-dependent parameter may vary along the record (a pressure signal)
+    sigma_0 = np.broadcast_to(params["sigma_0"], time.shape)
+    sigma_1 = np.broadcast_to(params["sigma_1"], time.shape)
     F_c = np.broadcast_to(params["F_c"], time.shape)
     F_s = np.broadcast_to(params["F_s"], time.shape)
     sigma_2 = np.broadcast_to(params["sigma_2"], time.shape)
@@ -130,6 +132,7 @@ def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
         v = velocity[i] * (1 - w) + velocity[i + 1] * w
         fc = F_c[i] * (1 - w) + F_c[i + 1] * w
         fs = F_s[i] * (1 - w) + F_s[i + 1] * w
+        s0 = sigma_0[i] * (1 - w) + sigma_0[i + 1] * w
         # decay rate s0 |v| / g(v) of eq. 2.5 = v - dz/dt at z = 1 (the unchecked core)
         return v, v - lugre_unchecked(v, 1.0, s0, 0.0, 0.0, fc, fs, v_r, alpha)[1]
 
@@ -146,5 +149,5 @@ def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
     if not sol.success:
         raise RuntimeError(f"solve_ivp (Radau) failed: {sol.message}")
     z = sol.y[0]
-    force = lugre_force(velocity, z, s0, s1, sigma_2, F_c, F_s, v_r, alpha=alpha)  # eq. 2.5
+    force = lugre_force(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha=alpha)
     return z, force
