@@ -34,9 +34,6 @@ HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 BUILD = HERE / "build"
 
-M, K, SPEED, P_A = 10.0, 2e4, 5e-3, 50e5
-DURATION, DT = 10.0, 1e-3
-TOL = 1e-4
 
 
 def _machine():
