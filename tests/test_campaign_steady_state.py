@@ -268,3 +268,20 @@ def test_a_bad_file_read_by_the_child_is_named_and_skippable(campaign_of_20, tmp
         extract_campaign(folder)
     result = extract_campaign(folder, skip_bad=True)
     assert [Path(s["file"]).name for s in result.skipped] == [bad.name]
+
+
+def test_the_file_queue_refuses_more_indices_than_the_pipe_holds():
+    """A blocking write of too many indices would hang before the child exists; instead the
+    extraction stays serial."""
+    import os
+    import struct
+
+    from cylfric.steady_state import _file_queue
+
+    assert _file_queue(20_000) is None  # 80 kB: more than a pipe's 64 KiB
+    fd = _file_queue(100)
+    try:
+        assert struct.unpack("<100i", os.read(fd, 400)) == tuple(range(100))
+        assert os.read(fd, 4) == b""  # the write end is closed: end of the queue
+    finally:
+        os.close(fd)

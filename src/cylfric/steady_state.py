@@ -486,6 +486,23 @@ def _receive(pipe):
     return pickle.loads(data)
 
 
+def _file_queue(n):
+    """Read end of a pipe holding the indices 0..n-1 (4 bytes each), or None if they do not
+    fit in the pipe's buffer at once (a pipe has 64 KiB, less when the user has many)."""
+    read_end, write_end = os.pipe()
+    data = struct.pack(f"<{n}i", *range(n))
+    os.set_blocking(write_end, False)
+    try:
+        written = os.write(write_end, data)
+    except BlockingIOError:
+        written = 0
+    os.close(write_end)
+    if written == len(data):
+        return read_end
+    os.close(read_end)
+    return None
+
+
 def _extract_all(one, n, workers, report, meanwhile=None):
     """``[one(i) for i in range(n)]``, on two cores when allowed (see extract_campaign).
 
@@ -495,16 +512,15 @@ def _extract_all(one, n, workers, report, meanwhile=None):
     """
     workers = (2 if sys.platform.startswith("linux") else 1) if workers is None else workers
     results = [None] * n
-    if workers < 2 or not PARALLEL_MIN_FILES <= n <= 16_000 or not _can_fork():
+    parallel = workers >= 2 and n >= PARALLEL_MIN_FILES and _can_fork()
+    queue_read = _file_queue(n) if parallel else None
+    if queue_read is None:
         if meanwhile is not None:
             meanwhile()
         for index in range(n):
             results[index] = one(index)
             report(index)
         return results
-    queue_read, queue_write = os.pipe()
-    os.write(queue_write, struct.pack(f"<{n}i", *range(n)))  # 64 KiB pipe: 16,384 indices
-    os.close(queue_write)
     read_end, write_end = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: take files from the queue, send each result, leave quietly
