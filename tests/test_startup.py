@@ -65,3 +65,14 @@ def test_the_pipeline_imports_the_identification_only_while_extracting():
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+def test_the_pipelines_meanwhile_loads_the_identification():
+    script = (
+        "import sys\nfrom cylfric.pipeline import _import_next_stages\n_import_next_stages()\n"
+        "print([m for m in ('scipy.optimize', 'jsonschema', 'cylfric.identify.steady')"
+        " if m not in sys.modules])"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"

@@ -274,7 +274,8 @@ def _sign_settings(folder) -> str:
 def _import_next_stages():
     """Import the identification and the datasheet (scipy.optimize, jsonschema: about 0.4 s)
     while the second extraction worker already reads files."""
-    from . import datasheet, identify  # noqa: F401
+    from . import datasheet  # noqa: F401
+    from .identify import steady  # noqa: F401  (the package itself loads its names lazily)
 
 
 def _fit(
