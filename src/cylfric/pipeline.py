@@ -274,6 +274,8 @@ def _sign_settings(folder) -> str:
 def _import_next_stages():
     """Import the identification and the datasheet (scipy.optimize, jsonschema: about 0.4 s)
     while the second extraction worker already reads files."""
+    import jsonschema  # noqa: F401  (the datasheet's validation loads it on first use)
+
     from . import datasheet  # noqa: F401
     from .identify import steady  # noqa: F401  (the package itself loads its names lazily)
 
