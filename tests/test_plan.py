@@ -272,6 +272,7 @@ def test_cli_plan_writes_the_test_sheet(tmp_path):
         (["--speeds", "1-400mm/s"], "does not fit the stroke"),
         (["--pressures", "160-0bar"], "low end must be below"),
         (["--pressures", "abc"], "expected LOW-HIGH"),
+        (["--speeds", "0-150mm/s"], "the lowest speed must be > 0"),
         (["--runs", "5"], "5 runs cannot identify 8 coefficients"),
         (["--fix", "alpha=1"], "no values"),
     ],

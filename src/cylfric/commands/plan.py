@@ -72,6 +72,13 @@ def register(app: typer.Typer) -> None:
         """A D-optimal test plan: runs in order (plan.csv, plan.html) and its uncertainty."""
         p_range = _range(pressures, "pressure", "bar", "--pressures")
         v_range = _range(speeds, "velocity", "mm/s", "--speeds")
+        if not v_range[0] > 0:
+            raise BadInput(
+                f"--speeds {speeds!r}: the lowest speed must be > 0 (candidate speeds are "
+                "log-spaced), e.g. --speeds 1-150mm/s"
+            )
+        if not p_range[0] >= 0:
+            raise BadInput(f"--pressures {pressures!r}: pressures must be >= 0")
         if runs < 1 or repeats < 1:
             raise BadInput("--runs and --repeats must be >= 1")
         fixed = tuple(n.strip() for n in fix.split(",") if n.strip())
