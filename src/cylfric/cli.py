@@ -215,14 +215,17 @@ def run_fit(
     export=(),
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
-    from .io.campaign import discover_runs, load_config
+    from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config
     from .pipeline import fit_campaign
 
     fixed = _fixed(list(fix))
     config = load_config(campaign)
     if glob is not None:
         config = dataclasses.replace(config, glob=glob)
-    n_files = len(discover_runs(campaign, config))
+    n_files = sum(  # the constant-velocity runs the bar counts (not presliding/breakaway tests)
+        str(info.extra.get("test", "")).strip().lower() not in DYNAMIC_TESTS
+        for info in discover_runs(campaign, config)
+    )
     progress = _progress()
     task = progress.add_task(f"reading {campaign.name}", total=n_files)
     # warnings reach the user once, as the notes printed below (not as Python's own lines)
