@@ -262,7 +262,7 @@ class FrictionModel:
         Covariance [SI] of the fitted (varying) coefficients, in the order of ``names``.
     influence : (names, matrix), optional
         Influence of each run of the fit on the coefficients (runs x coefficients, SI, the
-        covariance's names): the leave-one-run-out jackknife with
+        covariance's names): the cluster-robust (CR2) contributions with
         ``covariance = matrix.T @ matrix``. With it, :meth:`band` uses each point's effective
         degrees of freedom (few runs carrying a coefficient give few).
     statistics : mapping, optional
