@@ -242,30 +242,29 @@ _P = np.array(
 
 @njit(cache=True, inline="always")
 def _rhs(t, y, out, dt, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1, v_r, alpha):
-    n = x_ref.shape[0]
-    pos = t / dt
-    if pos <= 0.0:
-        i, w = 0, 0.0
-    elif pos >= n - 1:
-        i, w = n - 2, 1.0
-    else:
-        i = int(pos)
-        w = pos - i
-    xr = x_ref[i] + w * (x_ref[i + 1] - x_ref[i])  # one index and weight for all inputs
-    vr = v_ref[i] + w * (v_ref[i + 1] - v_ref[i])
-    fe = f_ext[i] + w * (f_ext[i + 1] - f_ext[i])
-    fc = F_c[i] + w * (F_c[i + 1] - F_c[i])
-    fs = F_s[i] + w * (F_s[i + 1] - F_s[i])
-    s2 = sigma_2[i] + w * (sigma_2[i + 1] - sigma_2[i])
-    x, v, z, e = y[0], y[1], y[2], y[3]
-    g = g_function(abs(v), fc, fs, v_r, alpha)
-    dz = v - s0 * abs(v) * z / g
-    friction = s0 * z + s1 * dz + s2 * v
-    out[0] = v
-    out[1] = (k * (xr - x) + c * (vr - v) + ki * e + fe - friction) / mass
-    out[2] = dz
-    out[3] = xr - x
-    return friction
+    """DOPRI5's right-hand side: the plant (:func:`_plant`) without a ramp; returns the
+    friction force (eq. 2.5) [N]."""
+    return _plant(
+        t,
+        y,
+        out,
+        dt,
+        0.0,
+        mass,
+        k,
+        c,
+        ki,
+        x_ref,
+        v_ref,
+        f_ext,
+        F_c,
+        F_s,
+        sigma_2,
+        s0,
+        s1,
+        v_r,
+        alpha,
+    )
 
 
 @njit(cache=True)
