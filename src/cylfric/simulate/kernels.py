@@ -268,6 +268,30 @@ def _rhs(t, y, out, dt, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, 
 
 
 @njit(cache=True)
+def _record(
+    out_y, friction, reached, accepted, rejected, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha
+):
+    """The integrators' result: states on the output grid (NaN past ``reached``), the friction
+    force there (eq. 2.5; outputs lie on the input grid, no interpolation) [N], step counts."""
+    n = out_y.shape[0]
+    for i in range(reached, n):
+        out_y[i] = np.nan
+    for i in range(n):
+        friction[i] = lugre_instant(
+            out_y[i, 1], out_y[i, 2], sigma_0, sigma_1, sigma_2[i], F_c[i], F_s[i], v_r, alpha
+        )
+    return (
+        out_y[:, 0].copy(),
+        out_y[:, 1].copy(),
+        out_y[:, 2].copy(),
+        friction,
+        accepted,
+        rejected,
+        reached,
+    )
+
+
+@njit(cache=True)
 def dopri(
     dt,
     x0,
@@ -434,96 +458,20 @@ def dopri(
             factor = max(0.2, 0.9 * err**-0.2)
             last_rejected = True
         h *= factor
-    for i in range(next_out, n):
-        out_y[i] = np.nan
-    for i in range(n):  # outputs lie on the input grid: no interpolation needed
-        friction[i] = lugre_instant(
-            out_y[i, 1], out_y[i, 2], sigma_0, sigma_1, sigma_2[i], F_c[i], F_s[i], v_r, alpha
-        )
-    return (
-        out_y[:, 0].copy(),
-        out_y[:, 1].copy(),
-        out_y[:, 2].copy(),
+    return _record(
+        out_y,
         friction,
+        next_out,
         accepted,
         rejected,
-        next_out,
+        sigma_0,
+        sigma_1,
+        sigma_2,
+        F_c,
+        F_s,
+        v_r,
+        alpha,
     )
-
-
-@njit(cache=True, parallel=True)
-def dopri_batch(
-    dt,
-    record_every,
-    x0,
-    v0,
-    mass,
-    k,
-    c,
-    ki,
-    x_ref,
-    v_ref,
-    f_ext,
-    f_offset,
-    F_c,
-    F_s,
-    sigma_2,
-    sigma_0,
-    sigma_1,
-    v_r,
-    alpha,
-    rtol,
-    max_steps,
-):
-    """Many parameter sets with the adaptive Dormand-Prince kernel (``prange``, both cores).
-
-    Per-set parameters are 1-D arrays of length ``n_sets``, ``f_offset`` a constant force
-    added to the shared ``f_ext`` per set [N] (e.g. the net pressure force). Returns
-    position [m] and friction force [N] every ``record_every`` grid points, as
-    (n_sets, n_records) arrays, and the number of grid points each set reached (all of them
-    unless ``max_steps`` ran out).
-    """
-    n_sets = F_c.shape[0]
-    n = x_ref.shape[0]
-    n_rec = (n - 1) // record_every + 1
-    positions = np.empty((n_sets, n_rec))
-    frictions = np.empty((n_sets, n_rec))
-    reached = np.empty(n_sets, dtype=np.int64)
-    for s in prange(n_sets):
-        fc = np.full(n, F_c[s])
-        fs = np.full(n, F_s[s])
-        s2 = np.full(n, sigma_2[s])
-        fe = f_ext + f_offset[s]
-        pos, _, _, force, _, _, got = dopri(
-            dt,
-            x0,
-            v0,
-            0.0,
-            mass,
-            k,
-            c,
-            ki,
-            x_ref,
-            v_ref,
-            fe,
-            fc,
-            fs,
-            s2,
-            sigma_0[s],
-            sigma_1[s],
-            v_r[s],
-            alpha[s],
-            rtol,
-            1e-12,
-            1e-9,
-            1e-13,
-            max_steps,
-        )
-        for r in range(n_rec):
-            positions[s, r] = pos[r * record_every]
-            frictions[s, r] = force[r * record_every]
-        reached[s] = got
-    return positions, frictions, reached
 
 
 # ------------------------------------------------ adaptive Rosenbrock (Rodas3 / Rodas4), L-stable
@@ -985,21 +933,19 @@ def rosenbrock(
         tables,
         out_y,
     )
-    for i in range(reached, n):
-        out_y[i] = np.nan
-    friction = np.empty(n)
-    for i in range(n):
-        friction[i] = lugre_instant(
-            out_y[i, 1], out_y[i, 2], sigma_0, sigma_1, sigma_2[i], F_c[i], F_s[i], v_r, alpha
-        )
-    return (
-        out_y[:, 0].copy(),
-        out_y[:, 1].copy(),
-        out_y[:, 2].copy(),
-        friction,
+    return _record(
+        out_y,
+        np.empty(n),
+        reached,
         accepted,
         rejected,
-        reached,
+        sigma_0,
+        sigma_1,
+        sigma_2,
+        F_c,
+        F_s,
+        v_r,
+        alpha,
     )
 
 
