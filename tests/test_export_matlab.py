@@ -24,38 +24,7 @@ needs_octave = pytest.mark.skipif(
     OCTAVE is None, reason="GNU Octave is not installed: the .m files cannot be run here"
 )
 
-MODELS = {
-    "thesis": FrictionModel(),  # eq. 4.1-4.3, linear laws, mean pressure
-    "mixed_laws": FrictionModel(
-        {
-            "F_c": {"law": "quadratic", "intercept": 60.0, "slope": 4e-6, "curvature": 1e-13},
-            "F_s": {"law": "exponential", "intercept": 100.0, "amplitude": 30.0, "rate": 1e-7},
-            "sigma_2": {"law": "constant", "intercept": 300.0},
-            "v_r": 0.008,
-            "alpha": 1.3,
-        },
-        reference="max",
-        sigma_0={"intercept": 8e5, "slope": 0.01},
-        sigma_1=900.0,
-        validity={
-            "pressure_min": 10e5,
-            "pressure_max": 150e5,
-            "velocity_min": 1e-3,
-            "velocity_max": 0.1,
-        },
-    ),
-    "coulomb_viscous": FrictionModel(
-        {
-            "F_c": {"intercept": 80.0, "slope": 5e-6},
-            "F_s": None,
-            "sigma_2": {"intercept": 350.0, "slope": 1e-6},
-            "v_r": None,
-            "alpha": None,
-        },
-        friction_law="coulomb_viscous",
-        reference="sum",
-    ),
-}
+from export_models import MODELS  # noqa: E402  (tests/export_models.py)
 
 _ASSIGN = re.compile(r"^P\.(\w+)(?:\.(\w+))? = (.+?);")
 
