@@ -204,6 +204,20 @@ def _least_squares(residual, starts, lower, upper):
     return best.x
 
 
+def _grid_and_start(model, speeds, pressures):
+    """(P, V) grid [Pa, m/s], the model's friction there [N] (equal chamber pressures), and
+    starting values from its levels: slope [N/Pa] and preload [N] of F_c against p_A + p_B,
+    the mean F_s/F_c [-], sigma_2 [N*s/m] and v_r [m/s]."""
+    P, V = np.meshgrid(pressures, speeds, indexing="ij")
+    target = model.friction(V, model.operating_pressure(P, P))
+    levels = _model_levels(model, pressures)
+    slope, preload = np.polyfit(2 * pressures, np.broadcast_to(levels["F_c"], pressures.shape), 1)
+    ratio = float(np.mean(np.asarray(levels["F_s"]) / np.asarray(levels["F_c"])))
+    viscous = float(np.mean(levels["sigma_2"]))
+    v_r = float(np.mean(levels["v_r"]))
+    return P, V, target, (slope, preload, ratio, viscous, v_r)
+
+
 def _model_levels(model, pressures):
     """Parameters of the cylfric model at chamber pressures [Pa] (p_A = p_B)."""
     return model.params_at(model.operating_pressure(pressures, pressures))
@@ -228,13 +242,7 @@ def fit_cylinder_friction_il(model, speeds, pressures) -> dict:
         [-], ``breakaway_velocity`` [m/s], ``viscous_coefficient`` [N*s/m].
     """
     speeds, pressures = np.asarray(speeds, float), np.asarray(pressures, float)
-    P, V = np.meshgrid(pressures, speeds, indexing="ij")
-    target = model.friction(V, model.operating_pressure(P, P))
-    levels = _model_levels(model, pressures)
-    slope, preload = np.polyfit(2 * pressures, np.broadcast_to(levels["F_c"], pressures.shape), 1)
-    ratio = float(np.mean(np.asarray(levels["F_s"]) / np.asarray(levels["F_c"])))
-    viscous = float(np.mean(levels["sigma_2"]))
-    v_r = float(np.mean(levels["v_r"]))
+    P, V, target, (slope, preload, ratio, viscous, v_r) = _grid_and_start(model, speeds, pressures)
 
     def unpack(x):  # optimizer units: N, N/bar, -, mm/s, N*s/mm
         return {
@@ -268,13 +276,7 @@ def fit_cylinder_friction(model, speeds, pressures, *, velocity_threshold=None) 
     speeds, pressures = np.asarray(speeds, float), np.asarray(pressures, float)
     if velocity_threshold is None:
         velocity_threshold = min(LEGACY_VELOCITY_THRESHOLD, float(speeds[0]) / 2)
-    P, V = np.meshgrid(pressures, speeds, indexing="ij")
-    target = model.friction(V, model.operating_pressure(P, P))
-    levels = _model_levels(model, pressures)
-    slope, preload = np.polyfit(2 * pressures, np.broadcast_to(levels["F_c"], pressures.shape), 1)
-    ratio = float(np.mean(np.asarray(levels["F_s"]) / np.asarray(levels["F_c"])))
-    viscous = float(np.mean(levels["sigma_2"]))
-    v_r = float(np.mean(levels["v_r"]))
+    P, V, target, (slope, preload, ratio, viscous, v_r) = _grid_and_start(model, speeds, pressures)
 
     def unpack(x):  # optimizer units: N, N/bar, -, s/mm, N*s/mm
         return {
