@@ -375,6 +375,13 @@ def _goals(rows, sweep=SWEEP):
         # None when numbalsoda is not installed (the bench extra builds it with gfortran)
         "sweep_min_ratio_numbalsoda (>= 3)": min((v for v in nb.values() if v), default=None),
         "sweep_numbalsoda_found_no_setting": [k for k, v in nb.items() if not v],
+        "40s_min_ratio_numbalsoda (>= 3)": min(
+            (
+                by[name].get("ratio_numbalsoda_over_cylfric") or math.inf
+                for name in ("canudas s0=1e+05 40s", "canudas s0=1e+10 40s")
+            ),
+            default=None,
+        ),
         "max_ratio_numba_kernel_over_C (<= 1.3)": max(
             r.get("ratio_numba_kernel_over_c", math.nan) for r in rows
         ),
