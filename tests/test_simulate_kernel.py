@@ -106,9 +106,7 @@ def test_remembered_parameters_follow_the_pressure():
     gives the 20 bar result twice and a larger steady sliding force at 100 bar."""
     model = FrictionModel(sigma_0=1e6, sigma_1=float(np.sqrt(1e6 * 10.0)))
     drive = SpringPull(2e4, 0.05)
-    runs = [
-        simulate(Cylinder(10.0), model, drive, 0.5, pressure_a=p) for p in (20e5, 100e5, 20e5)
-    ]
+    runs = [simulate(Cylinder(10.0), model, drive, 0.5, pressure_a=p) for p in (20e5, 100e5, 20e5)]
     force = [r.outputs["friction_force"] for r in runs]
     assert_allclose(force[0], force[2], rtol=0, atol=0)
     assert force[1][-1] > force[0][-1] + 5.0  # [N]; F_c(100 bar) - F_c(20 bar) is about 40 N
