@@ -244,12 +244,11 @@ def test_compiled_kernels_agree_with_the_model_to_1e_12():
         )
         assert abs(compiled - force) <= 1e-12 * terms
         # the plant right-hand side of the Rosenbrock integrator (kernels._plant) inlines it
-        const = np.full(2, 1.0)
+        sig = np.array([[0.0, 0.0, 0.0, k["F_c"], k["F_s"], k["sigma_2"]]] * 2)
         rhs = np.empty(4)
         plant_force = kernels._plant(
-            0.0, np.array([0.0, v, z, 0.0]), rhs, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0 * const,
-            0 * const, 0 * const, k["F_c"] * const, k["F_s"] * const, k["sigma_2"] * const,
-            k["sigma_0"], k["sigma_1"], k["v_r"], k["alpha"],
+            0.0, np.array([0.0, v, z, 0.0]), rhs, sig, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0,
+            k["sigma_0"], k["sigma_1"], 1.0 / k["v_r"], k["alpha"],
         )  # fmt: skip
         assert abs(plant_force - force) <= 1e-12 * terms
         h = 10 ** rng.uniform(-6, -2)

@@ -1,9 +1,13 @@
 /* Hardware reference for benchmarks/bench_stiff.py: the adaptive Rodas3 scheme of
- * cylfric.simulate.kernels.rosenbrock_core, written in plain C (gcc -O3, no fast-math), for a
- * spring pulled at constant speed. Same operations in the same order: inputs on the uniform
- * grid interpolated linearly, exact Jacobian of the LuGre plant solved in closed form, the
- * three breakaway step guards, force-weighted error norm, Hermite/linear output on the grid,
- * instantaneous LuGre force (eq. 2.5) at the grid points.
+ * cylfric.simulate.kernels.rodas3_core, written in plain C, for a spring pulled at constant
+ * speed. Same operations in the same order: inputs as a (m x 6) block interpolated linearly
+ * (two rows and a ramp for constant inputs), exact Jacobian of the LuGre plant solved in closed
+ * form, the exp of f(t_n+1, y_n+1) re-used by the next step's Jacobian (three exps per step),
+ * the three breakaway step guards, force-weighted error norm, Horner-form Hermite (linear for
+ * v and z on stiff steps) output on the grid with the friction force (eq. 2.5) and the drive
+ * force computed there. Compiled as numba compiles the kernel: gcc -O3 -march=native with FMA
+ * contraction, reciprocals and reassociation but no NaN/inf assumptions (fast-math without
+ * -ffinite-math-only), see FLAGS in bench_stiff.py.
  *
  * usage: rodas3 DURATION DT MASS K SPEED F_C F_S SIGMA_2 SIGMA_0 SIGMA_1 V_R ALPHA RTOL
  *               ATOL_X ATOL_V ATOL_Z ATOL_F REPS OUT.bin
@@ -14,196 +18,221 @@
 #include <stdlib.h>
 #include <time.h>
 
-static inline double g_function(double speed, double fc, double fs, double vr, double alpha) {
-    double u = speed / vr;
-    if (alpha == 1.0) return fc + (fs - fc) * exp(-u);
-    if (alpha == 2.0) return fc + (fs - fc) * exp(-(u * u));
-    return fc + (fs - fc) * exp(-pow(u, alpha));
+static inline double exp_neg(double x) {
+    if (x < 1e-3)
+        return 1.0 - x * (1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0)))));
+    if (x > 746.0) return 0.0;
+    return exp(-x);
 }
 
-static inline double lugre_instant(double v, double z, double s0, double s1, double s2,
-                                   double fc, double fs, double vr, double alpha) {
-    double g = g_function(fabs(v), fc, fs, vr, alpha);
-    double dz = v - s0 * fabs(v) * z / g;
-    return s0 * z + s1 * dz + s2 * v;
-}
-
-static inline void lugre_partials(double v, double z, double s0, double fc, double fs,
-                                  double vr, double alpha, double *d_v, double *d_z,
-                                  double *d_fc, double *d_fs) {
-    double speed = fabs(v), u = speed / vr, decay, slope_u;
-    if (u == 0.0) {
-        decay = 1.0;
-        slope_u = alpha == 1.0 ? 1.0 : (alpha > 1.0 ? 0.0 : 1e300);
-    } else if (alpha == 1.0) {
-        decay = exp(-u);
-        slope_u = 1.0;
-    } else {
-        double ua = pow(u, alpha);
-        decay = exp(-ua);
-        slope_u = alpha * ua / u;
-    }
-    double g = fc + (fs - fc) * decay;
-    double dg = -(fs - fc) * decay * slope_u / vr;
-    double sign = v >= 0.0 ? 1.0 : -1.0;
-    *d_v = 1.0 - s0 * z * sign * (g - speed * dg) / (g * g);
-    *d_z = -s0 * speed / g;
-    double d_g = s0 * speed * z / (g * g);
-    *d_fc = d_g * (1.0 - decay);
-    *d_fs = d_g * decay;
+static inline double stribeck_decay(double speed, double inv_vr, double alpha) {
+    double u = speed * inv_vr;
+    if (alpha == 2.0) return exp_neg(u * u);
+    if (alpha == 1.0) return exp_neg(u);
+    return exp_neg(pow(u, alpha));
 }
 
 typedef struct {
-    int n;
-    double dt, mass, k, c, ki, s0, s1, v_r, alpha;
-    const double *xr, *vr, *fe, *fc, *fs, *s2;
+    int m, n_grid, every, mode;
+    double dt_s, inv_dt_s, ramp, dt, inv_m, mass, k, c, ki, s0, s1, v_r, inv_vr, alpha, offset;
+    const double *sig; /* m x 6: x_ref, v_ref, f_ext, F_c, F_s, sigma_2 */
 } Plant;
 
 typedef struct { double xr, vr, fe, fc, fs, s2, sxr, svr, sfe, sfc, sfs, ss2; } Inputs;
 
-static inline Inputs inputs(const Plant *p, double t) {
+static inline Inputs signals(const Plant *p, double t) {
     Inputs in;
-    double pos = t / p->dt, w;
+    double pos = t * p->inv_dt_s, w;
     int i;
     if (pos <= 0.0) { i = 0; w = 0.0; }
-    else if (pos >= p->n - 1) { i = p->n - 2; w = 1.0; }
+    else if (pos >= p->m - 1) { i = p->m - 2; w = 1.0; }
     else { i = (int)pos; w = pos - i; }
-    double dxr = p->xr[i + 1] - p->xr[i], dvr = p->vr[i + 1] - p->vr[i];
-    double dfe = p->fe[i + 1] - p->fe[i], dfc = p->fc[i + 1] - p->fc[i];
-    double dfs = p->fs[i + 1] - p->fs[i], ds2 = p->s2[i + 1] - p->s2[i];
-    in.xr = p->xr[i] + w * dxr; in.vr = p->vr[i] + w * dvr; in.fe = p->fe[i] + w * dfe;
-    in.fc = p->fc[i] + w * dfc; in.fs = p->fs[i] + w * dfs; in.s2 = p->s2[i] + w * ds2;
-    in.sxr = dxr / p->dt; in.svr = dvr / p->dt; in.sfe = dfe / p->dt;
-    in.sfc = dfc / p->dt; in.sfs = dfs / p->dt; in.ss2 = ds2 / p->dt;
+    const double *a = p->sig + 6 * i, *b = a + 6;
+    double dxr = b[0] - a[0], dvr = b[1] - a[1], dfe = b[2] - a[2];
+    double dfc = b[3] - a[3], dfs = b[4] - a[4], ds2 = b[5] - a[5];
+    in.xr = a[0] + w * dxr + p->ramp * t; in.vr = a[1] + w * dvr + p->ramp;
+    in.fe = a[2] + w * dfe; in.fc = a[3] + w * dfc; in.fs = a[4] + w * dfs;
+    in.s2 = a[5] + w * ds2;
+    in.sxr = dxr * p->inv_dt_s + p->ramp; in.svr = dvr * p->inv_dt_s; in.sfe = dfe * p->inv_dt_s;
+    in.sfc = dfc * p->inv_dt_s; in.sfs = dfs * p->inv_dt_s; in.ss2 = ds2 * p->inv_dt_s;
     return in;
 }
 
-static inline void plant(const Plant *p, double t, const double *y, double *out) {
-    Inputs in = inputs(p, t);
-    double v = y[1], z = y[2];
-    double g = g_function(fabs(v), in.fc, in.fs, p->v_r, p->alpha);
-    double dz = v - p->s0 * fabs(v) * z / g;
-    double friction = p->s0 * z + p->s1 * dz + in.s2 * v;
-    out[0] = v;
-    out[1] = (p->k * (in.xr - y[0]) + p->c * (in.vr - v) + p->ki * y[3] + in.fe - friction)
-             / p->mass;
-    out[2] = dz;
-    out[3] = in.xr - y[0];
+/* dv/dt, dz/dt, de/dt and the decay of g(v) at given inputs */
+static inline void rhs_at(const Plant *p, double x, double v, double z, double e,
+                          const Inputs *in, double *acc, double *dz, double *de,
+                          double *decay) {
+    *decay = stribeck_decay(fabs(v), p->inv_vr, p->alpha);
+    double g = in->fc + (in->fs - in->fc) * *decay;
+    *dz = v - p->s0 * fabs(v) * z / g;
+    double friction = p->s0 * z + p->s1 * *dz + in->s2 * v;
+    *acc = (p->k * (in->xr - x) + p->c * (in->vr - v) + p->ki * e + in->fe - friction) * p->inv_m;
+    *de = in->xr - x;
 }
 
-/* Rodas3 (Sandu et al. 1997) in the KPP form */
-static const double GAMMA0 = 0.5;
-static const double A[4][4] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {2, 0, 0, 0}, {2, 0, 1, 0}};
-static const double C[4][4] = {{0, 0, 0, 0}, {4, 0, 0, 0}, {1, -1, 0, 0}, {1, -1, -8.0 / 3.0, 0}};
-static const double M[4] = {2, 0, 1, 1};
-static const double E[4] = {0, 0, 0, 1};
-static const double ALPHA[4] = {0, 0, 1, 1};
-static const double GAMMA[4] = {0.5, 1.5, 0, 0};
-static const int REUSE[4] = {1, 1, 0, 0};
+static inline void partials(double v, double z, double s0, double fc, double fs, double inv_vr,
+                            double alpha, double decay, double *d_v, double *d_z,
+                            double *d_fc, double *d_fs) {
+    double speed = fabs(v), u = speed * inv_vr, slope_u;
+    if (u == 0.0) slope_u = alpha == 1.0 ? 1.0 : (alpha > 1.0 ? 0.0 : 1e300);
+    else if (alpha == 1.0) slope_u = 1.0;
+    else if (alpha == 2.0) slope_u = 2.0 * u;
+    else slope_u = alpha * pow(u, alpha) / u;
+    double g = fc + (fs - fc) * decay;
+    double inv_g2 = 1.0 / (g * g);
+    double dg = -(fs - fc) * decay * slope_u * inv_vr;
+    double sign = v >= 0.0 ? 1.0 : -1.0;
+    *d_v = 1.0 - s0 * z * sign * (g - speed * dg) * inv_g2;
+    *d_z = -s0 * speed * g * inv_g2;
+    double d_g = s0 * speed * z * inv_g2;
+    *d_fc = d_g * (1.0 - decay);
+    *d_fs = d_g * decay;
+}
 
-static long run(const Plant *p, double rtol, const double atol_in[4], double atol_f,
-                double *out_y /* n x 4 */) {
-    int n = p->n;
-    double dt = p->dt, t_end = dt * (n - 1);
-    double y[4] = {0, 0, 0, 0}, atol[4] = {atol_in[0], atol_in[1], atol_in[2],
-                                          atol_in[0] * (t_end > 1.0 ? t_end : 1.0)};
-    double K[4][4] = {{0}}, stage[4], f_stage[4], rhs[4], y_new[4], f0[4], f1[4];
-    plant(p, 0.0, y, f0);
-    for (int q = 0; q < 4; q++) out_y[q] = y[q];
-    double t = 0.0, h = dt < 1e-5 ? dt : 1e-5, exponent = -1.0 / 3.0;
+static inline void solve(double rx, double rv, double rz, double re, double a_, double cz,
+                         double d_, double d_v, double inv_gi, double inv_gz, double inv_den,
+                         double *kx, double *kv, double *kz, double *ke) {
+    *kv = (rv - a_ * rx * inv_gi - cz * rz * inv_gz + d_ * re * inv_gi
+           - d_ * rx * inv_gi * inv_gi) * inv_den;
+    *kx = (rx + *kv) * inv_gi;
+    *kz = (rz + d_v * *kv) * inv_gz;
+    *ke = (re - *kx) * inv_gi;
+}
+
+/* friction force and drive force at an output point (kernels._outputs) */
+static inline void outputs(const Plant *p, double tj, int i_grid, double x, double v, double z,
+                           double e, double *friction, double *drive) {
+    Inputs in;
+    if (p->mode == 0) {
+        const double *a = p->sig + 6 * i_grid;
+        in.xr = a[0] + p->ramp * tj; in.vr = a[1] + p->ramp;
+        in.fe = a[2]; in.fc = a[3]; in.fs = a[4]; in.s2 = a[5];
+    } else if (p->mode == 1) {
+        in.xr = p->sig[0] + p->ramp * tj; in.vr = p->sig[1] + p->ramp;
+        in.fe = p->sig[2]; in.fc = p->sig[3]; in.fs = p->sig[4]; in.s2 = p->sig[5];
+    } else {
+        in = signals(p, tj);
+    }
+    double speed = fabs(v);
+    double g = in.fc + (in.fs - in.fc) * stribeck_decay(speed, p->inv_vr, p->alpha);
+    *friction = p->s0 * z + p->s1 * (v - p->s0 * speed * z / g) + in.s2 * v;
+    *drive = p->k * (in.xr - x) + p->c * (in.vr - v) + p->ki * e + in.fe + p->offset;
+}
+
+static long run(const Plant *p, double rtol, double atol_x, double atol_v, double atol_z,
+                double atol_f, long max_steps, int n_out, double *out /* 5 x n_out */) {
+    double dt = p->dt, t_end = dt * (p->n_grid - 1);
+    double atol_e = atol_x * (t_end > 1.0 ? t_end : 1.0);
+    double inv_m = p->inv_m, k = p->k, c = p->c, ki = p->ki, s0 = p->s0, s1 = p->s1;
+    double x = 0.0, v = 0.0, z = 0.0, e = 0.0, t = 0.0;
+    Inputs in = signals(p, 0.0), in1;
+    double a0, dz0, de0, decay0, a1, dz1, de1, decay1, fa, fz_, fe_, dummy;
+    rhs_at(p, x, v, z, e, &in, &a0, &dz0, &de0, &decay0);
+    double fr, dr;
+    outputs(p, 0.0, 0, x, v, z, e, &fr, &dr);
+    out[0] = x; out[n_out] = v; out[2 * n_out] = z; out[3 * n_out] = fr; out[4 * n_out] = dr;
+    double h = dt < 1e-5 ? dt : 1e-5;
     int next_out = 1;
     long accepted = 0, rejected = 0;
-    double mass = p->mass, k = p->k, c = p->c, ki = p->ki, s0 = p->s0, s1 = p->s1;
-    while (next_out < n && accepted + rejected < 50000000) {
+    while (next_out < n_out && accepted + rejected < max_steps) {
         if (t + h > t_end) h = t_end - t;
-        Inputs in = inputs(p, t);
-        double v = y[1], z = y[2], d_v, d_z, d_fc, d_fs;
-        lugre_partials(v, z, s0, in.fc, in.fs, p->v_r, p->alpha, &d_v, &d_z, &d_fc, &d_fs);
+        double d_v, d_z, d_fc, d_fs;
+        partials(v, z, s0, in.fc, in.fs, p->inv_vr, p->alpha, decay0, &d_v, &d_z, &d_fc, &d_fs);
         double f_v = s1 * d_v + in.s2, f_z = s0 + s1 * d_z;
-        double load = k * (in.xr - y[0]) + c * (in.vr - v) + ki * y[3] + in.fe;
-        double rate = k * (in.sxr - v) + c * in.svr + in.sfe + ki * (in.xr - y[0]);
+        double load = k * (in.xr - x) + c * (in.vr - v) + ki * e + in.fe;
+        double rate = k * (in.sxr - v) + c * in.svr + in.sfe + ki * (in.xr - x);
         if (load * rate > 0.0) {
-            double margin = g_function(fabs(v), in.fc, in.fs, p->v_r, p->alpha) - fabs(load);
+            double margin = (in.fc + (in.fs - in.fc) * decay0) - fabs(load);
             if (margin > 0.0) h = fmin(h, fmax(0.5 * margin / fabs(rate), 1e-3 * dt));
         }
-        if (v * f0[1] < 0.0 && fabs(v) > 1e-3 * p->v_r)
-            h = fmin(h, fmax(0.5 * fabs(v / f0[1]), 1e-3 * dt));
-        double trace = -(c + f_v) / mass + d_z;
-        double det = -(c + f_v) / mass * d_z + f_z * d_v / mass;
+        if (v * a0 < 0.0 && fabs(v) > 1e-3 * p->v_r)
+            h = fmin(h, fmax(0.5 * fabs(v / a0), 1e-3 * dt));
+        double b_ = (c + f_v) * inv_m, cz = f_z * inv_m;
+        double trace = d_z - b_, det = cz * d_v - b_ * d_z;
         double disc = 0.25 * trace * trace - det;
         double growth = disc > 0.0 ? 0.5 * trace + sqrt(disc) : 0.5 * trace;
         if (growth > 0.0) h = fmin(h, 1.0 / growth);
         int stiff = h * (fabs(trace) + sqrt(fabs(det))) > 1.0;
         if (t + h > t_end) h = t_end - t;
         double dzdt_t = d_fc * in.sfc + d_fs * in.sfs;
-        double ft_v = (k * in.sxr + c * in.svr + in.sfe - s1 * dzdt_t - v * in.ss2) / mass;
-        double gi = 1.0 / (h * GAMMA0), a_ = k / mass, b_ = (c + f_v) / mass, cz = f_z / mass;
-        double d_ = ki / mass, inv_g = 1.0 / gi, inv_gz = 1.0 / (gi - d_z);
-        double inv_den = 1.0 / (a_ * inv_g + gi + b_ + cz * d_v * inv_gz + d_ * inv_g * inv_g);
-        for (int s = 0; s < 4; s++) {
-            if (REUSE[s]) {
-                for (int q = 0; q < 4; q++) f_stage[q] = f0[q];
-            } else {
-                for (int q = 0; q < 4; q++) {
-                    double acc = 0.0;
-                    for (int j = 0; j < s; j++) acc += A[s][j] * K[j][q];
-                    stage[q] = y[q] + acc;
-                }
-                plant(p, t + ALPHA[s] * h, stage, f_stage);
-            }
-            for (int q = 0; q < 4; q++) {
-                double acc = 0.0;
-                for (int j = 0; j < s; j++) acc += C[s][j] * K[j][q];
-                rhs[q] = f_stage[q] + acc / h;
-            }
-            double hg = h * GAMMA[s];
-            double rx = rhs[0], rv = rhs[1] + hg * ft_v, rz = rhs[2] + hg * dzdt_t;
-            double re = rhs[3] + hg * in.sxr;
-            double kv = (rv - a_ * rx * inv_g - cz * rz * inv_gz + d_ * re * inv_g
-                         - d_ * rx * inv_g * inv_g) * inv_den;
-            double kx = (rx + kv) * inv_g;
-            K[s][0] = kx;
-            K[s][1] = kv;
-            K[s][2] = (rz + d_v * kv) * inv_gz;
-            K[s][3] = (re - kx) * inv_g;
-        }
-        double err = 0.0, err_f = 0.0;
-        for (int q = 0; q < 4; q++) {
-            double acc_m = 0.0, acc_e = 0.0;
-            for (int j = 0; j < 4; j++) { acc_m += M[j] * K[j][q]; acc_e += E[j] * K[j][q]; }
-            y_new[q] = y[q] + acc_m;
-            double scale = atol[q] + rtol * fmax(fabs(y[q]), fabs(y_new[q]));
-            err += (acc_e / scale) * (acc_e / scale);
-            if (q == 1) err_f += f_v * acc_e;
-            else if (q == 2) err_f += f_z * acc_e;
-        }
-        double force_n = s0 * z + s1 * f0[2] + in.s2 * v;
-        double ef = err_f / (atol_f + rtol * fabs(force_n));
-        err = sqrt((err + ef * ef) / 5);
+        double ft_v = (k * in.sxr + c * in.svr + in.sfe - s1 * dzdt_t - v * in.ss2) * inv_m;
+        double inv_h = 1.0 / h, gi = 2.0 * inv_h, inv_gi = 0.5 * h;
+        double a_ = k * inv_m, d_ = ki * inv_m;
+        double inv_gz = 1.0 / (gi - d_z);
+        double inv_den = 1.0 / (a_ * inv_gi + gi + b_ + cz * d_v * inv_gz + d_ * inv_gi * inv_gi);
+        double k1x, k1v, k1z, k1e, k2x, k2v, k2z, k2e, k3x, k3v, k3z, k3e, k4x, k4v, k4z, k4e;
+        solve(v, a0 + 0.5 * h * ft_v, dz0 + 0.5 * h * dzdt_t, de0 + 0.5 * h * in.sxr, a_, cz, d_,
+              d_v, inv_gi, inv_gz, inv_den, &k1x, &k1v, &k1z, &k1e);
+        solve(v + 4.0 * inv_h * k1x, a0 + 4.0 * inv_h * k1v + 1.5 * h * ft_v,
+              dz0 + 4.0 * inv_h * k1z + 1.5 * h * dzdt_t, de0 + 4.0 * inv_h * k1e + 1.5 * h * in.sxr,
+              a_, cz, d_, d_v, inv_gi, inv_gz, inv_den, &k2x, &k2v, &k2z, &k2e);
+        double t1 = t + h;
+        in1 = signals(p, t1);
+        double yv = v + 2.0 * k1v;
+        rhs_at(p, x + 2.0 * k1x, yv, z + 2.0 * k1z, e + 2.0 * k1e, &in1, &fa, &fz_, &fe_, &dummy);
+        solve(yv + (k1x - k2x) * inv_h, fa + (k1v - k2v) * inv_h, fz_ + (k1z - k2z) * inv_h,
+              fe_ + (k1e - k2e) * inv_h, a_, cz, d_, d_v, inv_gi, inv_gz, inv_den,
+              &k3x, &k3v, &k3z, &k3e);
+        double sx = 2.0 * k1x + k3x, sv = 2.0 * k1v + k3v, sz = 2.0 * k1z + k3z;
+        double se = 2.0 * k1e + k3e;
+        yv = v + sv;
+        rhs_at(p, x + sx, yv, z + sz, e + se, &in1, &fa, &fz_, &fe_, &dummy);
+        solve(yv + (k1x - k2x - 8.0 / 3.0 * k3x) * inv_h, fa + (k1v - k2v - 8.0 / 3.0 * k3v) * inv_h,
+              fz_ + (k1z - k2z - 8.0 / 3.0 * k3z) * inv_h, fe_ + (k1e - k2e - 8.0 / 3.0 * k3e) * inv_h,
+              a_, cz, d_, d_v, inv_gi, inv_gz, inv_den, &k4x, &k4v, &k4z, &k4e);
+        double x1 = x + (sx + k4x), v1 = v + (sv + k4v), z1 = z + (sz + k4z), e1 = e + (se + k4e);
+        double q = k4x / (atol_x + rtol * fmax(fabs(x), fabs(x1)));
+        double err = q * q;
+        q = k4v / (atol_v + rtol * fmax(fabs(v), fabs(v1)));
+        err += q * q;
+        q = k4z / (atol_z + rtol * fmax(fabs(z), fabs(z1)));
+        err += q * q;
+        q = k4e / (atol_e + rtol * fmax(fabs(e), fabs(e1)));
+        err += q * q;
+        q = (f_v * k4v + f_z * k4z) / (atol_f + rtol * fabs(s0 * z + s1 * dz0 + in.s2 * v));
+        err += q * q;
+        err = sqrt(err / 5);
         double factor;
         if (err <= 1.0 && isfinite(err)) {
-            double t_new = t + h;
-            plant(p, t_new, y_new, f1);
-            while (next_out < n && next_out * dt <= t_new + 1e-12 * dt) {
-                double th = (next_out * dt - t) / h, t2 = th * th, t3 = t2 * th;
-                double h00 = 2 * t3 - 3 * t2 + 1, h10 = (t3 - 2 * t2 + th) * h;
-                double h01 = 3 * t2 - 2 * t3, h11 = (t3 - t2) * h;
-                for (int q = 0; q < 4; q++) {
-                    if (stiff && (q == 1 || q == 2))
-                        out_y[4 * next_out + q] = y[q] + th * (y_new[q] - y[q]);
-                    else
-                        out_y[4 * next_out + q] = h00 * y[q] + h10 * f0[q] + h01 * y_new[q]
-                                                  + h11 * f1[q];
-                }
+            rhs_at(p, x1, v1, z1, e1, &in1, &a1, &dz1, &de1, &decay1);
+            double dx = x1 - x, dv = v1 - v, dzz = z1 - z, dee = e1 - e;
+            double cx1 = h * v, cx2 = 3.0 * dx - h * (2.0 * v + v1), cx3 = h * (v + v1) - 2.0 * dx;
+            double cv1, cv2, cv3, cz1, cz2, cz3;
+            if (stiff) {
+                cv1 = dv; cv2 = 0.0; cv3 = 0.0; cz1 = dzz; cz2 = 0.0; cz3 = 0.0;
+            } else {
+                cv1 = h * a0; cv2 = 3.0 * dv - h * (2.0 * a0 + a1); cv3 = h * (a0 + a1) - 2.0 * dv;
+                cz1 = h * dz0; cz2 = 3.0 * dzz - h * (2.0 * dz0 + dz1);
+                cz3 = h * (dz0 + dz1) - 2.0 * dzz;
+            }
+            double ce1 = h * de0, ce2 = 3.0 * dee - h * (2.0 * de0 + de1);
+            double ce3 = h * (de0 + de1) - 2.0 * dee;
+            while (next_out < n_out) {
+                int i_grid = next_out * p->every;
+                double tj = i_grid * dt;
+                if (tj > t1 + 1e-12 * dt) break;
+                double th = (tj - t) * inv_h;
+                double xj = x + th * (cx1 + th * (cx2 + th * cx3));
+                double vj = v + th * (cv1 + th * (cv2 + th * cv3));
+                double zj = z + th * (cz1 + th * (cz2 + th * cz3));
+                double ej = ki != 0.0 ? e + th * (ce1 + th * (ce2 + th * ce3)) : 0.0;
+                outputs(p, tj, i_grid, xj, vj, zj, ej, &fr, &dr);
+                out[next_out] = xj;
+                out[n_out + next_out] = vj;
+                out[2 * n_out + next_out] = zj;
+                out[3 * n_out + next_out] = fr;
+                out[4 * n_out + next_out] = dr;
                 next_out++;
             }
-            t = t_new;
-            for (int q = 0; q < 4; q++) { y[q] = y_new[q]; f0[q] = f1[q]; }
+            t = t1;
+            x = x1; v = v1; z = z1; e = e1;
+            a0 = a1; dz0 = dz1; de0 = de1; decay0 = decay1;
+            in = in1;
             accepted++;
-            factor = fmin(6.0, 0.9 * pow(fmax(err, 1e-10), exponent));
+            factor = fmin(6.0, 0.9 / cbrt(fmax(err, 1e-10)));
         } else {
             rejected++;
-            factor = !isfinite(err) ? 0.2 : fmax(0.2, 0.9 * pow(err, exponent));
+            factor = !isfinite(err) ? 0.2 : fmax(0.2, 0.9 / cbrt(err));
         }
         h *= factor;
     }
@@ -216,31 +245,24 @@ int main(int argc, char **argv) {
     for (int i = 1; i < 19; i++) a[i - 1] = atof(argv[i]);
     double duration = a[0], dt = a[1];
     int n = (int)llround(duration / dt) + 1, reps = (int)a[17];
-    double *xr = malloc(n * sizeof(double)), *vr = malloc(n * sizeof(double));
-    double *fe = calloc(n, sizeof(double)), *fc = malloc(n * sizeof(double));
-    double *fs = malloc(n * sizeof(double)), *s2 = malloc(n * sizeof(double));
-    double *out_y = malloc(4 * n * sizeof(double)), *force = malloc(n * sizeof(double));
-    for (int i = 0; i < n; i++) {
-        xr[i] = a[4] * (i * dt); vr[i] = a[4]; fc[i] = a[5]; fs[i] = a[6]; s2[i] = a[7];
-    }
-    Plant p = {n, dt, a[2], a[3], 0.0, 0.0, a[8], a[9], a[10], a[11], xr, vr, fe, fc, fs, s2};
-    double atol[4] = {a[13], a[14], a[15], 0.0};
+    /* a spring pulled at constant speed, constant friction: two rows and a ramp, as simulate() */
+    double sig[12] = {0.0, 0.0, 0.0, a[5], a[6], a[7], 0.0, 0.0, 0.0, a[5], a[6], a[7]};
+    double *out = malloc(5 * (size_t)n * sizeof(double));
+    Plant p = {2, n, 1, n == 2 ? 0 : 1, dt * (n - 1), 1.0 / (dt * (n - 1)), a[4], dt,
+               1.0 / a[2], a[2], a[3], 0.0, 0.0, a[8], a[9], a[10], 1.0 / a[10], a[11], 0.0, sig};
     double best = 1e30;
     long steps = 0;
     for (int r = 0; r < reps; r++) {
         struct timespec t0, t1;
         clock_gettime(CLOCK_MONOTONIC, &t0);
-        steps = run(&p, a[12], atol, a[16], out_y);
-        for (int i = 0; i < n; i++)
-            force[i] = lugre_instant(out_y[4 * i + 1], out_y[4 * i + 2], p.s0, p.s1, s2[i],
-                                     fc[i], fs[i], p.v_r, p.alpha);
+        steps = run(&p, a[12], a[13], a[14], a[15], a[16], 50000000L, n, out);
         clock_gettime(CLOCK_MONOTONIC, &t1);
         double s = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
         if (s < best) best = s;
     }
     FILE *f = fopen(argv[19], "wb");
     if (!f) { perror(argv[19]); return 1; }
-    fwrite(force, sizeof(double), n, f);
+    fwrite(out + 3 * (size_t)n, sizeof(double), n, f);
     fclose(f);
     printf("%.9f %ld\n", best, steps);
     return 0;

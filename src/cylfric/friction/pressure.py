@@ -172,8 +172,12 @@ def params_at_pressure(pressure, coefficients, *, law="linear"):
     (97.7, 384.0)
     """
     check_signal("pressure", pressure)
+    scalar = np.ndim(pressure) == 0
     out = {}
     for name, spec in coefficients.items():
+        if scalar and type(spec) is float:  # a constant at one pressure: nothing to evaluate
+            out[name] = spec
+            continue
         if isinstance(spec, Mapping):
             spec = dict(spec)
             law_name = spec.pop("law", law)

@@ -23,14 +23,35 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
+def exp_neg(x):
+    """exp(-x) for x >= 0, as math.exp to rounding (at most 1 ulp apart) but cheaper where it can.
+
+    Below 1e-3 the Taylor series to x^5 (its truncation, < x^6/720 < 1.4e-21, is below double
+    rounding): sticking contacts have |v| << v_r. Above 746 the result underflows to 0.0, which
+    is what exp returns there too, only slowly. In between, ``math.exp``.
+    """
+    if x < 1e-3:
+        return 1.0 - x * (1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0)))))
+    if x > 746.0:
+        return 0.0
+    return math.exp(-x)
+
+
+@njit(cache=True, inline="always")
+def stribeck_decay(speed, inv_v_r, alpha):
+    """exp(-(|v|/v_r)^alpha) of g(v) (eq. 2.5) from ``speed = |v|`` and ``1 / v_r`` [-]."""
+    u = speed * inv_v_r
+    if alpha == 2.0:  # Gaussian Stribeck curve: u*u is exact and avoids pow
+        return exp_neg(u * u)
+    if alpha == 1.0:
+        return exp_neg(u)
+    return exp_neg(u**alpha)
+
+
+@njit(cache=True, inline="always")
 def g_function(speed, F_c, F_s, v_r, alpha):
     """g(v) of eq. 2.5 for ``speed = |v|`` [N]."""
-    u = speed / v_r
-    if alpha == 1.0:
-        return F_c + (F_s - F_c) * math.exp(-u)
-    if alpha == 2.0:  # Gaussian Stribeck curve: u*u is exact and avoids pow
-        return F_c + (F_s - F_c) * math.exp(-(u * u))
-    return F_c + (F_s - F_c) * math.exp(-(u**alpha))
+    return F_c + (F_s - F_c) * stribeck_decay(speed, 1.0 / v_r, alpha)
 
 
 @njit(cache=True, inline="always")
@@ -211,6 +232,131 @@ def fixed_step(
     return pos, vel, zz, force, mean_force, iterations
 
 
+# ------------------------------------------------------------------- the plant and its inputs
+#
+# Input signals are one (m, 6) array ``sig`` with the columns x_ref [m], v_ref [m/s], f_ext [N],
+# F_c [N], F_s [N], sigma_2 [N*s/m] on a uniform grid ``dt_s`` apart, interpolated linearly in
+# time. ``ramp`` [m/s] adds ``ramp * t`` to x_ref and ``ramp`` to v_ref, so a spring pulled at
+# constant speed with constant friction needs two rows only (m = 2, dt_s = the duration).
+
+
+@njit(cache=True, inline="always")
+def _signals(sig, inv_dt_s, ramp, t):
+    """Inputs at t (linear between grid points) and their slopes on that interval."""
+    m = sig.shape[0]
+    pos = t * inv_dt_s
+    if pos <= 0.0:
+        i, w = 0, 0.0
+    elif pos >= m - 1:
+        i, w = m - 2, 1.0
+    else:
+        i = int(pos)
+        w = pos - i
+    dxr = sig[i + 1, 0] - sig[i, 0]
+    dvr = sig[i + 1, 1] - sig[i, 1]
+    dfe = sig[i + 1, 2] - sig[i, 2]
+    dfc = sig[i + 1, 3] - sig[i, 3]
+    dfs = sig[i + 1, 4] - sig[i, 4]
+    ds2 = sig[i + 1, 5] - sig[i, 5]
+    return (
+        sig[i, 0] + w * dxr + ramp * t,
+        sig[i, 1] + w * dvr + ramp,
+        sig[i, 2] + w * dfe,
+        sig[i, 3] + w * dfc,
+        sig[i, 4] + w * dfs,
+        sig[i, 5] + w * ds2,
+        dxr * inv_dt_s + ramp,
+        dvr * inv_dt_s,
+        dfe * inv_dt_s,
+        dfc * inv_dt_s,
+        dfs * inv_dt_s,
+        ds2 * inv_dt_s,
+    )
+
+
+@njit(cache=True, inline="always")
+def _rhs_at(x, v, z, e, xr, vr, fe, fc, fs, s2, inv_m, k, c, ki, s0, s1, inv_v_r, alpha):
+    """The plant at given inputs: (dv/dt [m/s^2], dz/dt [m/s], de/dt [m], friction force
+    (eq. 2.5) [N], decay of g(v) [-]); dx/dt is v."""
+    decay = stribeck_decay(abs(v), inv_v_r, alpha)
+    g = fc + (fs - fc) * decay
+    dz = v - s0 * abs(v) * z / g
+    friction = s0 * z + s1 * dz + s2 * v
+    acc = (k * (xr - x) + c * (vr - v) + ki * e + fe - friction) * inv_m
+    return acc, dz, xr - x, friction, decay
+
+
+@njit(cache=True, inline="always")
+def _plant(t, y, out, sig, inv_dt_s, ramp, inv_m, k, c, ki, s0, s1, inv_v_r, alpha):
+    """Right-hand side of the plant at t, y = (x, v, z, e) into ``out``; returns the friction
+    force (eq. 2.5) [N]. ``inv_m`` = 1/mass, ``inv_v_r`` = 1/v_r."""
+    xr, vr, fe, fc, fs, s2, _, _, _, _, _, _ = _signals(sig, inv_dt_s, ramp, t)
+    acc, dz, de, friction, _ = _rhs_at(
+        y[0], y[1], y[2], y[3], xr, vr, fe, fc, fs, s2, inv_m, k, c, ki, s0, s1, inv_v_r, alpha
+    )
+    out[0] = y[1]
+    out[1] = acc
+    out[2] = dz
+    out[3] = de
+    return friction
+
+
+@njit(cache=True, inline="always")
+def _signal_mode(sig, n_grid):
+    """How outputs read the inputs: 0 on the output grid, 1 constant, 2 interpolated."""
+    if sig.shape[0] == n_grid:
+        return 0
+    if sig.shape[0] == 2:
+        for q in range(6):
+            if sig[0, q] != sig[1, q]:
+                return 2
+        return 1
+    return 2
+
+
+@njit(cache=True, inline="always")
+def _outputs(x, v, z, e, xr, vr, fe, fc, fs, s2, k, c, ki, params, offset):
+    """Friction force (eq. 2.5) [N] and force of the drive on the rod (``offset`` added) [N]."""
+    s0, s1, inv_v_r, alpha = params
+    speed = abs(v)
+    g = fc + (fs - fc) * stribeck_decay(speed, inv_v_r, alpha)
+    friction = s0 * z + s1 * (v - s0 * speed * z / g) + s2 * v
+    return friction, k * (xr - x) + c * (vr - v) + ki * e + fe + offset
+
+
+@njit(cache=True, inline="always")
+def _write(out, j, tj, i_grid, mode, sig, inv_dt_s, ramp, x, v, z, e, k, c, ki, params, offset):
+    """Output point j: position, velocity, z, friction force (eq. 2.5) [N] and the force of
+    the drive on the rod [N] (``offset`` added) into ``out[:, j]``."""
+    s0, s1, inv_v_r, alpha = params
+    if mode == 0:
+        xr = sig[i_grid, 0] + ramp * tj
+        vr = sig[i_grid, 1] + ramp
+        fe, fc, fs, s2 = sig[i_grid, 2], sig[i_grid, 3], sig[i_grid, 4], sig[i_grid, 5]
+    elif mode == 1:
+        xr = sig[0, 0] + ramp * tj
+        vr = sig[0, 1] + ramp
+        fe, fc, fs, s2 = sig[0, 2], sig[0, 3], sig[0, 4], sig[0, 5]
+    else:
+        xr, vr, fe, fc, fs, s2, _, _, _, _, _, _ = _signals(sig, inv_dt_s, ramp, tj)
+    friction, drive = _outputs(x, v, z, e, xr, vr, fe, fc, fs, s2, k, c, ki, params, offset)
+    out[0, j] = x
+    out[1, j] = v
+    out[2, j] = z
+    out[3, j] = friction
+    out[4, j] = drive
+
+
+@njit(cache=True)
+def _output_grid(out, reached, dt, every):
+    """Times of the output grid [s]; outputs past the last reached point are NaN."""
+    n_out = out.shape[1]
+    for j in range(reached, n_out):
+        for r in range(out.shape[0]):
+            out[r, j] = np.nan
+    return np.arange(n_out) * (dt * every) if every != 1 else np.arange(n_out) * dt
+
+
 # ------------------------------------------------------------ adaptive Dormand-Prince 5(4)
 
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
@@ -240,94 +386,24 @@ _P = np.array(
 )
 
 
-@njit(cache=True, inline="always")
-def _rhs(t, y, out, dt, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1, v_r, alpha):
-    """DOPRI5's right-hand side: the plant (:func:`_plant`) without a ramp; returns the
-    friction force (eq. 2.5) [N]."""
-    return _plant(
-        t,
-        y,
-        out,
-        dt,
-        0.0,
-        mass,
-        k,
-        c,
-        ki,
-        x_ref,
-        v_ref,
-        f_ext,
-        F_c,
-        F_s,
-        sigma_2,
-        s0,
-        s1,
-        v_r,
-        alpha,
-    )
-
-
-@njit(cache=True)
-def _record(
-    out_y, friction, reached, accepted, rejected, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha
-):
-    """The integrators' result: states on the output grid (NaN past ``reached``), the friction
-    force there (eq. 2.5; outputs lie on the input grid, no interpolation) [N], step counts."""
-    n = out_y.shape[0]
-    for i in range(reached, n):
-        out_y[i] = np.nan
-    for i in range(n):
-        friction[i] = lugre_instant(
-            out_y[i, 1], out_y[i, 2], sigma_0, sigma_1, sigma_2[i], F_c[i], F_s[i], v_r, alpha
-        )
-    return (
-        out_y[:, 0].copy(),
-        out_y[:, 1].copy(),
-        out_y[:, 2].copy(),
-        friction,
-        accepted,
-        rejected,
-        reached,
-    )
-
-
 @njit(cache=True)
 def dopri(
-    dt,
-    x0,
-    v0,
-    z0,
-    mass,
-    k,
-    c,
-    ki,
-    x_ref,
-    v_ref,
-    f_ext,
-    F_c,
-    F_s,
-    sigma_2,
-    sigma_0,
-    sigma_1,
-    v_r,
-    alpha,
-    rtol,
-    atol_x,
-    atol_v,
-    atol_z,
-    max_steps,
-):
-    """Adaptive Dormand-Prince 5(4) with dense output on the input grid.
+    sig, dt_s, ramp, dt, n, x0, v0, z0, mass, k, c, ki, sigma_0, sigma_1, v_r, alpha,
+    rtol, atol_x, atol_v, atol_z, max_steps, offset,
+):  # fmt: skip
+    """Adaptive Dormand-Prince 5(4) with dense output on the grid ``dt`` apart (n points).
 
-    Absolute tolerances per state: position [m], velocity [m/s], z [m]; the servo integral
-    state shares the position tolerance times the duration. Returns position, velocity, z,
-    friction [N] on the grid, the numbers of accepted and rejected steps, and how many grid
-    points were reached (fewer than the grid when ``max_steps`` ran out).
+    Inputs as for :func:`rosenbrock`. Absolute tolerances per state: position [m], velocity
+    [m/s], z [m]; the servo integral shares the position tolerance times the duration.
+    Returns (time [s], out, accepted, rejected, reached) with ``out`` (5, n): position [m],
+    velocity [m/s], z [m], friction [N] (eq. 2.5), drive force [N]; NaN past ``reached``
+    (fewer than n points when ``max_steps`` ran out).
     """
-    n = x_ref.shape[0]
     t_end = dt * (n - 1)
-    out_y = np.empty((n, 4))
-    friction = np.empty(n)
+    out = np.empty((5, n))
+    inv_dt_s, inv_m, inv_v_r = 1.0 / dt_s, 1.0 / mass, 1.0 / v_r
+    params = (sigma_0, sigma_1, inv_v_r, alpha)
+    mode = _signal_mode(sig, n)
     y = np.array([x0, v0, z0, 0.0])
     atol = np.array([atol_x, atol_v, atol_z, atol_x * max(t_end, 1.0)])
     K = np.empty((7, 4))
@@ -335,27 +411,8 @@ def dopri(
     tmp = np.empty(4)
     y_new = np.empty(4)
     f0 = np.empty(4)
-    _rhs(
-        0.0,
-        y,
-        f0,
-        dt,
-        mass,
-        k,
-        c,
-        ki,
-        x_ref,
-        v_ref,
-        f_ext,
-        F_c,
-        F_s,
-        sigma_2,
-        sigma_0,
-        sigma_1,
-        v_r,
-        alpha,
-    )
-    out_y[0] = y
+    _plant(0.0, y, f0, sig, inv_dt_s, ramp, inv_m, k, c, ki, sigma_0, sigma_1, inv_v_r, alpha)
+    _write(out, 0, 0.0, 0, mode, sig, inv_dt_s, ramp, x0, v0, z0, 0.0, k, c, ki, params, offset)
     t = 0.0
     h = min(dt, 1e-4)
     next_out = 1
@@ -373,24 +430,20 @@ def dopri(
                 for r in range(s):
                     acc += _A[s, r] * K[r, q]
                 tmp[q] = y[q] + h * acc
-            _rhs(
+            _plant(
                 t + _C[s] * h,
                 tmp,
                 K[s],
-                dt,
-                mass,
+                sig,
+                inv_dt_s,
+                ramp,
+                inv_m,
                 k,
                 c,
                 ki,
-                x_ref,
-                v_ref,
-                f_ext,
-                F_c,
-                F_s,
-                sigma_2,
                 sigma_0,
                 sigma_1,
-                v_r,
+                inv_v_r,
                 alpha,
             )
         for q in range(4):
@@ -398,24 +451,20 @@ def dopri(
             for r in range(6):
                 acc += _B[r] * K[r, q]
             y_new[q] = y[q] + h * acc
-        _rhs(
+        _plant(
             t + h,
             y_new,
             K[6],
-            dt,
-            mass,
+            sig,
+            inv_dt_s,
+            ramp,
+            inv_m,
             k,
             c,
             ki,
-            x_ref,
-            v_ref,
-            f_ext,
-            F_c,
-            F_s,
-            sigma_2,
             sigma_0,
             sigma_1,
-            v_r,
+            inv_v_r,
             alpha,
         )
         err = 0.0
@@ -436,11 +485,16 @@ def dopri(
                             coef += K[r, q] * _P[r, j]
                         Q[q, j] = coef
             while next_out < n and next_out * dt <= t_new + 1e-12 * dt:
-                theta = (next_out * dt - t) / h
+                tj = next_out * dt
+                theta = (tj - t) / h
                 for q in range(4):
-                    out_y[next_out, q] = y[q] + h * theta * (
+                    tmp[q] = y[q] + h * theta * (
                         Q[q, 0] + theta * (Q[q, 1] + theta * (Q[q, 2] + theta * Q[q, 3]))
                     )
+                _write(
+                    out, next_out, tj, next_out, mode, sig, inv_dt_s, ramp,
+                    tmp[0], tmp[1], tmp[2], tmp[3], k, c, ki, params, offset,
+                )  # fmt: skip
                 next_out += 1
             t = t_new
             y[:] = y_new
@@ -458,84 +512,49 @@ def dopri(
             factor = max(0.2, 0.9 * err**-0.2)
             last_rejected = True
         h *= factor
-    return _record(
-        out_y,
-        friction,
-        next_out,
-        accepted,
-        rejected,
-        sigma_0,
-        sigma_1,
-        sigma_2,
-        F_c,
-        F_s,
-        v_r,
-        alpha,
-    )
+    return _output_grid(out, next_out, dt, 1), out, accepted, rejected, next_out
 
 
-# ------------------------------------------------ adaptive Rosenbrock (Rodas3 / Rodas4), L-stable
+# ------------------------------------------------------- adaptive Rosenbrock (Rodas3), L-stable
 #
 # A Rosenbrock method solves one linear system per stage with the exact Jacobian instead of
 # Newton iterations: stiff bristles (sigma_0 up to 1e10 N/m) cost no smaller steps, because the
-# methods are L-stable and stiffly accurate. KPP form (Sandu et al. 1997; Hairer & Wanner 1996,
-# section IV.7), with G = 1/(h gamma) - J(t_n, y_n):
-#     Y_i = y_n + sum_j A_ij K_j,   G K_i = f(t_n + alpha_i h, Y_i) + sum_j C_ij / h K_j
-#                                           + h gamma_i df/dt(t_n, y_n)
-#     y_n+1 = y_n + sum_j M_j K_j,   error = sum_j E_j K_j
+# method is L-stable and stiffly accurate. Rodas3 (Sandu et al. 1997) in the KPP form (Hairer &
+# Wanner 1996, section IV.7), with G = 1/(h gamma) - J(t_n, y_n), gamma = 1/2:
+#     G K_1 = f(t_n, y_n) + h/2 f_t
+#     G K_2 = f(t_n, y_n) + 4 K_1 / h + 3h/2 f_t
+#     G K_3 = f(t_n + h, y_n + 2 K_1) + (K_1 - K_2) / h
+#     G K_4 = f(t_n + h, y_n + 2 K_1 + K_3) + (K_1 - K_2 - 8/3 K_3) / h
+#     y_n+1 = y_n + 2 K_1 + K_3 + K_4,   error = K_4
+# written out for the four states (the coefficient tables are in benchmarks/rosenbrock_tables.py,
+# which also has Rodas4). f(t_n+1, y_n+1) is evaluated on acceptance for the output and is the
+# next step's f(t_n, y_n); the Jacobian re-uses its exp. So a step costs three exps.
 # Between steps the states are interpolated on the output grid by cubic Hermite polynomials
-# through (y_n, f_n) and (y_n+1, f_n+1) (f_n+1 is the next step's first stage anyway), except
-# velocity and z on stiff steps: their slopes carry the stiff error, so they go linearly.
+# through (y_n, f_n) and (y_n+1, f_n+1), except velocity and z on stiff steps: their slopes
+# carry the stiff error, so they go linearly.
 
-RODAS3 = (  # Sandu et al. 1997, "Benchmarking stiff ODE solvers for atmospheric chemistry II"
-    0.5,
-    np.array([[0, 0, 0, 0], [0, 0, 0, 0], [2, 0, 0, 0], [2, 0, 1, 0]], dtype=np.float64),
-    np.array([[0, 0, 0, 0], [4, 0, 0, 0], [1, -1, 0, 0], [1, -1, -8 / 3, 0]], dtype=np.float64),
-    np.array([2.0, 0.0, 1.0, 1.0]),
-    np.array([0.0, 0.0, 0.0, 1.0]),
-    np.array([0.0, 0.0, 1.0, 1.0]),
-    np.array([0.5, 1.5, 0.0, 0.0]),
-    3.0,
-)
-_R4A = (1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950)
-RODAS4 = (  # Hairer & Wanner 1996, RODAS (order 4(3), 6 stages), in the KPP form
-    0.25,
-    np.array(
-        [
-            [0, 0, 0, 0, 0, 0],
-            [1.544, 0, 0, 0, 0, 0],
-            [0.9466785280815826, 0.2557011698983284, 0, 0, 0, 0],
-            [3.314825187068521, 2.896124015972201, 0.9986419139977817, 0, 0, 0],
-            [*_R4A, 0, 0],
-            [*_R4A, 1.0, 0],
-        ],
-        dtype=np.float64,
-    ),
-    np.array(
-        [
-            [0, 0, 0, 0, 0, 0],
-            [-5.6688, 0, 0, 0, 0, 0],
-            [-2.430093356833875, -0.2063599157091915, 0, 0, 0, 0],
-            [-0.1073529058151375, -9.594562251023355, -20.47028614809616, 0, 0, 0],
-            [7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160, 0, 0],
-            [
-                8.083246795921522,
-                -7.981132988064893,
-                -31.52159432874371,
-                16.31930543123136,
-                -6.058818238834054,
-                0,
-            ],
-        ],
-        dtype=np.float64,
-    ),
-    np.array([*_R4A, 1.0, 1.0]),
-    np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
-    np.array([0.0, 0.386, 0.21, 0.63, 1.0, 1.0]),
-    np.array([0.25, -0.1043, 0.1035, -0.0362, 0.0, 0.0]),
-    4.0,
-)
-ROSENBROCK_TABLES = {"rodas3": RODAS3, "rodas4": RODAS4}
+
+@njit(cache=True, inline="always")
+def _partials(v, z, sigma_0, F_c, F_s, inv_v_r, alpha, decay):
+    """:func:`lugre_partials` from the decay exp(-(|v|/v_r)^alpha) already computed."""
+    speed = abs(v)
+    u = speed * inv_v_r
+    if u == 0.0:
+        slope_u = 1.0 if alpha == 1.0 else (0.0 if alpha > 1.0 else 1e300)
+    elif alpha == 1.0:
+        slope_u = 1.0
+    elif alpha == 2.0:
+        slope_u = 2.0 * u
+    else:
+        slope_u = alpha * u**alpha / u
+    g = F_c + (F_s - F_c) * decay
+    inv_g2 = 1.0 / (g * g)
+    dg = -(F_s - F_c) * decay * slope_u * inv_v_r  # dg/d|v|
+    sign = 1.0 if v >= 0.0 else -1.0
+    d_v = 1.0 - sigma_0 * z * sign * (g - speed * dg) * inv_g2
+    d_z = -sigma_0 * speed * g * inv_g2
+    d_g = sigma_0 * speed * z * inv_g2  # d(dz/dt)/dg
+    return d_v, d_z, d_g * (1.0 - decay), d_g * decay
 
 
 @njit(cache=True, inline="always")
@@ -546,171 +565,60 @@ def lugre_partials(v, z, sigma_0, F_c, F_s, v_r, alpha):
     g(v) = F_c + (F_s - F_c) exp(-(|v|/v_r)^alpha). At v = 0 the one-sided slope for v > 0
     is used (the velocity term then vanishes for alpha > 1).
     """
-    speed = abs(v)
-    u = speed / v_r
-    if u == 0.0:
-        decay = 1.0
-        slope_u = 1.0 if alpha == 1.0 else (0.0 if alpha > 1.0 else 1e300)
-    elif alpha == 1.0:
-        decay = math.exp(-u)
-        slope_u = 1.0
-    else:
-        ua = u**alpha
-        decay = math.exp(-ua)
-        slope_u = alpha * ua / u
-    g = F_c + (F_s - F_c) * decay
-    dg = -(F_s - F_c) * decay * slope_u / v_r  # dg/d|v|
-    sign = 1.0 if v >= 0.0 else -1.0
-    d_v = 1.0 - sigma_0 * z * sign * (g - speed * dg) / (g * g)
-    d_z = -sigma_0 * speed / g
-    d_g = sigma_0 * speed * z / (g * g)  # d(dz/dt)/dg
-    return d_v, d_z, d_g * (1.0 - decay), d_g * decay
+    inv_v_r = 1.0 / v_r
+    decay = stribeck_decay(abs(v), inv_v_r, alpha)
+    return _partials(v, z, sigma_0, F_c, F_s, inv_v_r, alpha, decay)
 
 
 @njit(cache=True, inline="always")
-def _inputs(t, dt, ramp, x_ref, v_ref, f_ext, F_c, F_s, sigma_2):
-    """Inputs at t (linear between grid points) and their slopes on that interval."""
-    n = x_ref.shape[0]
-    pos = t / dt
-    if pos <= 0.0:
-        i, w = 0, 0.0
-    elif pos >= n - 1:
-        i, w = n - 2, 1.0
-    else:
-        i = int(pos)
-        w = pos - i
-    dxr = x_ref[i + 1] - x_ref[i]
-    dvr = v_ref[i + 1] - v_ref[i]
-    dfe = f_ext[i + 1] - f_ext[i]
-    dfc = F_c[i + 1] - F_c[i]
-    dfs = F_s[i + 1] - F_s[i]
-    ds2 = sigma_2[i + 1] - sigma_2[i]
-    return (
-        x_ref[i] + w * dxr + ramp * t,
-        v_ref[i] + w * dvr + ramp,
-        f_ext[i] + w * dfe,
-        F_c[i] + w * dfc,
-        F_s[i] + w * dfs,
-        sigma_2[i] + w * ds2,
-        dxr / dt + ramp,
-        dvr / dt,
-        dfe / dt,
-        dfc / dt,
-        dfs / dt,
-        ds2 / dt,
-    )
+def _solve(rx, rv, rz, re, a_, cz, d_, d_v, inv_gi, inv_gz, inv_den):
+    """K = G^-1 r for G = 1/(h gamma) I - J in closed form (x and e eliminated, z by its row)."""
+    kv = (
+        rv - a_ * rx * inv_gi - cz * rz * inv_gz + d_ * re * inv_gi - d_ * rx * inv_gi * inv_gi
+    ) * inv_den
+    kx = (rx + kv) * inv_gi
+    return kx, kv, (rz + d_v * kv) * inv_gz, (re - kx) * inv_gi
 
 
-@njit(cache=True, inline="always")
-def _plant(
-    t, y, out, dt, ramp, mass, k, c, ki, x_ref, v_ref, f_ext, F_c, F_s, sigma_2, s0, s1, v_r, alpha
-):
-    """Right-hand side of the plant; returns the friction force (eq. 2.5) [N]."""
-    xr, vr, fe, fc, fs, s2, _, _, _, _, _, _ = _inputs(
-        t, dt, ramp, x_ref, v_ref, f_ext, F_c, F_s, sigma_2
-    )
-    x, v, z, e = y[0], y[1], y[2], y[3]
-    g = g_function(abs(v), fc, fs, v_r, alpha)
-    dz = v - s0 * abs(v) * z / g
-    friction = s0 * z + s1 * dz + s2 * v
-    out[0] = v
-    out[1] = (k * (xr - x) + c * (vr - v) + ki * e + fe - friction) / mass
-    out[2] = dz
-    out[3] = xr - x
-    return friction
+# Floating-point contraction (FMA), reciprocals and reassociation are allowed in the Rodas3 kernel
+# (not NaN/inf assumptions: a failed step is detected by a non-finite error). They change
+# results at rounding level only; benchmarks/c/rodas3.c is compiled with the same freedoms.
+FAST_MATH = {"contract", "arcp", "nsz", "afn", "reassoc"}
 
 
-@njit(cache=True)
-def rosenbrock_core(
-    dt,
-    ramp,
-    x0,
-    v0,
-    z0,
-    mass,
-    k,
-    c,
-    ki,
-    x_ref,
-    v_ref,
-    f_ext,
-    F_c,
-    F_s,
-    sigma_2,
-    s0,
-    s1,
-    v_r,
-    alpha,
-    rtol,
-    atol_x,
-    atol_v,
-    atol_z,
-    atol_f,
-    max_steps,
-    h_max,
-    tables,
-    out_y,
-):
-    """Adaptive Rosenbrock integration of the plant; states written to ``out_y`` (n, 4).
+@njit(cache=True, fastmath=FAST_MATH)
+def rodas3_core(
+    sig, dt_s, ramp, x0, v0, z0, mass, k, c, ki, sigma_0, sigma_1, v_r, alpha,
+    rtol, atol_x, atol_v, atol_z, atol_f, max_steps, dt, every, n_grid, offset, out,
+):  # fmt: skip
+    """Adaptive Rodas3 integration of the plant; outputs into ``out`` (5, n_out).
 
-    ``ramp`` [m/s] adds ``ramp * t`` to ``x_ref`` and ``ramp`` to ``v_ref`` (a spring pulled
-    at constant speed needs no signal arrays of its own). ``tables`` is :data:`RODAS3` or
-    :data:`RODAS4`. Returns (accepted, rejected, grid points reached).
+    The grid has ``n_grid`` points ``dt`` apart; output j is grid point ``j * every`` (see
+    :func:`_write` for the rows). Returns (accepted, rejected, output points reached).
     """
-    gamma, A, C, M, E, ALPHA, GAMMA, order = tables
-    stages = M.shape[0]
-    n = x_ref.shape[0]
-    t_end = dt * (n - 1)
-    y = np.array([x0, v0, z0, 0.0])
-    atol = np.array([atol_x, atol_v, atol_z, atol_x * max(t_end, 1.0)])
-    K = np.zeros((stages, 4))
-    stage = np.empty(4)
-    f_stage = np.empty(4)
-    rhs_ = np.empty(4)
-    y_new = np.empty(4)
-    f0 = np.empty(4)
-    f1 = np.empty(4)
-    _plant(
-        0.0,
-        y,
-        f0,
-        dt,
-        ramp,
-        mass,
-        k,
-        c,
-        ki,
-        x_ref,
-        v_ref,
-        f_ext,
-        F_c,
-        F_s,
-        sigma_2,
-        s0,
-        s1,
-        v_r,
-        alpha,
-    )
-    out_y[0, :] = y
+    n_out = out.shape[1]
+    t_end = dt * (n_grid - 1)
+    atol_e = atol_x * max(t_end, 1.0)
+    inv_dt_s, inv_m, inv_v_r = 1.0 / dt_s, 1.0 / mass, 1.0 / v_r
+    s0, s1 = sigma_0, sigma_1
+    params = (s0, s1, inv_v_r, alpha)
+    mode = _signal_mode(sig, n_grid)
+    x, v, z, e = x0, v0, z0, 0.0
     t = 0.0
+    xr, vr, fe, fc, fs, s2, sxr, svr, sfe, sfc, sfs, ss2 = _signals(sig, inv_dt_s, ramp, 0.0)
+    a0, dz0, de0, _, decay0 = _rhs_at(
+        x, v, z, e, xr, vr, fe, fc, fs, s2, inv_m, k, c, ki, s0, s1, inv_v_r, alpha
+    )
+    _write(out, 0, 0.0, 0, mode, sig, inv_dt_s, ramp, x, v, z, e, k, c, ki, params, offset)
     h = min(dt, 1e-5)
     next_out = 1
     accepted = 0
     rejected = 0
-    exponent = -1.0 / order
-    reuse = np.zeros(stages, dtype=np.bool_)  # stage evaluates f(t_n, y_n) again: reuse f0
-    for s in range(stages):
-        reuse[s] = s == 0 or (ALPHA[s] == 0.0 and not np.any(A[s] != 0.0))
-    while next_out < n and accepted + rejected < max_steps:
-        h = min(h, h_max)
+    while next_out < n_out and accepted + rejected < max_steps:
         if t + h > t_end:
             h = t_end - t
         # exact Jacobian and time derivative at (t_n, y_n)
-        xr, vr, fe, fc, fs, s2, sxr, svr, sfe, sfc, sfs, ss2 = _inputs(
-            t, dt, ramp, x_ref, v_ref, f_ext, F_c, F_s, sigma_2
-        )
-        v, z = y[1], y[2]
-        d_v, d_z, d_fc, d_fs = lugre_partials(v, z, s0, fc, fs, v_r, alpha)
+        d_v, d_z, d_fc, d_fs = _partials(v, z, s0, fc, fs, inv_v_r, alpha, decay0)
         f_v = s1 * d_v + s2  # dF/dv
         f_z = s0 + s1 * d_z  # dF/dz
         # Breakaway guards. An implicit step damps growing modes it steps over, and a stuck
@@ -719,18 +627,20 @@ def rosenbrock_core(
         # the present loading rate (the threshold is approached geometrically, like an event
         # location); (2) a growing mode of the (v, z) block (breakaway under way) limits h to
         # 1/(its rate).
-        load = k * (xr - y[0]) + c * (vr - v) + ki * y[3] + fe
-        rate = k * (sxr - v) + c * svr + sfe + ki * (xr - y[0])
+        load = k * (xr - x) + c * (vr - v) + ki * e + fe
+        rate = k * (sxr - v) + c * svr + sfe + ki * (xr - x)
         if load * rate > 0.0:
-            margin = g_function(abs(v), fc, fs, v_r, alpha) - abs(load)
+            margin = (fc + (fs - fc) * decay0) - abs(load)
             if margin > 0.0:
                 h = min(h, max(0.5 * margin / abs(rate), 1e-3 * dt))
         # (3) a slip that decelerates towards v = 0 (where |v| makes the Jacobian jump) is
         # followed to the sticking instant geometrically too
-        if v * f0[1] < 0.0 and abs(v) > 1e-3 * v_r:
-            h = min(h, max(0.5 * abs(v / f0[1]), 1e-3 * dt))
-        trace = -(c + f_v) / mass + d_z
-        det = -(c + f_v) / mass * d_z + f_z * d_v / mass
+        if v * a0 < 0.0 and abs(v) > 1e-3 * v_r:
+            h = min(h, max(0.5 * abs(v / a0), 1e-3 * dt))
+        b_ = (c + f_v) * inv_m
+        cz = f_z * inv_m
+        trace = d_z - b_
+        det = cz * d_v - b_ * d_z
         disc = 0.25 * trace * trace - det
         growth = 0.5 * trace + math.sqrt(disc) if disc > 0.0 else 0.5 * trace
         if growth > 0.0:
@@ -741,308 +651,227 @@ def rosenbrock_core(
         if t + h > t_end:
             h = t_end - t
         dzdt_t = d_fc * sfc + d_fs * sfs
-        ft_v = (k * sxr + c * svr + sfe - s1 * dzdt_t - v * ss2) / mass
+        ft_v = (k * sxr + c * svr + sfe - s1 * dzdt_t - v * ss2) * inv_m
         # G = 1/(h gamma) I - J, solved in closed form (x, e eliminated; z by its own row)
-        gi = 1.0 / (h * gamma)
-        a_ = k / mass
-        b_ = (c + f_v) / mass
-        cz = f_z / mass
-        d_ = ki / mass
-        inv_g = 1.0 / gi
+        inv_h = 1.0 / h
+        gi = 2.0 * inv_h
+        inv_gi = 0.5 * h
+        a_ = k * inv_m
+        d_ = ki * inv_m
         inv_gz = 1.0 / (gi - d_z)
-        inv_den = 1.0 / (a_ * inv_g + gi + b_ + cz * d_v * inv_gz + d_ * inv_g * inv_g)
-        for s in range(stages):
-            if reuse[s]:
-                f_stage[:] = f0  # Rodas3's second stage re-uses f(t_n, y_n)
-            else:
-                for q in range(4):
-                    acc = 0.0
-                    for j in range(s):
-                        acc += A[s, j] * K[j, q]
-                    stage[q] = y[q] + acc
-                _plant(
-                    t + ALPHA[s] * h,
-                    stage,
-                    f_stage,
-                    dt,
-                    ramp,
-                    mass,
-                    k,
-                    c,
-                    ki,
-                    x_ref,
-                    v_ref,
-                    f_ext,
-                    F_c,
-                    F_s,
-                    sigma_2,
-                    s0,
-                    s1,
-                    v_r,
-                    alpha,
-                )
-            for q in range(4):
-                acc = 0.0
-                for j in range(s):
-                    acc += C[s, j] * K[j, q]
-                rhs_[q] = f_stage[q] + acc / h
-            hg = h * GAMMA[s]
-            rx = rhs_[0]
-            rv = rhs_[1] + hg * ft_v
-            rz = rhs_[2] + hg * dzdt_t
-            re = rhs_[3] + hg * sxr
-            kv = (
-                rv - a_ * rx * inv_g - cz * rz * inv_gz + d_ * re * inv_g - d_ * rx * inv_g * inv_g
-            ) * inv_den
-            kx = (rx + kv) * inv_g
-            K[s, 0] = kx
-            K[s, 1] = kv
-            K[s, 2] = (rz + d_v * kv) * inv_gz
-            K[s, 3] = (re - kx) * inv_g
-        err = 0.0
-        err_f = 0.0
-        for q in range(4):
-            acc_m = 0.0
-            acc_e = 0.0
-            for j in range(stages):
-                acc_m += M[j] * K[j, q]
-                acc_e += E[j] * K[j, q]
-            y_new[q] = y[q] + acc_m
-            scale = atol[q] + rtol * max(abs(y[q]), abs(y_new[q]))
-            err += (acc_e / scale) ** 2
-            if q == 1:
-                err_f += f_v * acc_e
-            elif q == 2:
-                err_f += f_z * acc_e
-        # the friction force is what users read: its error (linearised) is controlled too
-        force_n = s0 * z + s1 * f0[2] + s2 * v
-        err += (err_f / (atol_f + rtol * abs(force_n))) ** 2
+        inv_den = 1.0 / (a_ * inv_gi + gi + b_ + cz * d_v * inv_gz + d_ * inv_gi * inv_gi)
+        # stage 1
+        rx = v
+        rv = a0 + 0.5 * h * ft_v
+        rz = dz0 + 0.5 * h * dzdt_t
+        re = de0 + 0.5 * h * sxr
+        k1x, k1v, k1z, k1e = _solve(rx, rv, rz, re, a_, cz, d_, d_v, inv_gi, inv_gz, inv_den)
+        # stage 2
+        rx = v + 4.0 * inv_h * k1x
+        rv = a0 + 4.0 * inv_h * k1v + 1.5 * h * ft_v
+        rz = dz0 + 4.0 * inv_h * k1z + 1.5 * h * dzdt_t
+        re = de0 + 4.0 * inv_h * k1e + 1.5 * h * sxr
+        k2x, k2v, k2z, k2e = _solve(rx, rv, rz, re, a_, cz, d_, d_v, inv_gi, inv_gz, inv_den)
+        # stages 3 and 4 at t_n + h (the inputs there are shared with f(t_n+1, y_n+1))
+        t1 = t + h
+        xr1, vr1, fe1, fc1, fs1, s21, sxr1, svr1, sfe1, sfc1, sfs1, ss21 = _signals(
+            sig, inv_dt_s, ramp, t1
+        )
+        yv = v + 2.0 * k1v
+        fa, fz_, fe_, _, _ = _rhs_at(
+            x + 2.0 * k1x, yv, z + 2.0 * k1z, e + 2.0 * k1e,
+            xr1, vr1, fe1, fc1, fs1, s21, inv_m, k, c, ki, s0, s1, inv_v_r, alpha,
+        )  # fmt: skip
+        rx = yv + (k1x - k2x) * inv_h
+        rv = fa + (k1v - k2v) * inv_h
+        rz = fz_ + (k1z - k2z) * inv_h
+        re = fe_ + (k1e - k2e) * inv_h
+        k3x, k3v, k3z, k3e = _solve(rx, rv, rz, re, a_, cz, d_, d_v, inv_gi, inv_gz, inv_den)
+        sx = 2.0 * k1x + k3x
+        sv = 2.0 * k1v + k3v
+        sz = 2.0 * k1z + k3z
+        se = 2.0 * k1e + k3e
+        yv = v + sv
+        fa, fz_, fe_, _, _ = _rhs_at(
+            x + sx, yv, z + sz, e + se,
+            xr1, vr1, fe1, fc1, fs1, s21, inv_m, k, c, ki, s0, s1, inv_v_r, alpha,
+        )  # fmt: skip
+        rx = yv + (k1x - k2x - 8.0 / 3.0 * k3x) * inv_h
+        rv = fa + (k1v - k2v - 8.0 / 3.0 * k3v) * inv_h
+        rz = fz_ + (k1z - k2z - 8.0 / 3.0 * k3z) * inv_h
+        re = fe_ + (k1e - k2e - 8.0 / 3.0 * k3e) * inv_h
+        k4x, k4v, k4z, k4e = _solve(rx, rv, rz, re, a_, cz, d_, d_v, inv_gi, inv_gz, inv_den)
+        x1 = x + (sx + k4x)
+        v1 = v + (sv + k4v)
+        z1 = z + (sz + k4z)
+        e1 = e + (se + k4e)
+        # weighted RMS error of the states and of the friction force (linearised), which is
+        # what users read
+        q = k4x / (atol_x + rtol * max(abs(x), abs(x1)))
+        err = q * q
+        q = k4v / (atol_v + rtol * max(abs(v), abs(v1)))
+        err += q * q
+        q = k4z / (atol_z + rtol * max(abs(z), abs(z1)))
+        err += q * q
+        q = k4e / (atol_e + rtol * max(abs(e), abs(e1)))
+        err += q * q
+        q = (f_v * k4v + f_z * k4z) / (atol_f + rtol * abs(s0 * z + s1 * dz0 + s2 * v))
+        err += q * q
         err = math.sqrt(err / 5)
         if err <= 1.0 and math.isfinite(err):
-            t_new = t + h
-            _plant(
-                t_new,
-                y_new,
-                f1,
-                dt,
-                ramp,
-                mass,
-                k,
-                c,
-                ki,
-                x_ref,
-                v_ref,
-                f_ext,
-                F_c,
-                F_s,
-                sigma_2,
-                s0,
-                s1,
-                v_r,
-                alpha,
-            )
-            while next_out < n and next_out * dt <= t_new + 1e-12 * dt:
-                theta = (next_out * dt - t) / h
-                t2 = theta * theta
-                t3 = t2 * theta
-                h00 = 2 * t3 - 3 * t2 + 1
-                h10 = (t3 - 2 * t2 + theta) * h
-                h01 = 3 * t2 - 2 * t3
-                h11 = (t3 - t2) * h
-                for q in range(4):
-                    if stiff and (q == 1 or q == 2):  # slopes of stiff states carry their error
-                        out_y[next_out, q] = y[q] + theta * (y_new[q] - y[q])
-                    else:
-                        out_y[next_out, q] = h00 * y[q] + h10 * f0[q] + h01 * y_new[q] + h11 * f1[q]
+            a1, dz1, de1, _, decay1 = _rhs_at(
+                x1, v1, z1, e1, xr1, vr1, fe1, fc1, fs1, s21, inv_m, k, c, ki, s0, s1,
+                inv_v_r, alpha,
+            )  # fmt: skip
+            # cubic Hermite p(theta) = y_n + theta (c1 + theta (c2 + theta c3)) through
+            # (y_n, f_n), (y_n+1, f_n+1), its coefficients once per step
+            dx = x1 - x
+            cx1, cx2, cx3 = h * v, 3.0 * dx - h * (2.0 * v + v1), h * (v + v1) - 2.0 * dx
+            dv, dzz, dee = v1 - v, z1 - z, e1 - e
+            if stiff:  # slopes of stiff states carry their error: v and z go linearly
+                cv1, cv2, cv3 = dv, 0.0, 0.0
+                cz1, cz2, cz3 = dzz, 0.0, 0.0
+            else:
+                cv1, cv2, cv3 = h * a0, 3.0 * dv - h * (2.0 * a0 + a1), h * (a0 + a1) - 2.0 * dv
+                cz1 = h * dz0
+                cz2 = 3.0 * dzz - h * (2.0 * dz0 + dz1)
+                cz3 = h * (dz0 + dz1) - 2.0 * dzz
+            ce1, ce2, ce3 = h * de0, 3.0 * dee - h * (2.0 * de0 + de1), h * (de0 + de1) - 2.0 * dee
+            while next_out < n_out:
+                i_grid = next_out * every
+                tj = i_grid * dt
+                if tj > t1 + 1e-12 * dt:
+                    break
+                theta = (tj - t) * inv_h
+                xj = x + theta * (cx1 + theta * (cx2 + theta * cx3))
+                vj = v + theta * (cv1 + theta * (cv2 + theta * cv3))
+                zj = z + theta * (cz1 + theta * (cz2 + theta * cz3))
+                ej = e + theta * (ce1 + theta * (ce2 + theta * ce3)) if ki != 0.0 else 0.0
+                # (written out rather than through _write: passing the arrays to a helper
+                # here costs reference counting at every output point)
+                if mode == 0:
+                    xrj, vrj = sig[i_grid, 0] + ramp * tj, sig[i_grid, 1] + ramp
+                    fej, fcj, fsj, s2j = (
+                        sig[i_grid, 2],
+                        sig[i_grid, 3],
+                        sig[i_grid, 4],
+                        sig[i_grid, 5],
+                    )
+                elif mode == 1:
+                    xrj, vrj = sig[0, 0] + ramp * tj, sig[0, 1] + ramp
+                    fej, fcj, fsj, s2j = sig[0, 2], sig[0, 3], sig[0, 4], sig[0, 5]
+                else:
+                    xrj, vrj, fej, fcj, fsj, s2j, _, _, _, _, _, _ = _signals(
+                        sig, inv_dt_s, ramp, tj
+                    )
+                friction, drive = _outputs(
+                    xj, vj, zj, ej, xrj, vrj, fej, fcj, fsj, s2j, k, c, ki, params, offset
+                )
+                out[0, next_out] = xj
+                out[1, next_out] = vj
+                out[2, next_out] = zj
+                out[3, next_out] = friction
+                out[4, next_out] = drive
                 next_out += 1
-            t = t_new
-            y[:] = y_new
-            f0[:] = f1
+            t = t1
+            x, v, z, e = x1, v1, z1, e1
+            a0, dz0, de0, decay0 = a1, dz1, de1, decay1
+            xr, vr, fe, fc, fs, s2 = xr1, vr1, fe1, fc1, fs1, s21
+            sxr, svr, sfe, sfc, sfs, ss2 = sxr1, svr1, sfe1, sfc1, sfs1, ss21
             accepted += 1
-            factor = min(6.0, 0.9 * max(err, 1e-10) ** exponent)
+            factor = min(6.0, 0.9 / np.cbrt(max(err, 1e-10)))  # err^(-1/order)
         else:
             rejected += 1
-            factor = 0.2 if not math.isfinite(err) else max(0.2, 0.9 * err**exponent)
+            factor = 0.2 if not math.isfinite(err) else max(0.2, 0.9 / np.cbrt(err))
         h *= factor
     return accepted, rejected, next_out
 
 
 @njit(cache=True)
 def rosenbrock(
-    dt,
-    x0,
-    v0,
-    z0,
-    mass,
-    k,
-    c,
-    ki,
-    x_ref,
-    v_ref,
-    f_ext,
-    F_c,
-    F_s,
-    sigma_2,
-    sigma_0,
-    sigma_1,
-    v_r,
-    alpha,
-    rtol,
-    atol_x,
-    atol_v,
-    atol_z,
-    atol_f,
-    max_steps,
-    h_max,
-    tables,
-):
-    """Adaptive L-stable Rosenbrock integration with output on the input grid.
+    sig, dt_s, ramp, dt, n, x0, v0, z0, mass, k, c, ki, sigma_0, sigma_1, v_r, alpha,
+    rtol, atol_x, atol_v, atol_z, atol_f, max_steps, offset,
+):  # fmt: skip
+    """Adaptive L-stable Rosenbrock (Rodas3) integration with output on a grid ``dt`` apart.
 
-    Returns position [m], velocity [m/s], z [m], friction [N] (eq. 2.5) on the grid, the
-    numbers of accepted and rejected steps, and how many grid points were reached.
+    ``sig`` (m, 6): input signals x_ref [m], v_ref [m/s], f_ext [N] (pressure force included),
+    F_c [N], F_s [N], sigma_2 [N*s/m] on a grid ``dt_s`` apart (m = n on the output grid, or
+    2 rows over the duration for constants); ``ramp`` [m/s] adds ``ramp * t`` to x_ref and
+    ``ramp`` to v_ref. Plant: mass [kg], spring ``k`` [N/m], damping ``c`` [N*s/m], integral
+    gain ``ki`` [N/(m*s)]; sigma_0 [N/m], sigma_1 [N*s/m], v_r [m/s], alpha [-]. Absolute
+    tolerances: position [m], velocity [m/s], z [m], friction force [N].
+
+    Returns (time [s], out, accepted, rejected, reached) with ``out`` (5, n): position [m],
+    velocity [m/s], z [m], friction [N] (eq. 2.5) and the force of the drive on the rod
+    k (x_ref - x) + c (v_ref - v) + ki int(x_ref - x) + f_ext + ``offset`` [N]; NaN past
+    ``reached``.
     """
-    n = x_ref.shape[0]
-    out_y = np.empty((n, 4))
-    accepted, rejected, reached = rosenbrock_core(
-        dt,
-        0.0,
-        x0,
-        v0,
-        z0,
-        mass,
-        k,
-        c,
-        ki,
-        x_ref,
-        v_ref,
-        f_ext,
-        F_c,
-        F_s,
-        sigma_2,
-        sigma_0,
-        sigma_1,
-        v_r,
-        alpha,
-        rtol,
-        atol_x,
-        atol_v,
-        atol_z,
-        atol_f,
-        max_steps,
-        h_max,
-        tables,
-        out_y,
-    )
-    return _record(
-        out_y,
-        np.empty(n),
-        reached,
-        accepted,
-        rejected,
-        sigma_0,
-        sigma_1,
-        sigma_2,
-        F_c,
-        F_s,
-        v_r,
-        alpha,
-    )
+    out = np.empty((5, n))
+    accepted, rejected, reached = rodas3_core(
+        sig, dt_s, ramp, x0, v0, z0, mass, k, c, ki, sigma_0, sigma_1, v_r, alpha,
+        rtol, atol_x, atol_v, atol_z, atol_f, max_steps, dt, 1, n, offset, out,
+    )  # fmt: skip
+    return _output_grid(out, reached, dt, 1), out, accepted, rejected, reached
 
 
 @njit(cache=True, parallel=True)
 def rosenbrock_batch(
-    dt,
-    record_every,
-    x0,
-    v0,
-    rows,
-    ramp,
-    mass,
-    k,
-    c,
-    ki,
-    f_offset,
-    x_ref,
-    v_ref,
-    f_ext,
-    F_c,
-    F_s,
-    sigma_2,
-    sigma_0,
-    sigma_1,
-    v_r,
-    alpha,
-    rtol,
-    atol_x,
-    atol_v,
-    atol_z,
-    atol_f,
-    max_steps,
-    tables,
-    chunks,
-):
-    """Many heterogeneous sets with the Rosenbrock kernel (``prange``: all cores).
+    dt, n, record_every, x0, v0, rows, ramp, mass, k, c, ki, f_offset, x_ref, v_ref, f_ext,
+    F_c, F_s, sigma_2, sigma_0, sigma_1, v_r, alpha, rtol, atol_x, atol_v, atol_z, atol_f,
+    max_steps, chunks,
+):  # fmt: skip
+    """Many heterogeneous sets with the Rodas3 kernel (``prange``: all cores).
 
     Per-set values are 1-D arrays of length ``n_sets``: drive (``ramp`` [m/s], ``mass`` [kg],
     ``k``, ``c``, ``ki``, ``f_offset`` [N] added to the drive force), friction and absolute
     tolerances. ``rows[s]`` picks the set's input signals from the (n_signals, n) arrays
-    ``x_ref``, ``v_ref``, ``f_ext``. Returns the states (n_sets, n_records, 4) every
-    ``record_every`` grid points, step counts (n_sets, 2) and grid points reached.
+    ``x_ref``, ``v_ref``, ``f_ext``; row 0 must be the constant ``x0``, 0, 0 (springs pulled at
+    ``ramp``), which needs no signal arrays. Returns ``out`` (n_sets, 5, n_records) as in
+    :func:`rosenbrock` every ``record_every`` grid points (the drive force without
+    ``f_offset``), step counts (n_sets, 2) and output points reached.
     ``chunks`` work packages share the sets (a few per thread).
     """
     n_sets = F_c.shape[0]
-    n = x_ref.shape[1]
     n_rec = (n - 1) // record_every + 1
-    states = np.empty((n_sets, n_rec, 4))
+    t_end = dt * (n - 1)
+    out = np.empty((n_sets, 5, n_rec))
     steps = np.empty((n_sets, 2), dtype=np.int64)
     reached = np.empty(n_sets, dtype=np.int64)
     # sets go in chunks, each with its own work arrays allocated once (allocating per set
     # serialises the threads on the allocator)
     n_chunks = max(1, min(n_sets, chunks))
     for chunk in prange(n_chunks):
-        out_y = np.empty((n, 4))
-        fe = np.empty(n)
-        fc = np.empty(n)
-        fs = np.empty(n)
-        s2 = np.empty(n)
+        full = np.empty((n, 6))
+        compact = np.empty((2, 6))
         for s in range(chunk * n_sets // n_chunks, (chunk + 1) * n_sets // n_chunks):
             row = rows[s]
-            for i in range(n):
-                fe[i] = f_ext[row, i] + f_offset[s]
-            fc[:] = F_c[s]
-            fs[:] = F_s[s]
-            s2[:] = sigma_2[s]
-            accepted, rejected, got = rosenbrock_core(
-                dt, ramp[s], x0, v0, 0.0, mass[s], k[s], c[s], ki[s], x_ref[row], v_ref[row],
-                fe, fc, fs, s2, sigma_0[s], sigma_1[s], v_r[s], alpha[s], rtol, atol_x[s],
-                atol_v[s], atol_z[s], atol_f[s], max_steps, math.inf, tables, out_y,
+            if row == 0:
+                for r in range(2):
+                    compact[r, 0] = x_ref[0, 0]
+                    compact[r, 1] = v_ref[0, 0]
+                    compact[r, 2] = f_ext[0, 0] + f_offset[s]
+                    compact[r, 3] = F_c[s]
+                    compact[r, 4] = F_s[s]
+                    compact[r, 5] = sigma_2[s]
+                sig, dt_s = compact, max(t_end, dt)
+            else:
+                for i in range(n):
+                    full[i, 0] = x_ref[row, i]
+                    full[i, 1] = v_ref[row, i]
+                    full[i, 2] = f_ext[row, i] + f_offset[s]
+                    full[i, 3] = F_c[s]
+                    full[i, 4] = F_s[s]
+                    full[i, 5] = sigma_2[s]
+                sig, dt_s = full, dt
+            accepted, rejected, got = rodas3_core(
+                sig, dt_s, ramp[s], x0, v0, 0.0, mass[s], k[s], c[s], ki[s], sigma_0[s],
+                sigma_1[s], v_r[s], alpha[s], rtol, atol_x[s], atol_v[s], atol_z[s], atol_f[s],
+                max_steps, dt, record_every, n, -f_offset[s], out[s],
             )  # fmt: skip
-            for r in range(n_rec):
-                for q in range(4):
-                    states[s, r, q] = (
-                        out_y[r * record_every, q] if r * record_every < got else np.nan
-                    )
+            for j in range(got, n_rec):
+                for r in range(5):
+                    out[s, r, j] = np.nan
             steps[s, 0] = accepted
             steps[s, 1] = rejected
             reached[s] = got
-    return states, steps, reached
-
-
-@njit(cache=True)
-def lugre_instant_array(v, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha):
-    """:func:`lugre_instant` over (n_sets, n) arrays; parameters are (n_sets, 1) columns [N]."""
-    out = np.empty(v.shape)
-    for s in range(v.shape[0]):
-        for i in range(v.shape[1]):
-            out[s, i] = lugre_instant(
-                v[s, i],
-                z[s, i],
-                sigma_0[s, 0],
-                sigma_1[s, 0],
-                sigma_2[s, 0],
-                F_c[s, 0],
-                F_s[s, 0],
-                v_r[s, 0],
-                alpha[s, 0],
-            )
-    return out
+    return out, steps, reached

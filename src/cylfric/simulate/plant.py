@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import math
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -210,6 +211,9 @@ def rosenbrock_tolerances(rtol, params):
     scale, so one ``rtol`` means the same accuracy however stiff the bristles are. Returns
     (atol position [m], velocity [m/s], z [m], force [N]).
     """
+    f_c, sigma_0, v_r = params["F_c"], params["sigma_0"], params["v_r"]
+    if type(f_c) is float and type(sigma_0) is float and type(v_r) is float:  # the common case
+        return _rosenbrock_scales(rtol, params)
     f_c, sigma_0, v_r = (
         float(value) if np.ndim(value) == 0 else float(reduce(value))
         for value, reduce in (
@@ -293,13 +297,13 @@ def simulate(
     if method == "fixed" and not (0 < step < math.inf):
         raise ValueError(f"step = {step} s is out of range; expected a finite step > 0 s")
     n = int(round(duration / dt)) + 1
-    time = np.arange(n) * dt
     constant = (
         np.ndim(pressure_a) == 0
         and (pressure_b is None or np.ndim(pressure_b) == 0)
         and not callable(pressure_a)
         and not callable(pressure_b)
     )
+    time = None
     if constant:  # the common case, checked on the two numbers (no arrays)
         p_a = float(pressure_a)
         p_b = p_a if pressure_b is None else float(pressure_b)
@@ -310,22 +314,31 @@ def simulate(
         pb = pa if pressure_b is None else np.full(n, p_b)
         checked_a, checked_b = p_a, p_b
     else:
+        time = np.arange(n) * dt
         pa = _on_grid(pressure_a, time, "pressure_a")
         pb = pa if pressure_b is None else _on_grid(pressure_b, time, "pressure_b")
         checked_a, checked_b = pa, pb
     for name, values in (("pressure_a", checked_a), ("pressure_b", checked_b)):
-        if np.min(values) < 0:
+        if (values if constant else np.min(values)) < 0:
             raise ValueError(
                 f"{name} goes down to {np.min(values):.4g} Pa; expected pressures >= 0 Pa"
             )
     # warns outside the model's validity pressures, or for pressures that look like bar
-    friction.check(None, friction.operating_pressure(checked_a, checked_b), strict=strict)
-    params = _friction_params(friction, checked_a, checked_b)
-    _check_friction(friction, params)
-    f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
+    operating = friction.operating_pressure(checked_a, checked_b)
+    friction.check(None, operating, strict=strict)
+    if constant:
+        params = _params_checked(friction, float(operating))
+        f_pressure = float(cylinder.area_a * p_a - cylinder.area_b * p_b)
+    else:
+        params = _friction_params(friction, checked_a, checked_b)
+        _check_friction(friction, params)
+        f_pressure = cylinder.area_a * pa - cylinder.area_b * pb
     info = {"method": method, "dt": dt}
+    compiled = friction.simulation_law == "lugre" and method in ("rosenbrock", "dopri")
 
     if isinstance(drive, PrescribedMotion):
+        time = np.arange(n) * dt if time is None else time
+        f_pressure = np.broadcast_to(f_pressure, time.shape)
         velocity = _on_grid(drive.velocity, time, "velocity")
         position = drive.position0 + np.concatenate(
             ([0.0], np.cumsum(0.5 * (velocity[1:] + velocity[:-1]) * dt))
@@ -367,6 +380,46 @@ def simulate(
             info,
         )
 
+    if compiled:
+        # the compiled integrators take the inputs as one block and return the outputs
+        sig, dt_s, ramp, k, c, ki = _signal_block(drive, n, dt, x0, f_pressure, params, time)
+        scalar_pressure = type(f_pressure) is float
+        offset = -f_pressure if scalar_pressure else 0.0
+        lugre = (
+            cylinder.mass,
+            k,
+            c,
+            ki,
+            *(_const(params, name) for name in ("sigma_0", "sigma_1", "v_r", "alpha")),
+        )
+        if method == "rosenbrock":
+            time, out, accepted, rejected, reached = kernels.rosenbrock(
+                sig, dt_s, ramp, dt, n, x0, v0, z0, *lugre, rtol,
+                *rosenbrock_tolerances(rtol, params), MAX_STEPS, offset,
+            )  # fmt: skip
+            info.update(rtol=rtol, scheme="Rodas3")
+        else:
+            time, out, accepted, rejected, reached = kernels.dopri(
+                sig, dt_s, ramp, dt, n, x0, v0, z0, *lugre, rtol, 1e-12, 1e-9, 1e-13,
+                MAX_STEPS, offset,
+            )  # fmt: skip
+        if reached < n:
+            raise RuntimeError(
+                f"{method} stopped at t = {(reached - 1) * dt} s after {MAX_STEPS:.0e} steps; "
+                "loosen rtol or use method='fixed'"
+            )
+        if not scalar_pressure:
+            out[4] -= f_pressure
+        info.update(accepted=int(accepted), rejected=int(rejected))
+        return SimulationResult(
+            time,
+            {"position": out[0], "velocity": out[1], "z": out[2]},
+            {"friction_force": out[3], "drive_force": out[4], "pressure_a": pa, "pressure_b": pb},
+            info,
+        )
+
+    time = np.arange(n) * dt if time is None else time
+    f_pressure = np.broadcast_to(f_pressure, time.shape)
     x_ref, v_ref, f_ext, k, c, ki = _drive_signals(drive, time, x0)
     f_ext = f_ext + f_pressure
     if method == "scipy" or friction.simulation_law != "lugre":
@@ -394,7 +447,7 @@ def simulate(
             rtol=rtol,
         )
         info.update(info_extra)
-    elif method == "fixed":
+    else:  # method == "fixed"
         substeps = max(1, int(math.ceil(dt / step - 1e-9)))
         pos, vel, z, force, mean_force, iterations = kernels.fixed_step(
             dt,
@@ -404,40 +457,6 @@ def simulate(
         )
         states = {"position": pos, "velocity": vel, "z": z}
         info.update(step=dt / substeps, steps=(n - 1) * substeps, iterations=int(iterations))
-    elif method == "rosenbrock":
-        pos, vel, z, force, accepted, rejected, reached = kernels.rosenbrock(
-            dt,
-            *_plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext),
-            rtol,
-            *rosenbrock_tolerances(rtol, params),
-            MAX_STEPS,
-            math.inf,
-            kernels.RODAS3,
-        )
-        if reached < n:
-            raise RuntimeError(
-                f"rosenbrock stopped at t = {(reached - 1) * dt} s after {MAX_STEPS:.0e} steps; "
-                "loosen rtol or use method='fixed'"
-            )
-        states = {"position": pos, "velocity": vel, "z": z}
-        info.update(accepted=int(accepted), rejected=int(rejected), rtol=rtol, scheme="Rodas3")
-    else:
-        pos, vel, z, force, accepted, rejected, reached = kernels.dopri(
-            dt,
-            *_plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext),
-            rtol,
-            1e-12,
-            1e-9,
-            1e-13,
-            50_000_000,
-        )
-        if reached < n:
-            raise RuntimeError(
-                f"dopri stopped at t = {(reached - 1) * dt} s after 5e7 steps; "
-                "loosen rtol or use method='fixed'"
-            )
-        states = {"position": pos, "velocity": vel, "z": z}
-        info.update(accepted=int(accepted), rejected=int(rejected))
     error = x_ref - states["position"]
     drive_force = k * error + c * (v_ref - states["velocity"]) + f_ext - f_pressure
     if ki:
@@ -448,6 +467,39 @@ def simulate(
         {"friction_force": force, "drive_force": drive_force, "pressure_a": pa, "pressure_b": pb},
         info,
     )
+
+
+def _signal_block(drive, n, dt, x0, f_pressure, params, time=None):
+    """Input signals of the compiled integrators as one (m, 6) block (kernels order: x_ref,
+    v_ref, f_ext with the pressure force, F_c, F_s, sigma_2) and (dt_s, ramp, k, c, ki).
+
+    Constant inputs (a spring pulled at constant speed or a constant force, at constant
+    pressure and friction) take two rows over the duration, the spring's pull as ``ramp``;
+    otherwise one row per grid point.
+    """
+    names = ("F_c", "F_s", "sigma_2")
+    if type(f_pressure) is float and all(type(params[name]) is float for name in names):
+        ramp = None
+        if isinstance(drive, SpringPull):
+            f_ext, ramp, gains = 0.0, drive.speed, (drive.stiffness, drive.damping, 0.0)
+        elif (
+            isinstance(drive, AppliedForce)
+            and not callable(drive.force)
+            and np.ndim(drive.force) == 0
+        ):
+            f_ext, ramp, gains = float(drive.force), 0.0, (0.0, 0.0, 0.0)
+            if not math.isfinite(f_ext):
+                raise ValueError("force contains NaN or inf; expected finite values")
+        if ramp is not None:
+            row = [x0, 0.0, f_ext + f_pressure, *(float(params[name]) for name in names)]
+            return (np.array([row, row]), dt * (n - 1), ramp, *gains)
+    time = np.arange(n) * dt if time is None else time
+    x_ref, v_ref, f_ext, k, c, ki = _drive_signals(drive, time, x0)
+    sig = np.empty((n, 6))
+    sig[:, 0], sig[:, 1], sig[:, 2] = x_ref, v_ref, f_ext + f_pressure
+    for column, name in enumerate(names, 3):
+        sig[:, column] = params[name]
+    return sig, dt, 0.0, k, c, ki
 
 
 def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext):
@@ -474,6 +526,27 @@ def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_re
 
 
 _LUGRE_NAMES = ("sigma_0", "sigma_1", "sigma_2", "F_c", "F_s", "v_r", "alpha")
+
+
+_PARAMS = weakref.WeakKeyDictionary()
+
+
+def _params_checked(friction, pressure):
+    """``friction.params_at(pressure)`` at a constant operating pressure [Pa], checked for the
+    integrators and remembered per model (a model's parameters cannot change: its
+    ``parameters`` and ``laws`` are read-only mappings of frozen values, and they are compared
+    by identity). The returned dict is shared: read it, do not change it."""
+    key = (friction.parameters, friction.laws, friction.pressure_law, friction.simulation_law)
+    entry = _PARAMS.get(friction)
+    if entry is None or any(a is not b and a != b for a, b in zip(entry[0], key, strict=True)):
+        entry = _PARAMS[friction] = (key, {})
+    params = entry[1].get(pressure)
+    if params is None:
+        params = _friction_params(friction, pressure)
+        _check_friction(friction, params)
+        if len(entry[1]) < 256:
+            entry[1][pressure] = params
+    return params
 
 
 def _check_friction(friction, params):
@@ -511,7 +584,10 @@ def _arr(value, n):
 
 
 def _const(params, name):
-    values = np.asarray(params[name], dtype=float)
+    values = params[name]
+    if type(values) is float:
+        return values
+    values = np.asarray(values, dtype=float)
     if values.ndim and not np.all(values == values.flat[0]):
         raise ValueError(f"{name} must not vary with pressure in the compiled integrators")
     return float(values.flat[0])
@@ -708,65 +784,22 @@ def simulate_batch(
                 _check_friction(model, {name: friction[name][i] for name in friction})
             except ValueError as exc:
                 raise ValueError(f"set {i}: {exc}") from None
-    atol = np.column_stack(_rosenbrock_scales(rtol, friction))
-    states, steps, reached = kernels.rosenbrock_batch(
-        dt,
-        record_every,
-        x0,
-        v0,
-        columns["row"].astype(np.int64),
-        columns["ramp"],
-        columns["mass"],
-        columns["k"],
-        columns["c"],
-        columns["ki"],
-        columns["f_offset"],
-        np.array(rows_x),
-        np.array(rows_v),
-        np.array(rows_f),
-        friction["F_c"],
-        friction["F_s"],
-        friction["sigma_2"],
-        friction["sigma_0"],
-        friction["sigma_1"],
-        friction["v_r"],
-        friction["alpha"],
-        rtol,
-        np.ascontiguousarray(atol[:, 0]),
-        np.ascontiguousarray(atol[:, 1]),
-        np.ascontiguousarray(atol[:, 2]),
-        np.ascontiguousarray(atol[:, 3]),
-        MAX_STEPS,
-        kernels.RODAS3,
-        8 * numba.get_num_threads(),
-    )
-    if (reached < n).any():
+    atol = _rosenbrock_scales(rtol, friction)
+    out, steps, reached = kernels.rosenbrock_batch(
+        dt, n, record_every, x0, v0, columns["row"].astype(np.int64), columns["ramp"],
+        columns["mass"], columns["k"], columns["c"], columns["ki"], columns["f_offset"],
+        np.array(rows_x), np.array(rows_v), np.array(rows_f),
+        *(friction[name] for name in ("F_c", "F_s", "sigma_2", "sigma_0", "sigma_1", "v_r")),
+        friction["alpha"], rtol, *(np.broadcast_to(a, (n_sets,)).copy() for a in atol),
+        MAX_STEPS, 8 * numba.get_num_threads(),
+    )  # fmt: skip
+    if (reached < out.shape[2]).any():
         raise RuntimeError(
-            f"{int((reached < n).sum())} set(s) stopped after {MAX_STEPS:.0e} steps; loosen rtol"
+            f"{int((reached < out.shape[2]).sum())} set(s) stopped after {MAX_STEPS:.0e} steps; "
+            "loosen rtol"
         )
-    rec = time[::record_every]
-    position, velocity, z, integral = (states[:, :, q] for q in range(4))
-    force = kernels.lugre_instant_array(
-        velocity,
-        z,
-        friction["sigma_0"][:, None],
-        friction["sigma_1"][:, None],
-        friction["sigma_2"][:, None],
-        friction["F_c"][:, None],
-        friction["F_s"][:, None],
-        friction["v_r"][:, None],
-        friction["alpha"][:, None],
-    )
-    rows = columns["row"].astype(int)
-    x_ref = np.array(rows_x)[:, ::record_every][rows] + columns["ramp"][:, None] * rec
-    v_ref = np.array(rows_v)[:, ::record_every][rows] + columns["ramp"][:, None]
-    f_ext = np.array(rows_f)[:, ::record_every][rows]
-    drive_force = (
-        columns["k"][:, None] * (x_ref - position)
-        + columns["c"][:, None] * (v_ref - velocity)
-        + columns["ki"][:, None] * integral
-        + f_ext
-    )
+    rec = np.arange(0, n, record_every) * dt
+    position, velocity, z, force, drive_force = (out[:, q, :] for q in range(5))
     return BatchResult(
         rec,
         position,
