@@ -484,6 +484,7 @@ def identify(
                 validity=validity,
             )
         notes += [str(w.message) for w in caught]
+        notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
         for w in caught:  # recorded for the report, and still shown to the caller
             warnings.warn(w.message, w.category, stacklevel=2)
         per_pressure, fits, regressions, models, fits_by_law, comparison = core
@@ -552,7 +553,7 @@ def add_sensitivity(ident: Identification) -> Identification:
         recommended=recommended,
         sensitivity_refits=refits,
         directions=dict(ident.directions),
-        notes=ident.notes + [str(w.message) for w in caught],
+        notes=list(dict.fromkeys(ident.notes + [str(w.message) for w in caught])),
     )
 
 
