@@ -587,6 +587,15 @@ def _level_only(points, levels, fixed, notes, validity):
         names = ["F_c"]
     coef, *_ = np.linalg.lstsq(design, f, rcond=None)
     res = f - design @ coef
+    ends = np.array([validity["pressure_min"], validity["pressure_max"]])
+    level = coef[0] + (coef[1] * ends if len(coef) == 2 else 0.0)
+    if np.any(level <= 0):  # as the surface fits: never a negative friction level
+        raise UnphysicalFrictionError(
+            f"the friction level is pushed to 0 N (F_c = {np.min(level):.4g} N within "
+            f"{ends[0] / 1e5:.3g}-{ends[1] / 1e5:.3g} bar): the data contradict a positive "
+            "friction force; check the force-balance signs (load_cell_sign, position_sign), "
+            "the offset and the force and position units"
+        )
     dof = max(f.size - len(coef), 1)
     cov = np.linalg.pinv(design.T @ design) * float(res @ res) / dof
     se = np.sqrt(np.diag(cov))
