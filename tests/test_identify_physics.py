@@ -109,3 +109,14 @@ def test_single_pressure_stribeck_fit_keeps_F_s_above_F_c():
 def test_pressure_law_other_than_linear_is_refused_for_a_reduced_model():
     with pytest.raises(ValueError, match="quadratic pressure law cannot be used on these data"):
         _identify(_points(lambda v, p: 100.0 + 0 * v, noise=1.0), pressure_law="quadratic")
+
+
+def test_each_warning_is_a_note_once():
+    """Regression (issue 11 audit): --fix F_c=70N on the thesis data printed 'Covariance of
+    the parameters could not be estimated' three times, once per pressure-law fit."""
+
+    def thesis(v, p):
+        return stribeck(v, **params_at_pressure(p, THESIS_2016.coefficients))
+
+    ident = _identify(_points(thesis), fixed={"F_c": 70.0})
+    assert ident.notes and len(ident.notes) == len(set(ident.notes))

@@ -256,3 +256,14 @@ def test_events_are_status_lines_not_headers(tmp_path):
         "Segment 2 started",
         "Test run ended",
     ]
+
+
+def test_nul_bytes_past_64_kib_name_the_line(tmp_path):
+    """Issue 11: NUL bytes after the first 64 KiB gave 'columns change between segments'
+    without a line; now the row that holds them is named."""
+    body = "Time [s]\tForce [N]\n" + "".join(f"{i * 0.01:.2f}\t1.0\n" for i in range(8000))
+    data = body.encode()
+    path = tmp_path / "run.txt"
+    path.write_bytes(data[:70000] + b"\x00\x00" + data[70000:])
+    with pytest.raises(BenchFileError, match=r"run.txt, line 7100: expected a number in column 1"):
+        read_bench_text(path)

@@ -167,3 +167,16 @@ def test_the_report_lists_the_excluded_runs(clean, tmp_path):
     page = (out / "report.html").read_text()
     assert "The data-quality gate left 1 run(s) out of the fit" in page
     assert "run_013_p55bar_v7mms.txt" in page
+
+
+def test_a_flipped_sign_with_one_speed_per_direction_names_the_key(tmp_path):
+    """Regression (issue 11 audit): the level-only model (two speeds) wrote F_c < 0 and
+    only the datasheet check in the staging folder stopped it, naming a temporary file."""
+    folder = tmp_path / "campaign"
+    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50)))
+    (folder / "campaign.toml").write_text("[force_balance]\nload_cell_sign = -1\n")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 2, result.output
+    assert "friction level is pushed to 0 N" in result.output
+    assert "campaign.toml, line 2: load_cell_sign" in result.output
+    assert not out.exists()

@@ -484,6 +484,7 @@ def identify(
                 validity=validity,
             )
         notes += [str(w.message) for w in caught]
+        notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
         for w in caught:  # recorded for the report, and still shown to the caller
             warnings.warn(w.message, w.category, stacklevel=2)
         per_pressure, fits, regressions, models, fits_by_law, comparison = core
@@ -552,7 +553,7 @@ def add_sensitivity(ident: Identification) -> Identification:
         recommended=recommended,
         sensitivity_refits=refits,
         directions=dict(ident.directions),
-        notes=ident.notes + [str(w.message) for w in caught],
+        notes=list(dict.fromkeys(ident.notes + [str(w.message) for w in caught])),
     )
 
 
@@ -586,6 +587,15 @@ def _level_only(points, levels, fixed, notes, validity):
         names = ["F_c"]
     coef, *_ = np.linalg.lstsq(design, f, rcond=None)
     res = f - design @ coef
+    ends = np.array([validity["pressure_min"], validity["pressure_max"]])
+    level = coef[0] + (coef[1] * ends if len(coef) == 2 else 0.0)
+    if np.any(level <= 0):  # as the surface fits: never a negative friction level
+        raise UnphysicalFrictionError(
+            f"the friction level is pushed to 0 N (F_c = {np.min(level):.4g} N within "
+            f"{ends[0] / 1e5:.3g}-{ends[1] / 1e5:.3g} bar): the data contradict a positive "
+            "friction force; check the force-balance signs (load_cell_sign, position_sign), "
+            "the offset and the force and position units"
+        )
     dof = max(f.size - len(coef), 1)
     cov = np.linalg.pinv(design.T @ design) * float(res @ res) / dof
     se = np.sqrt(np.diag(cov))
