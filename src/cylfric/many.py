@@ -43,11 +43,15 @@ SUMMARY_COLUMNS = (
     "seconds [s]",
     "cpu [s]",
     "catalog",
+    "start [s]",
+    "worker",
 )
 """Columns of ``fit_many.csv``: ``status`` is ``ok`` or ``failed``; ``reason`` the error;
 ``seconds`` the wall time and ``cpu`` the processor time of the fit (``cpu`` well below
 ``seconds``: the machine was busy with other work); ``catalog`` is ``added``, empty
-without a catalogue, or the catalogue's error."""
+without a catalogue, or the catalogue's error; ``start`` is when the fit began, counted
+from the start of :func:`fit_many` [s], and ``worker`` the id of the process that ran it
+(together they show the workers running side by side)."""
 
 _CAMPAIGN_MARKERS = ("manifest.csv", "campaign.toml")
 _OUTPUT_MARKER = ".cylfric-output"
@@ -118,12 +122,21 @@ def _name(folder: Path, root: Path) -> str:
     return folder.relative_to(root).as_posix()
 
 
-def fit_one(folder, out, name, options) -> dict:
-    """Fit one campaign (what each worker runs); never raises: returns a summary row."""
+def fit_one(folder, out, name, options, started=None) -> dict:
+    """Fit one campaign (what each worker runs); never raises: returns a summary row.
+
+    ``started`` is the wall-clock time (``time.time()`` [s]) the ``start [s]`` column
+    counts from (default: now)."""
     import warnings
 
     t0, cpu0 = time.perf_counter(), time.process_time()
-    row = {"campaign": name, "out": str(out), "catalog": ""}
+    row = {
+        "campaign": name,
+        "out": str(out),
+        "catalog": "",
+        "start [s]": round(time.time() - (time.time() if started is None else started), 3),
+        "worker": os.getpid(),
+    }
     try:
         from .pipeline import fit_campaign
 
@@ -225,15 +238,11 @@ def fit_many(
     workers = workers or os.cpu_count() or 1
     context = None
     if scheduler is None:  # the workers' server imports the pipeline while this process goes on
-        # the whole fit (the pipeline imports identify and datasheet lazily) and the
-        # compiled reader, loaded once in the server the workers fork from
-        preload = [
-            "cylfric.pipeline",
-            "cylfric.many",
-            "cylfric.identify",
-            "cylfric.datasheet",
-            "cylfric._warm",
-        ]
+        # everything a fit needs (cylfric._warm: the compiled reader, the identification and
+        # the datasheet, which the pipeline imports lazily) and the part of Dask that runs a
+        # task in a worker (0.15 s per worker otherwise), loaded once in the server the
+        # workers fork from
+        preload = ["cylfric.many", "cylfric._warm", "dask.multiprocessing"]
         if fit_options.get("report", True):
             preload.append("cylfric.report")
         context = _worker_context(preload)
@@ -245,8 +254,12 @@ def fit_many(
     if scheduler != "serial" and (distributed or workers > 1):
         # fits side by side: each on one core (a fit alone reads files on two)
         fit_options.setdefault("workers", 1)
-    jobs = [(f, out / _name(f, root), _name(f, root), dict(fit_options)) for f in campaigns]
-    t0 = time.perf_counter()
+    t0, started = time.perf_counter(), time.time()
+    jobs = [
+        (f, out / _name(f, root), _name(f, root), dict(fit_options), started) for f in campaigns
+    ]
+    # largest first: a long fit started last would leave the other workers idle at the end
+    order = sorted(range(len(jobs)), key=lambda i: -_size(campaigns[i]))
     rows = {}
 
     def done(row):
@@ -262,9 +275,9 @@ def fit_many(
             done(fit_one(*job))
     elif scheduler is None:
         used = f"dask multiprocessing scheduler, {workers} process(es)"
-        _run_processes(jobs, workers, done, context)
+        _run_processes([jobs[i] for i in order], workers, done, context)
     else:
-        used = _run_distributed(jobs, scheduler, workers, done)
+        used = _run_distributed([jobs[i] for i in order], scheduler, workers, done)
     for job in jobs:  # a worker lost with its task: reported like any failure
         rows.setdefault(
             job[2],
@@ -281,6 +294,15 @@ def fit_many(
     summary.to_csv(buffer, index=False)
     atomic_write_text(out / "fit_many.csv", buffer.getvalue())
     return ManyResult(summary, out, used, time.perf_counter() - t0)
+
+
+def _size(folder: Path) -> int:
+    """Bytes of the files in a campaign folder (how long its fit takes, roughly)."""
+    total = 0
+    for entry in os.scandir(folder):
+        if entry.is_file():
+            total += entry.stat().st_size
+    return total
 
 
 def _add_to_catalog(db, out: Path, name: str) -> str:
@@ -322,11 +344,24 @@ def _run_processes(jobs, workers, done, context):
             if isinstance(result, dict) and "status" in result:
                 done(result)
 
-    tasks = [dask.delayed(fit_one, pure=False)(*job) for job in jobs]
+    # keys that sort in the order of ``jobs``: Dask's local scheduler starts ready tasks in
+    # key order
+    tasks = [
+        dask.delayed(fit_one, pure=False)(*job, dask_key_name=f"fit-{i:06d}")
+        for i, job in enumerate(jobs)
+    ]
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         try:
             with _Finished():
-                dask.compute(*tasks, scheduler="processes", pool=pool, num_workers=workers)
+                # chunksize=1: one campaign per message. Dask's multiprocessing default (6)
+                # sent 6 of 8 campaigns to one worker as a batch while the other sat idle
+                dask.compute(
+                    *tasks,
+                    scheduler="processes",
+                    pool=pool,
+                    num_workers=workers,
+                    chunksize=1,
+                )
         except Exception:  # noqa: BLE001 - a dead worker process: the rest are reported lost
             pass
 
