@@ -130,7 +130,7 @@ def render_report(
             f"<p class='note'>The data-quality gate left {len(excluded)} run(s) out of the fit "
             "(also in excluded.csv):</p>"
         )
-        parts.append(_table(excluded.assign(file=excluded["file"].map(lambda f: f.split("/")[-1]))))
+        parts.append(_table(excluded))  # files relative to the campaign folder
     else:
         parts.append("<p>The data-quality gate left no run out.</p>")
     parts.append(_quality(extraction))
