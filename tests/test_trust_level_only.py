@@ -124,3 +124,9 @@ def test_per_direction_is_honoured(campaign, tmp_path):
         # is missing in one of them)
         assert_allclose(rows["F_c [N]"], pooled["F_c [N]"], rtol=0.05)
         assert rows["F_s [N]"].isna().all() and rows["sigma_2 [N*s/m]"].isna().all()
+    # and the fit says why the two directions agree
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert any(
+        note.startswith("per direction: each run's own load-cell offset")
+        for note in (sheet["notes"])
+    )

@@ -532,6 +532,14 @@ def identify(
         if sensitivity and shape:
             result = add_sensitivity(result)
     if per_direction and "direction [-]" in used:
+        if "offset [N]" in used:  # points of steady_state.extract_campaign
+            result.notes.append(
+                "per direction: each run's own load-cell offset, the mean of its extension "
+                "and retraction force levels, is removed, so the two directions have the "
+                "same mean friction in every run and their fits differ only by stroke "
+                "scatter and missing windows; an asymmetry between the directions cannot "
+                "be told from the offset without a load-cell reading at rest"
+            )
         for name, sign in (("extension", 1), ("retraction", -1)):
             subset = used[used["direction [-]"] == sign].drop(columns="level")
             if len(subset) >= MIN_POINTS:
