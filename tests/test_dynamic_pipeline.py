@@ -86,6 +86,23 @@ def test_outputs_report_figure_and_tables(fitted):
     assert "Breakaway validation: RMS error" in report
 
 
+def test_the_dynamic_figure_has_legends_and_labelled_log_ticks(fitted):
+    """Issue 11: a legend on every figure, log axes with several labelled ticks."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from cylfric.report.dynamic import figure_dynamic
+
+    fig = figure_dynamic(fitted.dynamic)
+    assert all(ax.get_legend() is not None for ax in fig.axes)  # both panels
+    FigureCanvasAgg(fig).draw()
+    right = fig.axes[1]
+    assert right.get_xscale() == "log"
+    lo, hi = right.get_xlim()
+    locs = [x for x in right.xaxis.get_major_locator()() if lo <= x <= hi]
+    labels = [t for t in right.xaxis.get_major_formatter().format_ticks(locs) if t]
+    assert len(labels) >= 3, labels
+
+
 def test_campaign_without_dynamic_runs_keeps_sigmas_assumed(campaign, tmp_path):
     result = fit_campaign(campaign, tmp_path / "cv", glob="run_*", report=False)
     for name in ("sigma_0", "sigma_1"):

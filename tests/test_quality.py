@@ -83,14 +83,111 @@ def test_a_unit_slip_in_one_run_is_excluded(clean, tmp_path, name, old, new, che
 
 
 def test_a_run_typed_as_0_bar_while_measured_at_103_bar_is_excluded(clean, tmp_path):
+    """Only manifest.csv knows the run's pressure (no header line, no file-name token): the
+    outlier check finds it from its neighbours in speed at 0.1 bar."""
     folder = _copy(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
-    _edit(folder / "manifest.csv", f"{name},103,10", f"{name},0,10")
+    _edit(folder / name, "Pressure: 103 bar\n", "")
+    (folder / name).rename(folder / "run_024.txt")
+    _edit(folder / "manifest.csv", f"{name},103,10", "run_024.txt,0,10")
     result, out = _fit(folder, tmp_path)
     assert result.exit_code == 0, result.output
     excluded = _excluded(out)
-    assert list(excluded["check"]) == ["outlier"] and excluded["file"].iloc[0].endswith(name)
+    assert list(excluded["check"]) == ["outlier"] and list(excluded["file"]) == ["run_024.txt"]
     _within_tolerance(out)
+
+
+def _without_low_pressure(clean, tmp_path):
+    """The clean campaign without its 0.1 bar runs: no level a run typed 0 bar could join."""
+    folder = _copy(clean, tmp_path)
+    for path in folder.glob("*_p0.1bar_*"):
+        path.unlink()
+    manifest = folder / "manifest.csv"
+    lines = manifest.read_text().splitlines(keepends=True)
+    manifest.write_text("".join(line for line in lines if "_p0.1bar_" not in line))
+    return folder
+
+
+def test_a_manifest_pressure_that_the_file_contradicts_is_a_metadata_conflict(clean, tmp_path):
+    """Issue 11 audit: a run typed 0 bar in manifest.csv while its header says 'Pressure:
+    103 bar' and its name p103bar, in a campaign without a low-pressure level, was fitted
+    with exit 0, no exclusion and an RMSE of 9.7 N."""
+    folder = _without_low_pressure(clean, tmp_path)
+    name = "run_024_p103bar_v10mms.txt"
+    _edit(folder / "manifest.csv", f"{name},103,10", f"{name},0,10")
+    line = folder.joinpath("manifest.csv").read_text().splitlines().index(f"{name},0,10") + 1
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    assert list(excluded["check"]) == ["metadata"] and list(excluded["file"]) == [name]
+    assert excluded["reason"].iloc[0] == (
+        f"metadata conflict: pressure 0 bar in manifest.csv line {line} (the value used) but "
+        "103 bar in the file header (Pressure: 103 bar) and 103 bar in the file name (p103bar)"
+    )
+    _within_tolerance(out)
+    sheet = json.loads((out / "datasheet.json").read_text())
+    # the virtual bench's truth: F_c = 70.2 N + 0.5 N/bar * p (simulate.bench defaults)
+    assert abs(sheet["parameters"]["F_c"]["slope"] * 1e5 / 0.5 - 1) < 0.02
+    assert sheet["fit"]["rmse"] < 0.1  # N; 9.7 N with the run typed 0 bar kept
+    shutil.rmtree(out)
+    result, out = _fit(folder, tmp_path, "--strict")
+    assert result.exit_code == 2
+    assert f"{name}: metadata conflict: pressure 0 bar in manifest.csv line {line}" in (
+        " ".join(result.output.split())
+    )
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "edit, check, expected",
+    [
+        # the nominal speed: manifest 15 mm/s, header and name 10 mm/s
+        (
+            ("manifest.csv", "{name},103,10", "{name},103,15"),
+            "metadata",
+            "speed 15 mm/s in manifest.csv line 26 (the value used) but 10 mm/s in the file "
+            "header (Nominal velocity: 10 mm/s) and 10 mm/s in the file name (v10mms)",
+        ),
+        # 103 against 100 bar is within 5 %: the same level, nominal rounding
+        (("manifest.csv", "{name},103,10", "{name},100,10"), None, None),
+        # without manifest.csv the header wins; the file name still contradicts it
+        (
+            ("{name}", "Pressure: 103 bar", "Pressure: 55 bar"),
+            "metadata",
+            "pressure 55 bar in the file header (Pressure: 55 bar) (the value used) but 103 bar "
+            "in the file name (p103bar)",
+        ),
+    ],
+)
+def test_nominal_sources_are_compared(clean, tmp_path, edit, check, expected):
+    folder = _copy(clean, tmp_path)
+    name = "run_024_p103bar_v10mms.txt"
+    target, old, new = (part.format(name=name) for part in edit)
+    _edit(folder / target, old, new)
+    if target == name:
+        (folder / "manifest.csv").unlink()
+    excluded = assess(extract_campaign(folder, workers=1)).excluded
+    if check is None:
+        assert excluded.empty
+    else:
+        assert list(excluded["check"]) == [check] and list(excluded["file"]) == [name]
+        assert expected in excluded["reason"].iloc[0]
+
+
+def test_a_measured_pressure_column_is_not_second_guessed(tmp_path):
+    """The fit uses the pressure a file measures: its nominal sources may differ."""
+    folder = tmp_path / "measured"
+    generate_campaign(
+        folder,
+        BenchSettings(
+            pressures_bar=(20.0, 80.0), speeds_mm_s=(2, 5, 10, 20), pressure_channel=True
+        ),
+    )
+    manifest = folder / "manifest.csv"
+    rows = manifest.read_text().splitlines()
+    rows[1] = ",".join([rows[1].split(",")[0], "0", rows[1].split(",")[2]])
+    manifest.write_text("\n".join(rows) + "\n")
+    assert assess(extract_campaign(folder, workers=1)).excluded.empty
 
 
 def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):
@@ -108,8 +205,34 @@ def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):
     result, out = _fit(folder, tmp_path)
     assert result.exit_code == 0, result.output
     excluded = _excluded(out).set_index("check")
-    assert excluded.loc["motion", "file"].endswith("run_011_p55bar_v2mms.txt")
+    assert excluded.loc["motion", "file"] == "run_011_p55bar_v2mms.txt"
     assert excluded.loc["unlisted", "file"] == "extra_p55bar_v4mms.txt"
+
+
+def test_excluded_files_are_named_relative_to_the_campaign_folder(clean, tmp_path):
+    """One form in excluded.csv's file column: the path relative to the campaign folder
+    (it was the full path for runs and the bare name for unlisted files)."""
+    folder = _copy(clean, tmp_path)
+    (folder / "data").mkdir()
+    for path in folder.glob("run_*.txt"):
+        path.rename(folder / "data" / path.name)
+    manifest = folder / "manifest.csv"
+    lines = manifest.read_text().splitlines()
+    manifest.write_text("\n".join([lines[0]] + ["data/" + line for line in lines[1:]]) + "\n")
+    (folder / "campaign.toml").write_text('[files]\nglob = "data/*.txt"\n')
+    _edit(folder / "data" / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
+    shutil.copy(folder / "data" / "run_013_p55bar_v7mms.txt", folder / "data" / "extra.txt")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    assert list(excluded["file"]) == ["data/run_012_p55bar_v4mms.txt", "data/extra.txt"]
+    assert list(excluded["check"]) == ["speed", "unlisted"]
+    # a position column in mm labelled m reads 1000 times the nominal speed
+    assert (
+        "(about 1000 times the nominal: a position in mm whose unit says m?)"
+        in (excluded["reason"].iloc[0])
+    )
+    assert "data/run_012_p55bar_v4mms.txt: measured speed" in result.output
 
 
 def test_strict_turns_an_exclusion_into_exit_2_naming_the_file(clean, tmp_path):
@@ -180,3 +303,21 @@ def test_a_flipped_sign_with_one_speed_per_direction_names_the_key(tmp_path):
     assert "friction level is pushed to 0 N" in result.output
     assert "campaign.toml, line 2: load_cell_sign" in result.output
     assert not out.exists()
+
+
+def test_the_speed_check_names_a_unit_only_for_a_factor_of_1000(clean, tmp_path):
+    """A run measured at 10 mm/s that only manifest.csv calls 14 mm/s: 0.714 times the
+    nominal is no unit slip, and the reason does not suggest one (issue 11 audit)."""
+    folder = _copy(clean, tmp_path)
+    name = "run_024_p103bar_v10mms.txt"
+    _edit(folder / name, "Nominal velocity: 10 mm/s\n", "")
+    (folder / name).rename(folder / "run_024.txt")
+    _edit(folder / "manifest.csv", f"{name},103,10", "run_024.txt,103,14")
+    excluded = assess(extract_campaign(folder, workers=1)).excluded
+    assert list(excluded["check"]) == ["speed"] and list(excluded["file"]) == ["run_024.txt"]
+    reason = excluded["reason"].iloc[0]
+    assert reason.endswith(
+        "against nominal 14 mm/s (0.714 times the nominal: the nominal speed in the "
+        "metadata is wrong, or the rig did not reach it)"
+    )
+    assert "unit" not in reason

@@ -115,3 +115,74 @@ def test_importing_the_report_leaves_the_backend_and_rcparams_alone():
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+def _log_axes_labels(fig):
+    """Per log axis of ``fig``: the tick labels inside its view (after a draw)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    labels = []
+    for ax in fig.axes:
+        for axis, scale, (lo, hi) in (
+            (ax.xaxis, ax.get_xscale(), ax.get_xlim()),
+            (ax.yaxis, ax.get_yscale(), ax.get_ylim()),
+        ):
+            if scale != "log":
+                continue
+            locs = [x for x in axis.get_major_locator()() if min(lo, hi) <= x <= max(lo, hi)]
+            labels.append([t for t in axis.get_major_formatter().format_ticks(locs) if t])
+    return labels
+
+
+def check_legends_and_log_ticks(fig, stem):
+    """Issue 11: a legend on every figure; log axes with several labelled ticks."""
+    assert any(ax.get_legend() is not None for ax in fig.axes) or fig.legends, stem
+    for labels in _log_axes_labels(fig):
+        assert len(labels) >= 3, (stem, labels)
+
+
+def test_every_figure_has_a_legend_and_labelled_log_ticks(results):
+    extraction, _, full = results
+    figures = all_figures(full, extraction.offset, extraction.points)
+    assert [stem for stem, *_ in figures] == STEMS
+    for stem, _, build in figures:
+        check_legends_and_log_ticks(build(), stem)
+
+
+def test_the_log_axis_labels_ranges_within_one_decade():
+    """20-200 N/s: the default log axis labels only 100 there."""
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    ax = fig.subplots()
+    ax.plot([20, 200], [1, 2], label="line")
+    ax.legend()
+    F.log_axis(ax, "x", decades=1.0)
+    (labels,) = _log_axes_labels(fig)
+    assert labels == ["20", "50", "100", "200"]
+
+
+def test_the_report_calls_the_offset_the_load_cell_offset_and_says_if_it_follows_pressure():
+    from cylfric.report.html import offset_by_pressure
+    from cylfric.steady_state import Extraction
+
+    # four runs at 10 and 100 bar, each with both directions; offsets 20 N + 0.1 N/bar * p
+    rows = []
+    for run, p_bar in enumerate((10, 10, 100, 100)):
+        for direction in (1, -1):
+            rows.append(
+                {
+                    "run": run,
+                    "direction [-]": direction,
+                    "pressure [Pa]": p_bar * 1e5,
+                    "offset [N]": 20 + 0.1 * p_bar + 0.01 * (-1) ** run,
+                    "flag": "ok",
+                }
+            )
+    text = offset_by_pressure(Extraction(pd.DataFrame(rows)))
+    assert "The load-cell offset changes with pressure: +0.1 N/bar, +9 N over 10-100 bar" in text
+    flat = pd.DataFrame(rows).assign(**{"offset [N]": lambda d: 20 + 0.01 * (-1) ** d["run"]})
+    text = offset_by_pressure(Extraction(flat))
+    assert "does not change with pressure beyond its run-to-run spread" in text
+    assert "<td>21</td>" not in text and "<td>20</td>" in text  # the per-level table

@@ -260,7 +260,7 @@ def run_fit(
         if excluded is not None and len(excluded):
             console.print(f"[yellow]{len(excluded)} run(s) excluded[/yellow] (see excluded.csv):")
             for _, item in excluded.head(10).iterrows():
-                console.print(f"  {Path(item['file']).name}: {item['reason']}", markup=False)
+                console.print(f"  {item['file']}: {item['reason']}", markup=False)
         for note in result.identification.notes:
             console.print(f"[yellow]note:[/yellow] {note}")
         for exported in result.exports.values():

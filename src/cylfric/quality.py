@@ -10,18 +10,24 @@ those that would mislead the fit:
 - ``outlier``: the run's friction is far from what its neighbours in speed at the same
   pressure level say (interpolated in log speed), beyond ``outlier_sigma`` robust sigmas of
   all such residuals (a run typed as 0 bar in manifest.csv while measured at 80 bar);
-- ``motion``: the run gave no usable constant-velocity window (no motion, too short).
+- ``motion``: the run gave no usable constant-velocity window (no motion, too short);
+- ``metadata``: the run's nominal pressure or speed differs between its sources
+  (manifest.csv, campaign.toml's name_pattern, a header line such as ``Pressure: 103 bar``,
+  a file-name token such as ``p103bar``) by more than ``metadata_tolerance`` (a run typed
+  as 0 bar in manifest.csv whose file says 103 bar). A pressure the file measures (a
+  pressure column) is what the fit uses, so its nominal sources are not compared.
 
 Flagged runs are kept in the points table with the flag ``"excluded: <check>"``, so that
 :func:`cylfric.identify.identify` leaves them out, and listed in :attr:`QualityReport.excluded`
-(written as ``excluded.csv``). Files that ``manifest.csv`` does not list are listed too.
-Nothing is dropped silently.
+(written as ``excluded.csv``, file names relative to the campaign folder). Files that
+``manifest.csv`` does not list are listed too. Nothing is dropped silently.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -30,7 +36,7 @@ from .levels import pressure_levels
 
 __all__ = ["assess", "QualityReport", "CHECKS"]
 
-CHECKS = ("speed", "scale", "outlier", "motion", "unlisted")
+CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted")
 """Names of the checks, as they appear in ``excluded.csv``."""
 
 
@@ -78,7 +84,7 @@ def _runs_table(extraction):
     runs = pd.DataFrame(
         {
             "run": [info.get("run") for info in extraction.runs],
-            "file": [info["file"] for info in extraction.runs],
+            "file": [_relative(info["file"], extraction) for info in extraction.runs],
             "nominal_speed": [
                 abs(info.get("velocity [m/s]", math.nan)) for info in extraction.runs
             ],
@@ -88,6 +94,76 @@ def _runs_table(extraction):
         first = ok.groupby("run")[extra].first()
         measured["group"] = list(zip(*(first[c] for c in extra), strict=True))
     return runs.join(measured, on="run")
+
+
+def _speed_cause(ratio):
+    """Likely cause of a measured/nominal speed ratio, in words."""
+    if 1e3 / 3 < ratio < 3e3:
+        return "about 1000 times the nominal: a position in mm whose unit says m?"
+    if 1 / 3e3 < ratio < 3 / 1e3:
+        return "about 1/1000 of the nominal: a position in m whose unit says mm?"
+    return (
+        f"{ratio:.3g} times the nominal: the nominal speed in the metadata is wrong, or the "
+        "rig did not reach it"
+    )
+
+
+def _relative(file, extraction):
+    """``file`` relative to the campaign folder (as given when it is not inside it)."""
+    folder = getattr(extraction, "folder", None)
+    if folder is None:
+        return str(file)
+    try:
+        return Path(file).relative_to(folder).as_posix()
+    except ValueError:
+        return str(file)
+
+
+_SOURCE_NAMES = {
+    "manifest": "{where}",  # 'manifest.csv line 16'
+    "campaign.toml name_pattern": "campaign.toml's name_pattern ({where})",
+    "header": "the file header ({where})",
+    "file name": "the file name ({where})",
+}
+_UNITS = {"pressure": (1e5, "bar"), "velocity": (1e-3, "mm/s")}
+
+
+def _said(quantity, source, value, where):
+    """'103 bar in the file header (Pressure: 103 bar)' (``value`` SI)."""
+    scale, unit = _UNITS[quantity]
+    place = _SOURCE_NAMES.get(source, source + " ({where})").format(where=where)
+    return f"{value / scale:.4g} {unit} in {place}"
+
+
+def _conflicts(info, tolerance, floors):
+    """Text of the nominal values of one run that disagree with the value used, or ''.
+
+    ``info`` is one of ``Extraction.runs``; values differ when they are further apart than
+    ``tolerance`` times the larger of the two and more than ``floors[quantity]`` [SI].
+    """
+    texts = []
+    for quantity in ("pressure", "velocity"):
+        if quantity == "pressure" and info.get("pressure measured"):
+            continue
+        values = info.get("nominal", {}).get(quantity, {})
+        used = info.get("source", {}).get(quantity)
+        if used not in values:
+            continue
+        value, where = values[used]
+        others = [
+            (source, other, text)
+            for source, (other, text) in values.items()
+            if source != used
+            and abs(abs(other) - abs(value))
+            > max(tolerance * max(abs(other), abs(value)), floors[quantity])
+        ]
+        if not others:
+            continue
+        said = [_said(quantity, used, value, where)]
+        said += [_said(quantity, *item) for item in others]
+        label = "speed" if quantity == "velocity" else quantity
+        texts.append(f"{label} {said[0]} (the value used) but " + " and ".join(said[1:]))
+    return "; ".join(texts)
 
 
 _POINT_NAMES = {
@@ -161,6 +237,9 @@ def assess(
     outlier_sigma=8.0,
     min_speeds=4,
     noise_floor=0.005,
+    metadata_tolerance=0.05,
+    pressure_floor=0.2e5,
+    speed_floor=0.05e-3,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -185,6 +264,14 @@ def assess(
     min_speeds : int
         Fewest distinct speeds at a pressure level (within one group of runs, e.g. a seal)
         for the outlier check [-].
+    metadata_tolerance : float
+        Largest relative difference between two sources of a run's nominal pressure or
+        speed [-] (0.05: 5 % of the larger, so a file named p55bar may say 55.3 bar).
+    pressure_floor : float
+        Pressure differences up to this are never a conflict [Pa] (0.2 bar: a manifest's 0
+        against a file's 0.1 bar is the same unpressurised level).
+    speed_floor : float
+        Speed differences up to this are never a conflict [m/s] (0.05 mm/s).
 
     Returns
     -------
@@ -196,6 +283,13 @@ def assess(
     def exclude(row, check, reason):
         excluded.append({"file": row["file"], "run": row["run"], "check": check, "reason": reason})
 
+    floors = {"pressure": pressure_floor, "velocity": speed_floor}
+    for info in extraction.runs:
+        text = _conflicts(info, metadata_tolerance, floors)
+        if text:
+            row = {"file": _relative(info["file"], extraction), "run": info.get("run")}
+            exclude(row, "metadata", f"metadata conflict: {text}")
+    table = table[~table["run"].isin({e["run"] for e in excluded})]
     usable = table.dropna(subset=["friction"]) if "friction" in table else table.iloc[:0]
     no_window = table["friction"].isna() if "friction" in table else np.ones(len(table), bool)
     for row in table[no_window].to_dict("records"):
@@ -207,7 +301,8 @@ def assess(
             row,
             "speed",
             f"measured speed {row['speed'] * 1e3:.4g} mm/s against nominal "
-            f"{row['nominal_speed'] * 1e3:.4g} mm/s (a position unit, m or mm?)",
+            f"{row['nominal_speed'] * 1e3:.4g} mm/s "
+            f"({_speed_cause(row['speed'] / row['nominal_speed'])})",
         )
     flagged = {e["run"] for e in excluded}
     rest = usable[~usable["run"].isin(flagged)].copy()

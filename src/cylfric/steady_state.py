@@ -441,11 +441,17 @@ class Extraction:
         Spread (standard deviation) of the run offsets [N].
     runs : list of dict
         Per run: ``file``, ``run`` (index in the points table), nominal ``pressure [Pa]``
-        and ``velocity [m/s]`` (NaN when unknown), rows, segments, sources, events.
+        and ``velocity [m/s]`` (NaN when unknown), rows, segments, ``source`` (where the
+        nominal values came from), ``nominal`` (every value found, per source: manifest,
+        campaign.toml name_pattern, header, file name), ``pressure measured`` (the file has
+        a pressure column), events.
     unlisted : list of str
-        Files of the folder that ``manifest.csv`` does not list (not read).
+        Files of the folder that ``manifest.csv`` does not list (not read), relative to
+        the campaign folder.
     bytes_read : int
         Size of the files read [bytes].
+    folder : str or None
+        The campaign folder (file names in excluded.csv are relative to it).
     """
 
     points: pd.DataFrame
@@ -455,6 +461,7 @@ class Extraction:
     runs: list = field(default_factory=list)
     bytes_read: int = 0
     unlisted: list = field(default_factory=list)
+    folder: str | None = None
 
     @property
     def usable(self) -> pd.DataFrame:
@@ -629,6 +636,8 @@ def extract_campaign(
             "rows": metadata["rows"],
             "segments": metadata.get("segments", 1),
             "source": metadata["source"],
+            "nominal": metadata.get("nominal", {}),
+            "pressure measured": "pressure [Pa]" in data or "pressure_a [Pa]" in data,
             "events": len(metadata.get("events", [])),
         }
         return rows, summary, None
@@ -674,5 +683,12 @@ def extract_campaign(
         pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)
     )
     return Extraction(
-        points, skipped, offset, offset_std, runs, total, unlisted_files(folder, config)
+        points,
+        skipped,
+        offset,
+        offset_std,
+        runs,
+        total,
+        unlisted_files(folder, config),
+        str(folder),
     )

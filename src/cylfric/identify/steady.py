@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from ..friction.laws import viscous
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..levels import pressure_levels
 from ..model import FrictionModel
@@ -64,6 +65,11 @@ __all__ = [
 ]
 
 LAWS_COMPARED = FITTED_LAWS
+LEVEL_ONLY_FIXABLE = {"F_c", "sigma_2"}
+"""Parameters that may be held fixed when only the friction level is identifiable (at most
+three speeds per pressure): a fixed F_c is the level itself (constant over pressure), a
+fixed sigma_2 adds a known viscous term ``sigma_2 |v|``. F_s, v_r and alpha shape the
+Stribeck dip, which such data cannot show: holding them is refused."""
 
 
 def _distinct_speeds(speed, relative=0.1):
@@ -470,6 +476,16 @@ def identify(
             "gives the Coulomb friction level against pressure, F_c(p), and marks the rest "
             "not identified"
         )
+        shape_fixed = sorted(set(fixed) - LEVEL_ONLY_FIXABLE)
+        if shape_fixed:
+            options = ", ".join(f"--fix {name}" for name in shape_fixed)
+            raise ValueError(
+                f"fixed {', '.join(shape_fixed)} ({options}): at most "
+                f"{max(speeds_per_level)} distinct speed(s) per pressure, so only the "
+                "friction level against pressure, F_c(p), is fitted and the Stribeck shape "
+                f"that {', '.join(shape_fixed)} belong(s) to is not identified; fix only "
+                "F_c or sigma_2 here, or measure at least 4 speeds per pressure"
+            )
         warnings.warn(message, IdentificationWarning, stacklevel=2)
         result = _level_only(used, levels, fixed, notes + [message], validity)
     else:
@@ -516,6 +532,14 @@ def identify(
         if sensitivity and shape:
             result = add_sensitivity(result)
     if per_direction and "direction [-]" in used:
+        if "offset [N]" in used:  # points of steady_state.extract_campaign
+            result.notes.append(
+                "per direction: each run's own load-cell offset, the mean of its extension "
+                "and retraction force levels, is removed, so the two directions have the "
+                "same mean friction in every run and their fits differ only by stroke "
+                "scatter and missing windows; an asymmetry between the directions cannot "
+                "be told from the offset without a load-cell reading at rest"
+            )
         for name, sign in (("extension", 1), ("retraction", -1)):
             subset = used[used["direction [-]"] == sign].drop(columns="level")
             if len(subset) >= MIN_POINTS:
@@ -558,12 +582,21 @@ def add_sensitivity(ident: Identification) -> Identification:
 
 
 def _level_only(points, levels, fixed, notes, validity):
-    """Coulomb friction level against pressure when the Stribeck shape is not identifiable."""
+    """Coulomb friction level against pressure when the Stribeck shape is not identifiable.
+
+    ``fixed`` may hold ``F_c`` (the level, constant over pressure: nothing of it fitted)
+    and ``sigma_2`` (a known viscous term, subtracted before the level is fitted) [SI].
+    """
     labels = points["level"].to_numpy()
+    sigma_2 = fixed.get("sigma_2")
+    known = (  # the viscous part a fixed sigma_2 gives [N], eq. 2.2
+        viscous(points["velocity [m/s]"].abs().to_numpy(), sigma_2) if sigma_2 is not None else 0.0
+    )
+    points_f = points["friction [N]"].to_numpy() - known
     level_rows = []
     for k in range(len(levels)):
         sel = points[labels == k]
-        f = sel["friction [N]"].to_numpy()
+        f = points_f[labels == k]
         row = {
             "pressure [Pa]": float(sel["pressure [Pa]"].mean()),
             **{f"{p} [{_TABLE_UNITS[p]}]": math.nan for p in PARAMETERS},
@@ -575,31 +608,57 @@ def _level_only(points, levels, fixed, notes, validity):
         row["F_c [N]"] = float(f.mean())
         if f.size > 1:
             row["F_c_stderr [N]"] = float(f.std(ddof=1) / math.sqrt(f.size))
+        if "F_c" in fixed:
+            row["F_c [N]"], row["F_c_stderr [N]"] = float(fixed["F_c"]), 0.0
+        if sigma_2 is not None:
+            row["sigma_2 [N*s/m]"], row["sigma_2_stderr [N*s/m]"] = float(sigma_2), 0.0
         level_rows.append(row)
     per_pressure = pd.DataFrame(level_rows)
     p = points["pressure [Pa]"].to_numpy()
-    f = points["friction [N]"].to_numpy()
-    if len(levels) >= 2:
-        design = np.column_stack([np.ones_like(p), p])
-        names = ["F_c.intercept", "F_c.slope"]
-    else:
-        design = np.ones((p.size, 1))
-        names = ["F_c"]
-    coef, *_ = np.linalg.lstsq(design, f, rcond=None)
-    res = f - design @ coef
-    ends = np.array([validity["pressure_min"], validity["pressure_max"]])
-    level = coef[0] + (coef[1] * ends if len(coef) == 2 else 0.0)
-    if np.any(level <= 0):  # as the surface fits: never a negative friction level
-        raise UnphysicalFrictionError(
-            f"the friction level is pushed to 0 N (F_c = {np.min(level):.4g} N within "
-            f"{ends[0] / 1e5:.3g}-{ends[1] / 1e5:.3g} bar): the data contradict a positive "
-            "friction force; check the force-balance signs (load_cell_sign, position_sign), "
-            "the offset and the force and position units"
+    f = points_f
+    if "F_c" in fixed:
+        design = np.zeros((p.size, 0))
+        names = []
+        coef = np.zeros(0)
+        res = f - float(fixed["F_c"])
+        note = (
+            f"F_c held at {float(fixed['F_c']):.4g} N (--fix): RMSE "
+            f"{float(np.sqrt(np.mean(res**2))):.3g} N"
         )
+        try:  # what the data say without the fixed level, for comparison
+            free = _level_only(
+                points, levels, {k: v for k, v in fixed.items() if k != "F_c"}, [], validity
+            )
+            note += f", where the fitted level F_c(p) gives {free.model.statistics['rmse']:.3g} N"
+        except UnphysicalFrictionError:
+            note += "; the data alone push the level to 0 N"
+        notes = notes + [note]
+    else:
+        if len(levels) >= 2:
+            design = np.column_stack([np.ones_like(p), p])
+            names = ["F_c.intercept", "F_c.slope"]
+        else:
+            design = np.ones((p.size, 1))
+            names = ["F_c"]
+        coef, *_ = np.linalg.lstsq(design, f, rcond=None)
+        res = f - design @ coef
+        ends = np.array([validity["pressure_min"], validity["pressure_max"]])
+        level = coef[0] + (coef[1] * ends if len(coef) == 2 else 0.0)
+        if np.any(level <= 0):  # as the surface fits: never a negative friction level
+            raise UnphysicalFrictionError(
+                f"the friction level is pushed to 0 N (F_c = {np.min(level):.4g} N within "
+                f"{ends[0] / 1e5:.3g}-{ends[1] / 1e5:.3g} bar): the data contradict a positive "
+                "friction force; check the force-balance signs (load_cell_sign, "
+                "position_sign), the offset, the force and position units"
+                + (" and the fixed sigma_2" if sigma_2 is not None else "")
+            )
     dof = max(f.size - len(coef), 1)
     cov = np.linalg.pinv(design.T @ design) * float(res @ res) / dof
     se = np.sqrt(np.diag(cov))
-    if len(coef) == 2:
+    if "F_c" in fixed:
+        F_c = {"law": "constant", "intercept": float(fixed["F_c"])}
+        F_c_se = {"intercept": 0.0}
+    elif len(coef) == 2:
         F_c = {"intercept": float(coef[0]), "slope": float(coef[1])}
         F_c_se = {"intercept": float(se[0]), "slope": float(se[1])}
     else:
@@ -607,11 +666,22 @@ def _level_only(points, levels, fixed, notes, validity):
         F_c_se = {"intercept": float(se[0])}
     aic, bic = information_criteria(float(res @ res), f.size, len(coef))
     reason = "one speed per direction: the Stribeck shape cannot be identified"
+    not_identified = ("F_s", "v_r", "alpha") + (() if sigma_2 is not None else ("sigma_2",))
+    stderr = {"F_c": F_c_se}
+    if sigma_2 is not None:
+        stderr["sigma_2"] = {"intercept": 0.0}
     model = FrictionModel(
-        {"F_c": F_c, "F_s": None, "sigma_2": None, "v_r": None, "alpha": None},
-        friction_law="coulomb",
-        stderr={"F_c": F_c_se},
-        covariance=(names, cov),
+        {
+            "F_c": F_c,
+            "F_s": None,
+            "sigma_2": None if sigma_2 is None else {"law": "constant", "intercept": sigma_2},
+            "v_r": None,
+            "alpha": None,
+        },
+        friction_law="coulomb" if sigma_2 is None else "coulomb_viscous",
+        stderr=stderr,
+        fixed=tuple(fixed),
+        covariance=(names, cov) if names else None,
         statistics={
             "n_points": int(f.size),
             "n_variables": len(coef),
@@ -622,13 +692,16 @@ def _level_only(points, levels, fixed, notes, validity):
             "bic": bic,
         },
         validity=validity,
-        provenance={"method": "friction level versus pressure (Stribeck shape not identifiable)"},
-        not_identified={n: reason for n in ("F_s", "sigma_2", "v_r", "alpha")},
+        provenance={
+            "method": "friction level versus pressure (Stribeck shape not identifiable)"
+            + (f"; held fixed: {', '.join(sorted(fixed))}" if fixed else "")
+        },
+        not_identified={n: reason for n in not_identified},
     )
     comparison = pd.DataFrame(
         [
             {
-                "law": "linear" if len(coef) == 2 else "constant",
+                "law": "linear" if len(coef) == 2 else "constant",  # (fixed: constant)
                 "coefficients [-]": len(coef),
                 "rmse [N]": model.statistics["rmse"],
                 "aic": aic,

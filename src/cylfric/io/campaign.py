@@ -99,13 +99,28 @@ class CampaignConfig:
 
 @dataclass(frozen=True)
 class RunInfo:
-    """A run file with its nominal metadata (SI; NaN when unknown)."""
+    """A run file with its nominal metadata (SI; NaN when unknown).
+
+    ``source`` says where the pressure and velocity used came from; ``nominal`` holds every
+    value found for them, ``{quantity: {source: (value [SI], where)}}``, so that the
+    data-quality gate can compare the sources (:func:`cylfric.quality.assess`).
+    """
 
     path: Path
     pressure: float = math.nan  # [Pa]
     velocity: float = math.nan  # [m/s]
     extra: dict = field(default_factory=dict)
     source: dict = field(default_factory=dict)
+    nominal: dict = field(default_factory=dict)
+
+
+class _Manifest(dict):
+    """Rows of manifest.csv, file -> (pressure [Pa], velocity [m/s], extra); ``lines``:
+    file -> line number."""
+
+    def __init__(self):
+        super().__init__()
+        self.lines = {}
 
 
 def _quantity(value, dimension, default_unit, where):
@@ -285,21 +300,28 @@ def _validate_config(doc, path):
 
 def name_tokens(name: str) -> dict:
     """Pressure [Pa] and velocity [m/s] from file-name tokens such as ``p55bar_v10mms``."""
+    return {quantity: value for quantity, (value, _) in _tokens(name).items()}
+
+
+def _tokens(name: str) -> dict:
+    """Quantity -> (value [SI], the token as written) of the file-name tokens."""
     out = {}
     match = _PRESSURE_TOKEN.search(name)
     if match:
-        out["pressure"] = parse_quantity(match.group(1) + match.group(2), "pressure")
+        value = parse_quantity(match.group(1) + match.group(2), "pressure")
+        out["pressure"] = value, match.group(0).lstrip("_-. ")
     match = _VELOCITY_TOKEN.search(name)
     if match:
-        out["velocity"] = float(match.group(1).replace(",", ".")) * 1e-3
+        value = float(match.group(1).replace(",", ".")) * 1e-3
+        out["velocity"] = value, match.group(0).lstrip("_-. ")
     return out
 
 
 def _read_manifest(folder: Path) -> dict:
     path = folder / MANIFEST_NAME
+    rows = _Manifest()
     if not path.is_file():
-        return {}
-    rows = {}
+        return rows
     with path.open(newline="", encoding="utf-8-sig") as handle:
         reader = csv.DictReader(handle, skipinitialspace=True)
         if reader.fieldnames:  # 'file, pressure_bar' or 'File' are the same columns
@@ -345,6 +367,7 @@ def _read_manifest(folder: Path) -> dict:
                     path, f"{row['file']} is listed twice; expected one row per file", line=number
                 )
             rows[row["file"]] = (pressure, velocity, extra)
+            rows.lines[row["file"]] = number
     return rows
 
 
@@ -372,23 +395,43 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
     for path in candidates:
         pressure = velocity = math.nan
         extra, source = {}, {}
+        nominal = {"pressure": {}, "velocity": {}}
         if path.name in manifest:
             pressure, velocity, extra = manifest[path.name]
             source = {"pressure": "manifest", "velocity": "manifest"}
+            where = f"{MANIFEST_NAME} line {manifest.lines[path.name]}"
+            for quantity, value in (("pressure", pressure), ("velocity", velocity)):
+                if math.isnan(value):
+                    del source[quantity]
+                else:
+                    nominal[quantity]["manifest"] = (value, where)
         if pattern is not None:
             match = pattern.search(path.name)
             if match:
                 groups = {k: v for k, v in match.groupdict().items() if v is not None}
-                if math.isnan(pressure) and "pressure_bar" in groups:
-                    pressure = float(groups.pop("pressure_bar").replace(",", ".")) * 1e5
-                    source["pressure"] = "campaign.toml name_pattern"
-                if math.isnan(velocity) and "velocity_mm_s" in groups:
-                    velocity = float(groups.pop("velocity_mm_s").replace(",", ".")) * 1e-3
-                    source["velocity"] = "campaign.toml name_pattern"
-                groups.pop("pressure_bar", None)
-                groups.pop("velocity_mm_s", None)
+                for quantity, key, scale in (
+                    ("pressure", "pressure_bar", 1e5),
+                    ("velocity", "velocity_mm_s", 1e-3),
+                ):
+                    if key not in groups:
+                        continue
+                    text = groups.pop(key)
+                    try:
+                        value = float(text.replace(",", ".")) * scale
+                    except ValueError:
+                        raise BenchFileError(
+                            path,
+                            f"campaign.toml name_pattern gives {key} = {text!r}; expected a number",
+                        ) from None
+                    nominal[quantity]["campaign.toml name_pattern"] = (value, f"{key} = {text}")
+                    if quantity == "pressure" and math.isnan(pressure):
+                        pressure = value
+                        source["pressure"] = "campaign.toml name_pattern"
+                    elif quantity == "velocity" and math.isnan(velocity):
+                        velocity = value
+                        source["velocity"] = "campaign.toml name_pattern"
                 extra = {**groups, **extra}
-        runs.append(RunInfo(path, pressure, velocity, extra, source))
+        runs.append(RunInfo(path, pressure, velocity, extra, source, nominal))
     if not runs:
         raise BenchFileError(folder, f"no run files matching {config.glob!r}")
     return runs
@@ -402,9 +445,10 @@ def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
         return []
     config = config or load_config(folder)
     return sorted(
-        p.name
+        p.relative_to(folder).as_posix()
         for p in folder.glob(config.glob)
         if p.is_file()
+        and p.relative_to(folder).as_posix() not in manifest
         and p.name not in manifest
         and p.name not in _SKIP_NAMES
         and not p.name.startswith(".")
@@ -416,7 +460,8 @@ def read_run(info: RunInfo, config: CampaignConfig):
 
     Returns ``(data, metadata)``: ``data`` a dict of SI arrays named with their units (the
     columns of :func:`cylfric.io.read_bench_text`), ``metadata`` with ``pressure`` [Pa],
-    ``velocity`` [m/s], ``extra`` and ``source`` (where each value came from) added.
+    ``velocity`` [m/s], ``extra``, ``source`` (where each value came from) and ``nominal``
+    (every value found, ``{quantity: {source: (value [SI], where)}}``) added.
     """
     if info.path.suffix.lower() == ".mat":
         frame, metadata = read_mat(info.path)
@@ -434,24 +479,40 @@ def read_run(info: RunInfo, config: CampaignConfig):
         )
     pressure, velocity = info.pressure, info.velocity
     source = dict(info.source)
+    nominal = {q: dict(info.nominal.get(q, {})) for q in ("pressure", "velocity")}
     header = {k.lower(): v for k, v in metadata.get("header", {}).items()}
+    original = {k.lower(): k for k in metadata.get("header", {})}
     extra = dict(info.extra)
+    defaults = {"pressure": "bar", "velocity": "mm/s"}
     for quantity, keys in _HEADER_KEYS.items():
         for key in keys:
             if key in header:
-                if quantity == "pressure" and math.isnan(pressure):
-                    pressure = _quantity(header[key], "pressure", "bar", info.path)
-                    source["pressure"] = "header"
-                elif quantity == "velocity" and math.isnan(velocity):
-                    velocity = _quantity(header[key], "velocity", "mm/s", info.path)
-                    source["velocity"] = "header"
-                elif quantity == "temperature":
+                if quantity == "temperature":
                     extra.setdefault("temperature", header[key])
+                    break
+                used = math.isnan(pressure if quantity == "pressure" else velocity)
+                try:
+                    value = _quantity(header[key], quantity, defaults[quantity], info.path)
+                except BenchFileError:
+                    if used:  # needed: a header value that does not parse stops the run
+                        raise
+                    break  # not needed: another source gives the value
+                nominal[quantity]["header"] = (value, f"{original[key]}: {header[key]}")
+                if used and quantity == "pressure":
+                    pressure, source["pressure"] = value, "header"
+                elif used:
+                    velocity, source["velocity"] = value, "header"
                 break
-    tokens = name_tokens(info.path.name)
+    tokens = _tokens(info.path.name)
+    for quantity in ("pressure", "velocity"):
+        # a campaign.toml name_pattern is the authority on the file name
+        if quantity in tokens and "campaign.toml name_pattern" not in nominal[quantity]:
+            nominal[quantity]["file name"] = tokens[quantity]
     if math.isnan(pressure) and "pressure" in tokens:
-        pressure, source["pressure"] = tokens["pressure"], "file name"
+        pressure, source["pressure"] = tokens["pressure"][0], "file name"
     if math.isnan(velocity) and "velocity" in tokens:
-        velocity, source["velocity"] = tokens["velocity"], "file name"
-    metadata.update(pressure=pressure, velocity=velocity, extra=extra, source=source)
+        velocity, source["velocity"] = tokens["velocity"][0], "file name"
+    metadata.update(
+        pressure=pressure, velocity=velocity, extra=extra, source=source, nominal=nominal
+    )
     return data, metadata

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .figures import STYLE
+from .figures import STYLE, log_axis
 
 __all__ = ["figure_dynamic", "dynamic_tables", "dynamic_html"]
 
@@ -59,7 +59,10 @@ def figure_dynamic(dynamic) -> Figure:
                     rate, rows["measured [N]"], "o", color=color, label=f"{level / 1e5:.3g} bar"
                 )
                 right.plot(rate, rows["simulated [N]"], "x--", color=color)
-            right.set_xscale("log")
+            rates = table["force_rate [N/s]"].to_numpy(dtype=float)
+            rates = rates[rates > 0]
+            decades = float(np.log10(rates.max() / rates.min())) if rates.size else None
+            log_axis(right, "x", decades)
             right.legend(fontsize=7, title="o measured, x simulated", title_fontsize=7)
         else:
             right.text(0.5, 0.5, "no breakaway tests", ha="center", transform=right.transAxes)

@@ -34,6 +34,7 @@ __all__ = [
     "render",
     "render_all",
     "save_rendered",
+    "log_axis",
     "STYLE",
 ]
 
@@ -68,12 +69,26 @@ def _log_speed_axis(ax):
     Engineers read 1, 2, 5, 10, 20, 50 mm/s at a glance; it also draws several times faster
     than the default scientific-notation labels with minor ticks and their gridlines.
     """
+    log_axis(ax)
+
+
+def log_axis(ax, which="x", decades=None):
+    """Make the ``which`` axis of ``ax`` logarithmic with several labelled ticks.
+
+    1-2-5 ticks in plain numbers (``decades`` <= 3, or unknown), 1-3 ticks up to 5 decades,
+    one per decade beyond; no minor ticks. The default log axis labels only the powers of
+    ten, which leaves a range such as 20-200 N/s with one label or none.
+    """
     from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
 
-    ax.set_xscale("log")
-    ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
-    ax.xaxis.set_minor_locator(NullLocator())
+    subs = (1.0, 2.0, 5.0) if decades is None or decades <= 3 else (1.0, 3.0)
+    if decades is not None and decades > 5:
+        subs = (1.0,)
+    (ax.set_xscale if which == "x" else ax.set_yscale)("log")
+    axis = ax.xaxis if which == "x" else ax.yaxis
+    axis.set_major_locator(LogLocator(base=10, subs=subs))
+    axis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    axis.set_minor_locator(NullLocator())
 
 
 # The fixed layout of every report figure: size [in], subplot grid, margins (fractions of
@@ -242,7 +257,7 @@ def figure_parameters(ident):
 
 @_styled
 def figure_directions(points, offset=None):
-    """Fig. 4.3: ascending against descending force-balance levels and the weight offset [N].
+    """Fig. 4.3: ascending against descending force-balance levels and the load-cell offset.
 
     ``points`` is a points table (an extraction's, or an identification's ``points``); it
     needs no identified model.
@@ -504,13 +519,14 @@ def all_figures(ident=None, offset=None, points=None):
 
     ``points`` (a points table; default ``ident.points``) allows the directions figure, an
     identification ``ident`` the model figures, and its sensitivity study the last two.
-    ``offset`` is the weight offset [N].
+    ``offset`` is the load-cell offset [N] (weight, preload or pressure force).
     """
     if points is None and ident is not None:
         points = ident.points
     directions = (
         "directions",
-        "Ascending against descending levels and the weight offset (cf. Fig. 4.3).",
+        "Ascending against descending levels and the load-cell offset (weight, preload or "
+        "pressure force) between them (cf. Fig. 4.3).",
         lambda: figure_directions(points, offset),
     )
     if ident is None:

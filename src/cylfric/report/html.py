@@ -11,7 +11,7 @@ import pandas as pd
 from ..io.writers import atomic_write_text
 from .figures import render_all, save_rendered
 
-__all__ = ["render_report", "write_report", "write_report_folder"]
+__all__ = ["render_report", "write_report", "write_report_folder", "offset_by_pressure"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;
@@ -87,6 +87,7 @@ def render_report(
             val["velocity_max"] * 1e3,
         )
     )
+    parts.append(offset_by_pressure(extraction))
     for name, reason in model.not_identified.items():
         parts.append(
             f"<p class='note'>{html.escape(name)} not identified: {html.escape(reason)}</p>"
@@ -130,7 +131,7 @@ def render_report(
             f"<p class='note'>The data-quality gate left {len(excluded)} run(s) out of the fit "
             "(also in excluded.csv):</p>"
         )
-        parts.append(_table(excluded.assign(file=excluded["file"].map(lambda f: f.split("/")[-1]))))
+        parts.append(_table(excluded))  # files relative to the campaign folder
     else:
         parts.append("<p>The data-quality gate left no run out.</p>")
     parts.append(_quality(extraction))
@@ -175,6 +176,64 @@ def _engineering_per_pressure(table):
         }
     )
     return out
+
+
+def offset_by_pressure(extraction, t_limit=4.0, smallest=0.5) -> str:
+    """HTML: the load-cell offset per pressure level, and whether it changes with pressure.
+
+    Each run with windows in both directions has its own offset (F_up + F_down) / 2 [N]. A
+    straight line through them against pressure says whether the offset has a pressure
+    dependence (a pressure force on the load cell): when its change over the pressure range
+    exceeds ``smallest`` [N] and ``t_limit`` standard errors [-]. '' without an extraction or
+    with fewer than two pressure levels.
+    """
+    import numpy as np
+
+    from ..levels import pressure_levels
+
+    if extraction is None or "offset [N]" not in extraction.points:
+        return ""
+    pts = extraction.points
+    ok = pts[pts["flag"].eq("ok")]
+    both = ok.groupby("run")["direction [-]"].nunique() == 2
+    runs = ok[ok["run"].isin(both[both].index)].groupby("run")
+    table = pd.DataFrame(
+        {"pressure": runs["pressure [Pa]"].median(), "offset": runs["offset [N]"].first()}
+    ).dropna()
+    if len(table) < 3:
+        return ""
+    labels, levels = pressure_levels(table["pressure"].to_numpy())
+    if len(levels) < 2:
+        return ""
+    p, offset = table["pressure"].to_numpy(), table["offset"].to_numpy()
+    design = np.column_stack([np.ones_like(p), p])
+    coef, *_ = np.linalg.lstsq(design, offset, rcond=None)
+    res = offset - design @ coef
+    dof = max(len(p) - 2, 1)
+    cov = np.linalg.pinv(design.T @ design) * float(res @ res) / dof
+    span = float(p.max() - p.min())
+    change, change_se = coef[1] * span, math.sqrt(max(cov[1, 1], 0.0)) * span
+    per_level = pd.DataFrame(
+        {
+            "pressure [bar]": levels / 1e5,
+            "offset [N]": [float(np.median(offset[labels == k])) for k in range(len(levels))],
+            "runs": [int(np.sum(labels == k)) for k in range(len(levels))],
+        }
+    )
+    if abs(change) > max(smallest, t_limit * change_se):
+        verdict = (
+            f"The load-cell offset changes with pressure: {coef[1] * 1e5:+.3g} N/bar, "
+            f"{change:+.3g} N over {p.min() / 1e5:.3g}-{p.max() / 1e5:.3g} bar (a pressure "
+            "force on the load cell, e.g. unequal piston areas). Each run's own offset is "
+            "removed, so the friction is not biased by it."
+        )
+    else:
+        verdict = (
+            "The load-cell offset does not change with pressure beyond its run-to-run "
+            f"spread ({change:+.2g} ± {change_se:.2g} N over {p.min() / 1e5:.3g}-"
+            f"{p.max() / 1e5:.3g} bar)."
+        )
+    return f"<p>{html.escape(verdict)}</p>" + _table(per_level)
 
 
 def _quality(extraction) -> str:
