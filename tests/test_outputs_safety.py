@@ -30,6 +30,8 @@ def test_a_reused_out_keeps_no_stale_files(campaign, tmp_path):
     fit_campaign(campaign, out, report=True)
     assert (out / "report.html").is_file() and (out / MARKER).is_file()
     (out / "skipped.csv").write_text("left from another campaign\n")
+    with (out / MARKER).open("a") as marker:  # as if an earlier fit had written it
+        marker.write("skipped.csv\n")
     fit_campaign(campaign, out, report=False)
     assert not (out / "report.html").exists() and not (out / "skipped.csv").exists()
     assert (out / "datasheet.json").is_file()
@@ -69,6 +71,90 @@ def test_a_folder_that_is_not_cylfric_output_is_not_replaced(campaign, tmp_path)
     result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report"])
     assert result.exit_code == 2 and "is not a cylfric output folder" in result.output
     assert (out / "notes.txt").read_text() == "my own file\n"
+
+
+def test_a_folder_with_only_a_datasheet_and_no_marker_is_refused(campaign, tmp_path):
+    """F8 of the issue-11 check: a user folder holding a datasheet.json beside documents
+    was wiped (exit 0, no message). Without the marker it is not cylfric's: exit 2."""
+    out = tmp_path / "mydocs"
+    (out / "photos").mkdir(parents=True)
+    (out / "datasheet.json").write_text("{}")
+    (out / "thesis.docx").write_text("thesis draft\n")
+    (out / "photos" / "rig.jpg").write_text("img\n")
+    result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report"])
+    assert result.exit_code == 2
+    assert "is not a cylfric output folder (no .cylfric-output marker)" in result.output
+    assert "datasheet.json, photos/, thesis.docx" in " ".join(result.output.split())
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == [
+        "datasheet.json",
+        "photos",
+        "photos/rig.jpg",
+        "thesis.docx",
+    ]
+
+
+def test_files_added_to_an_earlier_output_folder_are_never_deleted(campaign, tmp_path):
+    """The marker lists what cylfric wrote; anything else in --out refuses the re-use
+    (exit 2 naming the files) and the folder is left exactly as it was."""
+    out = tmp_path / "out"
+    fit_campaign(campaign, out, report=False)
+    listed = (out / MARKER).read_text().splitlines()
+    assert "datasheet.json" in listed and "points.csv" in listed and MARKER not in listed
+    (out / "my notes.txt").write_text("keep me\n")
+    (out / "photos").mkdir()
+    (out / "photos" / "rig.jpg").write_text("img\n")
+    before = sorted(p.relative_to(out).as_posix() for p in out.rglob("*"))
+    result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report"])
+    assert result.exit_code == 2
+    message = " ".join(result.output.split())
+    assert "holds files cylfric did not write (my notes.txt, photos/;" in message
+    assert "choose another --out, or move them out of it" in message
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == before
+    (out / "my notes.txt").unlink()
+    (out / "photos" / "rig.jpg").unlink()
+    (out / "photos").rmdir()
+    assert (
+        runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report"]).exit_code == 0
+    )
+
+
+def test_more_than_four_foreign_files_are_counted(tmp_path):
+    from cylfric.pipeline import _check_reusable
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / MARKER).write_text("# header\ndatasheet.json\nexport/\nexport/a.txt\n")
+    (out / "datasheet.json").write_text("{}")
+    (out / "export").mkdir()
+    (out / "export" / "a.txt").write_text("")
+    _check_reusable(out)  # only listed files: re-usable
+    for name in "abcdef":
+        (out / "export" / f"{name}.mine").write_text("")
+    with pytest.raises(
+        ValueError,
+        match=r"\(export/a\.mine, export/b\.mine, export/c\.mine, "
+        r"export/d\.mine and 2 more; not listed",
+    ):
+        _check_reusable(out)
+
+
+def test_a_file_added_during_the_fit_stops_the_swap(campaign, tmp_path, monkeypatch):
+    import cylfric.pipeline as pipeline
+
+    out = tmp_path / "out"
+    fit_campaign(campaign, out, report=False)
+    real_fit = pipeline._fit
+
+    def fit_and_meanwhile_a_user_saves_a_file(*args, **kwargs):
+        result = real_fit(*args, **kwargs)
+        (out / "late.txt").write_text("saved during the fit\n")
+        return result
+
+    monkeypatch.setattr(pipeline, "_fit", fit_and_meanwhile_a_user_saves_a_file)
+    with pytest.raises(ValueError, match=r"holds files cylfric did not write \(late\.txt;"):
+        fit_campaign(campaign, out, report=False)
+    assert (out / "late.txt").read_text() == "saved during the fit\n"
+    assert not [p for p in tmp_path.iterdir() if ".staging-" in p.name]
 
 
 def test_a_second_concurrent_fit_is_refused(campaign, tmp_path):

@@ -75,9 +75,12 @@ def fit_campaign(
 
     Every output is written into a staging folder beside ``out`` and swapped in only when
     all succeeded: an earlier ``out`` is replaced whole (no stale files of another campaign)
-    or, on failure, left as it was. A lock file beside ``out`` refuses a second concurrent
-    fit into it; an ``out`` inside the campaign folder is refused (it would be read back as
-    runs).
+    or, on failure, left as it was. An existing ``out`` is re-used only when it is a cylfric
+    output folder whose marker (:data:`MARKER`) lists everything in it: a folder without
+    the marker, or holding any file or folder cylfric did not write, is refused
+    (ValueError naming those files), so nothing of the user's is ever deleted. A lock file
+    beside ``out`` refuses a second concurrent fit into it; an ``out`` inside the campaign
+    folder is refused (it would be read back as runs).
 
     Parameters
     ----------
@@ -149,6 +152,8 @@ def fit_campaign(
                 export or (),
                 workers,
             )
+            _write_marker(staging)
+            _check_reusable(out)  # again: a file may have been added during the fit
             _swap_in(staging, out)
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
@@ -165,7 +170,84 @@ def fit_campaign(
 
 
 MARKER = ".cylfric-output"
-"""File that marks a folder written by :func:`fit_campaign` (replaced whole by the next)."""
+"""File that marks a folder written by :func:`fit_campaign` and lists every file and folder
+cylfric wrote into it (one path a line, relative, folders ending in ``/``). The next fit
+replaces such a folder whole only when it holds nothing else."""
+
+_MARKER_HEADER = (
+    "# Written by cylfric fit. The next cylfric fit into this folder replaces it whole, but\n"
+    "# only while it holds nothing but the files listed here (anything else: it refuses).\n"
+)
+
+
+def _write_marker(folder: Path):
+    """List everything in ``folder`` (the finished staging folder) in its marker file."""
+    entries = sorted(
+        path.relative_to(folder).as_posix() + ("/" if path.is_dir() else "")
+        for path in folder.rglob("*")
+    )
+    listed = [e for e in entries if e != MARKER]
+    atomic_write_text(folder / MARKER, _MARKER_HEADER + "".join(f"{e}\n" for e in listed))
+
+
+def _listed(out: Path) -> set[str]:
+    """Paths the marker of ``out`` lists (empty for a marker of an older cylfric)."""
+    try:
+        text = (out / MARKER).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return set()
+    return {line.strip() for line in text.splitlines() if line.strip() and line[0] != "#"}
+
+
+def _foreign(out: Path) -> list[str]:
+    """Files and folders in ``out`` that its marker does not list (folders end in ``/``;
+    a folder that is not listed is named once, without its contents)."""
+    listed = _listed(out) | {MARKER}
+    foreign = []
+
+    def walk(folder: Path):
+        for path in sorted(folder.iterdir()):
+            name = path.relative_to(out).as_posix()
+            if path.is_dir() and not path.is_symlink():
+                if name + "/" in listed:
+                    walk(path)
+                else:
+                    foreign.append(name + "/")
+            elif name not in listed:
+                foreign.append(name)
+
+    walk(out)
+    return foreign
+
+
+def _named(paths: list[str], limit: int = 4) -> str:
+    shown = ", ".join(paths[:limit])
+    return shown + (f" and {len(paths) - limit} more" if len(paths) > limit else "")
+
+
+def _check_reusable(out: Path):
+    """Refuse an existing ``out`` that holds anything cylfric did not write there."""
+    if not out.exists() and not out.is_symlink():
+        return
+    if not out.is_dir():
+        raise ValueError(f"--out {out} is a file; expected a folder")
+    if not any(out.iterdir()):
+        return
+    if not (out / MARKER).is_file():
+        held = sorted(p.name + ("/" if p.is_dir() else "") for p in out.iterdir())
+        raise ValueError(
+            f"--out {out} exists and is not a cylfric output folder (no {MARKER} marker); "
+            f"it holds {_named(held)}. "
+            "The output folder is replaced whole: choose a new or empty --out, or move "
+            "those files"
+        )
+    foreign = _foreign(out)
+    if foreign:
+        raise ValueError(
+            f"--out {out} holds files cylfric did not write ({_named(foreign)}; not listed in "
+            f"its {MARKER}). The output folder is replaced whole and they would be lost: "
+            "choose another --out, or move them out of it"
+        )
 
 
 def _check_out(folder: Path, out: Path):
@@ -181,16 +263,7 @@ def _check_out(folder: Path, out: Path):
             f"--out {out} contains the campaign folder {folder}; the output folder is "
             "replaced whole, so choose one that does not hold the raw files"
         )
-    if out.exists():
-        if not out.is_dir():
-            raise ValueError(f"--out {out} is a file; expected a folder")
-        ours = (out / MARKER).exists() or (out / "datasheet.json").exists()
-        if not ours and any(out.iterdir()):
-            raise ValueError(
-                f"--out {out} exists and is not a cylfric output folder (no {MARKER} or "
-                "datasheet.json); the output folder is replaced whole, so choose a new or "
-                "empty folder"
-            )
+    _check_reusable(out)
 
 
 @contextlib.contextmanager
@@ -363,10 +436,6 @@ def _fit(
     if ident.directions:
         frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
-    atomic_write_text(
-        out / MARKER,
-        "Written by cylfric fit; the next cylfric fit into this folder replaces it whole.\n",
-    )
     timings["datasheet"] = time.perf_counter() - t0
     exports = {}
     if export:
