@@ -22,6 +22,57 @@ RANGES: dict[str, tuple[float, bool, str]] = {
 }
 
 
+ROUNDOFF = 1e-9
+"""Relative tolerance [-] of the physical constraints F_c >= 0, F_s >= F_c, sigma_2 >= 0:
+a value below its bound by at most ``ROUNDOFF * max(|value|, |F_c|, |F_s|, 1)`` (in the
+parameter's SI unit) is rounding of a value fitted onto the bound, and counts as the bound.
+The datasheet validation, the identification's check and the model all use
+:func:`roundoff_tolerance`, so what one accepts the others evaluate."""
+
+
+def roundoff_tolerance(F_c, F_s=None, sigma_2=None):
+    """Per-point tolerances (force [N], sigma_2 [N*s/m]) of the physical constraints.
+
+    ``ROUNDOFF`` times the larger of 1 and the magnitudes of F_c and F_s [N] (for F_c >= 0
+    and F_s >= F_c), and of 1 and |sigma_2| [N*s/m] (for sigma_2 >= 0); broadcast arrays.
+    """
+    F_c = np.abs(np.asarray(F_c, dtype=float))
+    F_s = F_c if F_s is None else np.abs(np.asarray(F_s, dtype=float))
+    force = ROUNDOFF * np.maximum(np.maximum(F_c, F_s), 1.0)
+    s2 = 0.0 if sigma_2 is None else np.abs(np.asarray(sigma_2, dtype=float))
+    return force, ROUNDOFF * np.maximum(s2, 1.0)
+
+
+def clamp_roundoff(params: dict) -> dict:
+    """``params`` with F_c, F_s and sigma_2 that miss their physical bound by rounding only
+    (:func:`roundoff_tolerance`) set exactly onto it (F_c, sigma_2 to 0; F_s to F_c).
+
+    Larger violations are left as they are (the parameter checks then refuse them).
+    """
+    out = dict(params)
+    F_c, F_s, sigma_2 = out.get("F_c"), out.get("F_s"), out.get("sigma_2")
+    if F_c is None:
+        return out
+    tol, tol_2 = roundoff_tolerance(F_c, F_s, sigma_2)
+
+    def onto(value, bound, tolerance):
+        value = np.asarray(value, dtype=float)
+        bound = np.broadcast_to(np.asarray(bound, dtype=float), value.shape)
+        near = (value < bound) & (value >= bound - tolerance)
+        if not near.any():
+            return None
+        fixed = np.where(near, bound, value)
+        return float(fixed) if fixed.ndim == 0 else fixed
+
+    if (new := onto(F_c, 0.0, tol)) is not None:
+        out["F_c"] = F_c = new
+    if F_s is not None and (new := onto(F_s, F_c, tol)) is not None:
+        out["F_s"] = new
+    if sigma_2 is not None and (new := onto(sigma_2, 0.0, tol_2)) is not None:
+        out["sigma_2"] = new
+    return out
+
+
 def check_parameters(**values) -> None:
     """Raise ValueError if any named parameter is NaN or outside its valid range.
 
@@ -37,7 +88,7 @@ def check_parameters(**values) -> None:
             low, strict, rule = RANGES[name]
             bad = arr <= low if strict else arr < low
             if bad.any():
-                first = arr[bad].flat[0] if arr.ndim else float(arr)
+                first = float(arr[bad].flat[0] if arr.ndim else arr)
                 raise ValueError(f"parameter {name} = {first!r} is out of range; expected {rule}")
 
 

@@ -19,7 +19,8 @@ import math
 
 import numpy as np
 
-from ..friction import stribeck_unchecked
+from ..friction import params_at_pressure, stribeck_unchecked
+from ..friction._checks import roundoff_tolerance
 from ..model import PARAMETER_BOUNDS, FrictionModel
 from .pressure_fit import (
     SurfaceFit,
@@ -145,6 +146,8 @@ def fit_linear_surface(
     names, transform, coefficients = _to_model(
         result.x, blocks, shape, fixed, friction_law, p_lo, span
     )
+    pa = np.asarray(pressure, dtype=float)
+    _onto_bounds(coefficients, (float(pa.min()), float(pa.max())))
     covariance = transform @ cov_x @ transform.T
     stderr = _stderr(coefficients, names, covariance)
     aic, bic = information_criteria(rss, force.size, n_free)
@@ -280,6 +283,42 @@ def _to_model(x, blocks, shape, fixed, friction_law, p_lo, span):
     for name in _NOT_IN_LAW.get(friction_law, ()):
         coefficients[name] = None
     return names, np.array(rows), coefficients
+
+
+def _onto_bounds(coefficients, ends):
+    """Put values the bounded fit left on a bound exactly onto it in the written law.
+
+    The fit holds F_c, F_s - F_c and sigma_2 >= 0 at both ends of the measured pressures
+    ``ends`` [Pa]; converting the two end values to intercept and slope can leave one of
+    them a rounding error below its bound there (sigma_2 = -2.2e-16 N*s/m at 10 bar). Such
+    an intercept is raised by that error, in place, so the datasheet holds F_c >= 0,
+    F_s >= F_c and sigma_2 >= 0 exactly over the measured range. Anything larger than
+    rounding (:func:`~cylfric.friction._checks.roundoff_tolerance`) is left for the
+    physical check to refuse.
+    """
+    ends = np.asarray(ends, dtype=float)
+
+    def at(name):
+        spec = coefficients.get(name)
+        if spec is None:
+            return None
+        return np.asarray(params_at_pressure(ends, {name: spec}, law="linear")[name], float)
+
+    for name, bound in (("F_c", None), ("F_s", "F_c"), ("sigma_2", None)):
+        spec = coefficients.get(name)
+        if not isinstance(spec, dict):
+            continue
+        for _ in range(4):  # one raise is almost always enough; rounding may need another
+            floor = 0.0 if bound is None else at(bound)
+            short = float(np.max(floor - at(name)))
+            force_tol, sigma_tol = roundoff_tolerance(at("F_c"), at("F_s"), at("sigma_2"))
+            tol = float(np.min(sigma_tol if name == "sigma_2" else force_tol))
+            if short <= 0 or short > tol:
+                break
+            raised = spec["intercept"] + short
+            if raised == spec["intercept"]:
+                raised = float(np.nextafter(raised, math.inf))
+            spec["intercept"] = raised
 
 
 def _stderr(coefficients, names, covariance):

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from ..friction._checks import roundoff_tolerance
 from ..friction.laws import viscous
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..levels import pressure_levels
@@ -251,9 +252,8 @@ def unphysical(model, validity, *, points=41):
     Checks F_c >= 0, F_s >= F_c and sigma_2 >= 0 at ``points`` pressures over the range.
     """
     p = np.linspace(validity["pressure_min"], validity["pressure_max"], points)
-    k = model.params_at(p)
-    tol = 1e-9 * max(float(np.max(np.abs(k["F_s"]))), 1.0)  # rounding of a value at a bound
-    tol_2 = 1e-9 * max(float(np.max(np.abs(k["sigma_2"]))), 1.0)
+    k = model.params_at(p)  # rounding onto a bound is clamped there (ROUNDOFF)
+    tol, tol_2 = roundoff_tolerance(k["F_c"], k["F_s"], k["sigma_2"])
     checks = (
         (k["F_c"] < -tol, "F_c < 0"),
         (k["F_s"] < k["F_c"] - tol, "F_s < F_c"),

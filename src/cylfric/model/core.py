@@ -31,8 +31,15 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..friction import get_law, lugre_force, operating_pressure, params_at_pressure, stribeck
-from ..friction._checks import check_parameters
+from ..friction import (
+    get_law,
+    lugre_force,
+    operating_pressure,
+    params_at_pressure,
+    stribeck,
+    stribeck_unchecked,
+)
+from ..friction._checks import check_parameters, clamp_roundoff
 from ..friction.literature import THESIS_2016
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS, PRESSURE_LAWS, PRESSURE_REFERENCES
 
@@ -543,7 +550,7 @@ class FrictionModel:
             params["sigma_2"] = 0.0 * params["F_c"]
         params.setdefault("v_r", 1.0)
         params.setdefault("alpha", 1.0)
-        return params
+        return clamp_roundoff(params)  # a value fitted onto a bound, off by rounding only
 
     def friction(self, velocity, pressure, *, strict=False):
         """Steady-state friction force [N] at ``velocity`` [m/s] and operating ``pressure`` [Pa].
@@ -554,9 +561,10 @@ class FrictionModel:
         self.check(velocity, pressure, strict=strict)
         return self._friction(velocity, pressure, self.coefficients())
 
-    def _friction(self, velocity, pressure, coefficients):
+    def _friction(self, velocity, pressure, coefficients, *, checked=True):
         params = self._params(pressure, coefficients)
-        return stribeck(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
+        law = stribeck if checked else stribeck_unchecked
+        return law(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
 
     def dynamic_force(self, velocity, z, pressure):
         """LuGre friction force [N] (eq. 2.5) at velocity [m/s], bristle deflection z [m]."""
@@ -619,7 +627,10 @@ class FrictionModel:
             values = []
             for sign in (1.0, -1.0):
                 shifted = dict(base, **{name: base[name] + sign * h})
-                values.append(self._friction(velocity, pressure, self._coefficients_from(shifted)))
+                # a coefficient on its physical bound (sigma_2 = 0 at one end) is shifted
+                # across it here: a difference quotient of the formula, not a model to check
+                shifted = self._coefficients_from(shifted)
+                values.append(self._friction(velocity, pressure, shifted, checked=False))
             columns.append((values[0] - values[1]) / (2 * h))
         return np.stack(columns, axis=-1)
 
@@ -651,7 +662,10 @@ class FrictionModel:
             values = []
             for sign in (1.0, -1.0):
                 shifted = dict(base, **{name: base[name] + sign * h})
-                values.append(self._friction(velocity, pressure, self._coefficients_from(shifted)))
+                # a coefficient on its physical bound (sigma_2 = 0 at one end) is shifted
+                # across it here: a difference quotient of the formula, not a model to check
+                shifted = self._coefficients_from(shifted)
+                values.append(self._friction(velocity, pressure, shifted, checked=False))
             columns.append((values[0] - values[1]) / (2 * h))
         return np.stack(columns, axis=-1)
 

@@ -251,6 +251,7 @@ def _physical(sheet):
     validity pressure range (0-200 bar when the sheet has none).
     """
     from ..friction import params_at_pressure
+    from ..friction._checks import roundoff_tolerance
 
     val = sheet.get("validity") or {}
     p = np.linspace(val.get("pressure_min", 0.0), val.get("pressure_max", 200e5), 41)
@@ -264,12 +265,12 @@ def _physical(sheet):
     F_s = params.get("F_s", F_c)
     sigma_2 = params.get("sigma_2", 0.0 * p)
     span = f"{p[0] / 1e5:.4g}-{p[-1] / 1e5:.4g} bar"
-    tol = 1e-9 * max(float(np.max(np.abs(F_s))), 1.0)  # [N], rounding of a bound value
-    tol_2 = 1e-9 * max(float(np.max(np.abs(sigma_2))), 1.0)  # [N*s/m]
+    # rounding of a value fitted onto a bound: the model's own tolerance (it evaluates these)
+    tol, tol_2 = roundoff_tolerance(F_c, F_s, sigma_2)
     checks = (
-        (np.min(F_c) < -tol, "parameters/F_c", f"F_c < 0 N within {span}"),
+        (np.any(F_c < -tol), "parameters/F_c", f"F_c < 0 N within {span}"),
         (np.any(F_s < F_c - tol), "parameters/F_s", f"F_s < F_c within {span}"),
-        (np.min(sigma_2) < -tol_2, "parameters/sigma_2", f"sigma_2 < 0 N*s/m within {span}"),
+        (np.any(sigma_2 < -tol_2), "parameters/sigma_2", f"sigma_2 < 0 N*s/m within {span}"),
         (
             np.max(np.maximum(F_s, F_c) + sigma_2 * v_max) > MAX_FORCE,
             "parameters",
