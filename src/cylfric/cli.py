@@ -128,7 +128,31 @@ def _fixed(options: list[str]) -> dict:
             out[name] = parse_quantity(value, dim, default_unit=unit)
         except UnitError as exc:
             raise BadInput(f"--fix {item!r}: {exc}") from None
+        _check_fixed(item, name, out[name], unit)
+    if out.get("F_s", math.inf) < out.get("F_c", 0.0):
+        raise BadInput(
+            f"--fix F_s={out['F_s']:g}N is below --fix F_c={out['F_c']:g}N; expected "
+            "F_s >= F_c (the static friction is at least the Coulomb friction)"
+        )
     return out
+
+
+def _check_fixed(item: str, name: str, value: float, unit: str):
+    """Refuse a held value the model cannot have (v_r = 0, alpha < 0.2, F_c < 0, NaN)."""
+    from .model.core import PARAMETER_BOUNDS
+    from .units import from_si
+
+    low, high = PARAMETER_BOUNDS[name]
+    if math.isfinite(value) and low <= value <= high and (value > 0 or name != "v_r"):
+        return
+    shown = unit if unit != "-" else ""
+    expected = f"{from_si(low, unit):g}" + (
+        f" to {from_si(high, unit):g} {shown}" if math.isfinite(high) else f" {shown} or more"
+    )
+    raise BadInput(
+        f"--fix {item!r}: {name} = {from_si(value, unit):g} {shown} is out of range; expected "
+        f"{expected.strip()}".replace("  ", " ")
+    )
 
 
 class _ThreadlessProgress(Progress):
@@ -546,7 +570,12 @@ def simulate(
             lambda t: 0.01 * (t > 0.1), kp=k, kd=2 * math.sqrt(k * m), ki=k
         ),
     }
-    result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
+    # warnings reach the user once each, as notes (not as Python's own lines with a path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
+    for note in dict.fromkeys(str(w.message) for w in caught):
+        console.print(f"[yellow]note:[/yellow] {note}")
     frame = result.to_pandas()
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))

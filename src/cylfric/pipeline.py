@@ -390,11 +390,7 @@ def _fit(
             after_extraction()
     quality = assess(extraction)
     if strict and not quality.excluded.empty:
-        first = quality.excluded.iloc[0]
-        raise ValueError(
-            f"{first['file']}: {first['reason']} ({quality.summary()}; --strict turns every "
-            "exclusion into an error)"
-        )
+        raise ValueError(_strict_message(quality.excluded))
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     from .datasheet import build_datasheet, write_datasheet
@@ -465,6 +461,25 @@ def _fit(
         timings["report"] = time.perf_counter() - t0
     return FitOutputs(
         out, sheet, ident, extraction, files, timings, quality.excluded, exports, dynamic
+    )
+
+
+STRICT_SHOWN = 8
+"""How many flagged runs the ``--strict`` error names (then a count of the rest)."""
+
+
+def _strict_message(excluded: pd.DataFrame) -> str:
+    """The ``--strict`` error: every flagged run with its reason (the first
+    :data:`STRICT_SHOWN`, then a count); nothing is written, so no file is named."""
+    counts = ", ".join(f"{n} by {check}" for check, n in excluded["check"].value_counts().items())
+    shown = excluded.head(STRICT_SHOWN)
+    runs = "; ".join(f"{row['file']}: {row['reason']}" for _, row in shown.iterrows())
+    if len(excluded) > STRICT_SHOWN:
+        runs += f"; and {len(excluded) - STRICT_SHOWN} more run(s)"
+    return (
+        f"--strict: the data-quality gate flags {len(excluded)} run(s) ({counts}): {runs}. "
+        "Nothing was written (--strict stops at the first flag); without --strict the fit "
+        "leaves these runs out and lists them with their reasons"
     )
 
 

@@ -115,6 +115,25 @@ CASED_UNITS: dict[str, tuple[str, float]] = {
 _AMBIGUOUS = {"mn": ("mN", "MN"), "mpa": ("mPa", "MPa"), "mv": ("mV", "MV")}
 
 
+# Where the case-insensitive symbols of UNITS carry the milli prefix m: an upper-case M
+# there is mega (Mm/s, Ms, Mbar, N*s/Mm), which cylfric does not read, so it is refused
+# rather than read as milli. (The m of metre and of min is no prefix: M/S, MIN are read.)
+_MILLI_AT: dict[str, tuple[int, ...]] = {
+    "ms": (0,),
+    "msec": (0,),
+    "mm": (0,),
+    "mbar": (0,),
+    "mm/s": (0,),
+    "mms": (0,),
+    "mm_s": (0,),
+    "mm/min": (0,),
+    "n/mm": (2,),
+    "ns/mm": (3,),
+    "n*s/mm": (4,),
+    "n.s/mm": (4,),
+}
+
+
 class UnitError(ValueError):
     """A unit symbol is unknown or of the wrong dimension."""
 
@@ -129,6 +148,15 @@ def _lookup(unit: str) -> tuple[str, float]:
     if exact in CASED_UNITS:
         return CASED_UNITS[exact]
     key = _key(unit)
+    mega = [i for i in _MILLI_AT.get(key, ()) if exact[i : i + 1] == "M"]
+    if mega and len(exact) == len(key):
+        milli = "".join("m" if i in mega else c for i, c in enumerate(exact))
+        milli = key if exact.isupper() else milli  # MM/S -> mm/s, not mM/S
+        raise UnitError(
+            f"unit {unit!r}: M is the mega prefix (m is milli), and cylfric reads no mega "
+            f"{UNITS[key][0]} unit; write {milli} for the milli unit. Unit prefixes are "
+            "case-sensitive"
+        )
     if key in _AMBIGUOUS:
         milli, mega = _AMBIGUOUS[key]
         raise UnitError(

@@ -602,11 +602,18 @@ class FrictionModel:
                     speed <= val["velocity_max"] + tol_v
                 )
             if not inside.all():
+                if speed is not None:
+                    speeds = (
+                        f", {val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
+                    )
+                else:  # a pressure check only (a simulation): say which pressures
+                    low, high = np.min(p[~inside]) / 1e5, np.max(p[~inside]) / 1e5
+                    given = f"{low:.4g}" if low == high else f"{low:.4g} to {high:.4g}"
+                    speeds = f" (pressures only; given {given} bar)"
                 problems.append(
                     f"{int((~inside).sum())} of {inside.size} point(s) outside the validity "
                     f"ranges {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} bar"
-                    f", {val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s: "
-                    "the model is extrapolated there"
+                    f"{speeds}: the model is extrapolated there"
                 )
         if problems:
             message = "; ".join(problems)
@@ -733,27 +740,31 @@ class FrictionModel:
         var = np.einsum("...i,ij,...j->...", jac, self.covariance[1], jac)
         return np.sqrt(np.clip(var, 0.0, None))
 
-    def band(self, velocity, pressure, level=0.95):
+    def band(self, velocity, pressure, level=0.95, *, strict=False):
         """Confidence band (lower, upper) [N] of the mean friction at ``level``.
 
         The model's friction plus and minus the Student-t quantile (each point's
         :meth:`effective_dof`) times :meth:`standard_error`. It covers the *true
         steady-state curve*, not individual measurements (see :meth:`prediction_band`).
+        Warns with :class:`ValidityWarning` outside the validity ranges, as
+        :meth:`friction` does (raises with ``strict=True``).
         """
+        self.check(velocity, pressure, strict=strict)
         f = self._friction(velocity, pressure, self.coefficients())
         dof = self.effective_dof(velocity, pressure) if self.influence is not None else None
         half = self._quantile(level, dof) * self.standard_error(velocity, pressure)
         return f - half, f + half
 
-    def prediction_band(self, velocity, pressure, level=0.95):
+    def prediction_band(self, velocity, pressure, level=0.95, *, strict=False):
         """Band (lower, upper) [N] for a new measured point: the mean's band plus the scatter.
 
         Adds the fit's residual standard deviation (``statistics["residual_std"]``) to the
-        variance of the mean.
+        variance of the mean. Warns outside the validity ranges (raises with ``strict=True``).
         """
         scatter = self.statistics.get("residual_std")
         if scatter is None:
             raise ValueError("this model carries no residual scatter (statistics.residual_std)")
+        self.check(velocity, pressure, strict=strict)
         f = self._friction(velocity, pressure, self.coefficients())
         se = self.standard_error(velocity, pressure)
         dof = None

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -23,7 +24,7 @@ import numba
 import numpy as np
 
 from ..friction import get_law, law_params
-from ..model import FrictionModel
+from ..model import FrictionModel, ValidityWarning
 from . import kernels
 from .result import SimulationResult
 
@@ -280,12 +281,52 @@ def simulate(
         Initial position [m], velocity [m/s], bristle deflection [m].
     strict : bool
         Raise instead of warning (:class:`cylfric.model.ValidityWarning`) when the pressures
-        leave the model's validity range or look like bar given as Pa.
+        leave the model's validity range or look like bar given as Pa (before the run), or
+        when the simulated speed leaves its validity speeds (after the run; the result is
+        then not returned).
 
     Returns
     -------
     SimulationResult
     """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = _simulate(
+            cylinder, friction, drive, duration, dt, pressure_a, pressure_b, method, step,
+            rtol, x0, v0, z0, strict,
+        )  # fmt: skip
+    for w in caught:  # shown at the caller's line, not at this module's
+        warnings.warn(w.message, w.category, stacklevel=2)
+    _check_speed(friction, result.states["velocity"], strict)
+    return result
+
+
+def _check_speed(friction: FrictionModel, velocity, strict: bool):
+    """Warn (raise with ``strict``) when a simulated speed [m/s] exceeds the model's
+    validity speeds: the friction law was extrapolated there. Speeds below the range are
+    not flagged (every start from rest passes through them)."""
+    if friction.validity is None or not np.size(velocity):
+        return
+    top = float(friction.validity["velocity_max"])
+    fastest = float(np.max(np.abs(velocity)))
+    if fastest > top * (1 + 1e-6):
+        share = float(np.mean(np.abs(velocity) > top * (1 + 1e-6)))
+        message = (
+            f"the simulated speed reaches {fastest * 1e3:.4g} mm/s ({share:.0%} of the samples "
+            f"above {top * 1e3:.4g} mm/s), beyond the model's validity speeds "
+            f"{friction.validity['velocity_min'] * 1e3:.4g}-{top * 1e3:.4g} mm/s: the friction "
+            "is extrapolated there"
+        )
+        if strict:
+            raise ValueError(message)
+        warnings.warn(message, ValidityWarning, stacklevel=3)
+
+
+def _simulate(
+    cylinder, friction, drive, duration, dt, pressure_a, pressure_b, method, step, rtol,
+    x0, v0, z0, strict,
+):  # fmt: skip
+    """The body of :func:`simulate` (arguments as there)."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; valid: {list(METHODS)}")
     if rtol is None:
