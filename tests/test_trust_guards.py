@@ -1,0 +1,209 @@
+"""Guards of issue 11 found missing by the hostile check (F11, F6, F7): --strict names every
+flagged run and promises no file it does not write; simulate and the band warn outside the
+validity ranges (raise with strict=True) and the CLI prints each warning once as a note;
+unit prefixes are case-sensitive (M is mega, never read as milli); impossible --fix values
+are refused naming the option."""
+
+from __future__ import annotations
+
+import json
+import re
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+from cylfric.cli import app
+from cylfric.friction.literature import THESIS_2016
+from cylfric.model import FrictionModel, ValidityWarning
+from cylfric.pipeline import STRICT_SHOWN, _strict_message
+from cylfric.simulate import Cylinder, SpringPull, simulate
+from cylfric.simulate.bench import BenchSettings, generate_campaign
+from cylfric.units import _MILLI_AT, UnitError, parse_quantity
+
+runner = CliRunner()
+VALIDITY = {  # the thesis campaign's ranges
+    "pressure_min": 1e5,
+    "pressure_max": 159e5,
+    "velocity_min": 1e-3,
+    "velocity_max": 0.1,
+}
+
+
+def _model():
+    return FrictionModel(dict(THESIS_2016.coefficients), validity=VALIDITY)
+
+
+def _flat(text: str) -> str:
+    return " ".join(text.split())
+
+
+# ---------------------------------------------------------------- F11: --strict
+def test_strict_names_every_flagged_run_and_writes_nothing(tmp_path):
+    folder = tmp_path / "campaign"
+    generate_campaign(
+        folder, BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(2, 5, 10, 20, 50))
+    )
+    names = sorted(p.name for p in folder.glob("run_*.txt"))
+    flagged = [names[1], names[7]]
+    for name in flagged:  # position in mm labelled m: 1000 times the nominal speed
+        path = folder / name
+        path.write_text(path.read_text().replace("s\tmm\tkN", "s\tm\tkN"))
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["fit", str(folder), "--out", str(out), "--no-report", "--strict"])
+    assert result.exit_code == 2, result.output
+    message = _flat(result.output)
+    assert "--strict: the data-quality gate flags 2 run(s) (2 by speed)" in message
+    for name in flagged:
+        assert f"{name}: measured speed" in message
+    assert "excluded.csv" not in message  # nothing is written, so no file is promised
+    assert "Nothing was written" in message
+    assert not out.exists()
+
+
+def test_strict_names_the_first_runs_and_counts_the_rest():
+    excluded = pd.DataFrame(
+        {
+            "file": [f"run_{i:03d}.txt" for i in range(STRICT_SHOWN + 3)],
+            "check": ["speed"] * (STRICT_SHOWN + 1) + ["metadata"] * 2,
+            "reason": [f"reason {i}" for i in range(STRICT_SHOWN + 3)],
+        }
+    )
+    message = _strict_message(excluded)
+    assert message.startswith(
+        f"--strict: the data-quality gate flags {STRICT_SHOWN + 3} run(s) "
+        f"({STRICT_SHOWN + 1} by speed, 2 by metadata): run_000.txt: reason 0; "
+    )
+    assert f"run_{STRICT_SHOWN - 1:03d}.txt: reason {STRICT_SHOWN - 1}; and 3 more run(s)." in (
+        message
+    )
+    assert f"run_{STRICT_SHOWN:03d}.txt" not in message
+
+
+# ---------------------------------------------------------------- F6: simulate guards
+def test_simulate_warns_when_the_speed_leaves_the_validity_range():
+    model = _model()
+    drive = SpringPull(stiffness=2e4, speed=0.5)  # pulls to about 0.5 m/s, range ends at 0.1
+    with pytest.warns(ValidityWarning, match=r"the simulated speed reaches \d+(\.\d+)? mm/s "):
+        result = simulate(Cylinder(mass=10.0), model, drive, 0.5, pressure_a=80e5)
+    assert np.max(np.abs(result.states["velocity"])) > 0.1
+    with pytest.raises(ValueError, match=r"beyond the model's validity speeds 1-100 mm/s"):
+        simulate(Cylinder(mass=10.0), model, drive, 0.5, pressure_a=80e5, strict=True)
+    with warnings.catch_warnings():  # a slow pull stays inside: no warning at all
+        warnings.simplefilter("error")
+        simulate(Cylinder(mass=10.0), model, SpringPull(2e4, 0.02), 0.5, pressure_a=80e5)
+
+
+def test_band_warns_outside_the_validity_range_like_friction():
+    model = FrictionModel.from_datasheet(_fitted_sheet())
+    with pytest.warns(ValidityWarning, match=r"outside the validity ranges"):
+        model.band(0.02, 300e5)
+    with pytest.raises(ValueError, match=r"outside the validity ranges"):
+        model.band(0.02, 300e5, strict=True)
+    with pytest.raises(ValueError, match=r"outside the validity ranges"):
+        model.prediction_band(0.5, 80e5, strict=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lower, upper = model.band(0.02, 80e5)
+    assert lower < model.friction(0.02, 80e5) < upper
+
+
+def _fitted_sheet():
+    """A small identified model (with covariance) as a datasheet dict."""
+    from cylfric.identify import identify
+
+    rng = np.random.default_rng(0)
+    speeds = np.array([1, 2, 4, 7, 10, 15, 25, 40, 70, 100]) * 1e-3
+    v, p = (a.ravel() for a in np.meshgrid(speeds, np.array([10, 80, 159]) * 1e5))
+    f = _model().friction(v, p)  # the thesis laws (Table 4.5), inside the ranges
+    points = pd.DataFrame(
+        {"velocity [m/s]": v, "pressure [Pa]": p, "friction [N]": f + rng.normal(0, 0.3, v.size)}
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return identify(points, sensitivity=False).model.to_datasheet()
+
+
+def test_cli_simulate_prints_each_warning_once_as_a_note(tmp_path):
+    sheet = tmp_path / "datasheet.json"
+    sheet.write_text(json.dumps(_model().to_datasheet()))
+    args = ["simulate", str(sheet), "--pressure", "300bar", "--duration", "0.2s"]
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "sim")])
+    assert result.exit_code == 0, result.output
+    output = _flat(result.output)
+    assert output.count("note: 1 of 1 point(s) outside the validity ranges 1-159 bar") == 1
+    assert "(pressures only; given 300 bar)" in output
+    assert "ValidityWarning" not in output and ".py:" not in output
+
+
+# ---------------------------------------------------------------- F7: unit prefixes
+@pytest.mark.parametrize(
+    ("text", "dimension", "written"),
+    [
+        ("10 Mm/s", "velocity", "mm/s"),
+        ("10 Mm", "length", "mm"),
+        ("10 Ms", "time", "ms"),
+        ("1 Mbar", "pressure", "mbar"),
+        ("0.3 N*s/Mm", "damping", "N*s/mm"),
+        ("10 MM/S", "velocity", "mm/s"),
+    ],
+)
+def test_an_upper_case_M_is_mega_and_refused_never_milli(text, dimension, written):
+    with pytest.raises(UnitError, match=rf"M is the mega prefix .* write {re.escape(written)} for the milli"):
+        parse_quantity(text, dimension)
+
+
+@pytest.mark.parametrize(
+    ("text", "dimension", "expected"),
+    [
+        ("10 mm/s", "velocity", 0.01),
+        ("3 M/S", "velocity", 3.0),  # metre in capitals: no prefix
+        ("2 MIN", "time", 120.0),
+        ("1 CM", "length", 0.01),
+        ("5 MPa", "pressure", 5e6),  # a mega unit cylfric reads
+        ("5 mbar", "pressure", 500.0),
+    ],
+)
+def test_the_case_of_units_without_a_milli_prefix_is_free(text, dimension, expected):
+    assert parse_quantity(text, dimension) == pytest.approx(expected, rel=1e-12)
+
+
+@given(
+    key=st.sampled_from(sorted(_MILLI_AT)),
+    number=st.floats(min_value=1e-6, max_value=1e6, allow_nan=False),
+)
+def test_no_mega_spelling_of_a_milli_unit_is_read(key, number):
+    from cylfric.units import UNITS
+
+    dimension = UNITS[key][0]
+    mega = "".join("M" if i in _MILLI_AT[key] else c for i, c in enumerate(key))
+    with pytest.raises(UnitError, match="M is the mega prefix"):
+        parse_quantity(f"{number!r} {mega}", dimension)
+    assert parse_quantity(f"{number!r} {key}", dimension) == pytest.approx(
+        number * UNITS[key][1], rel=1e-12
+    )
+
+
+@pytest.mark.parametrize(
+    ("option", "expected"),
+    [
+        (
+            "v_r=0mm/s",
+            "--fix 'v_r=0mm/s': v_r = 0 mm/s is out of range; expected 0.01 to 10000 mm/s",
+        ),
+        ("v_r=10Mm/s", "--fix 'v_r=10Mm/s': unit 'Mm/s': M is the mega prefix"),
+        ("alpha=0", "--fix 'alpha=0': alpha = 0 is out of range; expected 0.2 to 5"),
+        ("F_c=-3N", "--fix 'F_c=-3N': F_c = -3 N is out of range; expected 0 N or more"),
+        ("F_c=70N,F_s=50N", "--fix F_s=50N is below --fix F_c=70N; expected F_s >= F_c"),
+    ],
+)
+def test_impossible_fixed_values_exit_2_naming_the_option(tmp_path, option, expected):
+    args = ["fit", str(tmp_path), "--out", str(tmp_path / "out"), "--no-report", "--fix", option]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    assert expected in _flat(result.output)
+    assert "Traceback" not in result.output
