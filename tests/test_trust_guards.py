@@ -153,7 +153,9 @@ def test_cli_simulate_prints_each_warning_once_as_a_note(tmp_path):
     ],
 )
 def test_an_upper_case_M_is_mega_and_refused_never_milli(text, dimension, written):
-    with pytest.raises(UnitError, match=rf"M is the mega prefix .* write {re.escape(written)} for the milli"):
+    with pytest.raises(
+        UnitError, match=rf"M is the mega prefix .* write {re.escape(written)} for the milli"
+    ):
         parse_quantity(text, dimension)
 
 
@@ -207,3 +209,18 @@ def test_impossible_fixed_values_exit_2_naming_the_option(tmp_path, option, expe
     assert result.exit_code == 2
     assert expected in _flat(result.output)
     assert "Traceback" not in result.output
+
+
+def test_cli_simulate_names_the_datasheet_when_the_extrapolated_law_is_unphysical(tmp_path):
+    sheet = _model().to_datasheet()
+    # sigma_2 falls with pressure: 500 N*s/m at 0 bar, 102.5 at 159 bar (valid), -250 at 300
+    sheet["parameters"]["sigma_2"] = {"intercept": 500.0, "slope": -500.0 / 200e5}
+    path = tmp_path / "falling.json"
+    path.write_text(json.dumps(sheet))
+    args = ["simulate", str(path), "--pressure", "300bar", "--duration", "0.2s"]
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "sim")])
+    assert result.exit_code == 2
+    assert f"{path}: parameter sigma_2 = -250.0 is out of range; expected >= 0 N*s/m" in (
+        _flat(result.output)
+    )
+    assert "np.float64" not in result.output

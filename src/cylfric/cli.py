@@ -573,7 +573,10 @@ def simulate(
     # warnings reach the user once each, as notes (not as Python's own lines with a path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
+        try:
+            result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
+        except ValueError as exc:  # e.g. a law extrapolated below 0 outside its validity
+            raise BadInput(f"{model}: {exc}") from None
     for note in dict.fromkeys(str(w.message) for w in caught):
         console.print(f"[yellow]note:[/yellow] {note}")
     frame = result.to_pandas()
