@@ -220,7 +220,8 @@ def test_cli_simulate_names_the_datasheet_when_the_extrapolated_law_is_unphysica
     args = ["simulate", str(path), "--pressure", "300bar", "--duration", "0.2s"]
     result = runner.invoke(app, [*args, "--out", str(tmp_path / "sim")])
     assert result.exit_code == 2
-    assert f"{path}: parameter sigma_2 = -250.0 is out of range; expected >= 0 N*s/m" in (
-        _flat(result.output)
-    )
+    assert (
+        "falling.json: the friction model cannot be simulated: parameter sigma_2 = -250.0 is "
+        "out of range; expected >= 0 N*s/m"
+    ) in _flat(result.output)
     assert "np.float64" not in result.output
