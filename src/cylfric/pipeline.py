@@ -478,7 +478,7 @@ def _strict_message(excluded: pd.DataFrame) -> str:
         runs += f"; and {len(excluded) - STRICT_SHOWN} more run(s)"
     return (
         f"--strict: the data-quality gate flags {len(excluded)} run(s) ({counts}): {runs}. "
-        "Nothing was written (--strict stops at the first flag); without --strict the fit "
+        "Nothing was written (--strict stops before the fit); without --strict the fit "
         "leaves these runs out and lists them with their reasons"
     )
 
