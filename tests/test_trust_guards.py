@@ -225,3 +225,22 @@ def test_cli_simulate_names_the_datasheet_when_the_extrapolated_law_is_unphysica
         "out of range; expected >= 0 N*s/m"
     ) in _flat(result.output)
     assert "np.float64" not in result.output
+
+
+def test_simulate_batch_warns_once_for_the_sets_outside_the_validity_ranges():
+    from cylfric.simulate import simulate_batch
+
+    model = _model()
+    drives = [SpringPull(2e4, 0.02), SpringPull(2e4, 0.5), SpringPull(2e4, 0.02)]
+    pressures = [80e5, 80e5, 300e5]  # set 1 runs too fast, set 2 at too high a pressure
+    with pytest.warns(ValidityWarning) as caught:
+        simulate_batch(Cylinder(mass=10.0), model, drives, 0.5, pressures=pressures)
+    messages = [str(w.message) for w in caught]
+    assert messages == [
+        "1 of 3 set(s) (2) leave their model's validity pressures (set 2: 300 bar against "
+        "1-159 bar): the friction is extrapolated there",
+        messages[1],
+    ]
+    assert messages[1].startswith("1 of 3 set(s) (1) leave their model's validity speeds (set 1: ")
+    with pytest.raises(ValueError, match=r"\(2\) leave their model's validity pressures"):
+        simulate_batch(Cylinder(mass=10.0), model, drives, 0.5, pressures=pressures, strict=True)

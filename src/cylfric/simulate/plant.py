@@ -322,6 +322,44 @@ def _check_speed(friction: FrictionModel, velocity, strict: bool):
         warnings.warn(message, ValidityWarning, stacklevel=3)
 
 
+def _batch_validity(models, what: str, values, strict: bool):
+    """One warning (or error) naming the sets whose operating ``pressure`` [Pa] or largest
+    ``speed`` [m/s] leaves their model's validity range (operating pressure of both
+    chambers at the set's pressure; speeds below the range are not flagged)."""
+    outside = []
+    for i, (model, value) in enumerate(zip(models, values, strict=True)):
+        val = model.validity
+        if val is None:
+            continue
+        if what == "pressure":
+            p = float(model.operating_pressure(value, value))
+            tol = 1e-6 * max(abs(val["pressure_max"]), 1.0)
+            bad = not (val["pressure_min"] - tol <= p <= val["pressure_max"] + tol)
+        else:
+            bad = value > val["velocity_max"] * (1 + 1e-6)
+        if bad:
+            outside.append(i)
+    if not outside:
+        return
+    shown = ", ".join(str(i) for i in outside[:5]) + (" ..." if len(outside) > 5 else "")
+    unit, scale = ("bar", 1e5) if what == "pressure" else ("mm/s", 1e-3)
+    first = outside[0]
+    val = models[first].validity
+    low, high = (
+        (val["pressure_min"], val["pressure_max"])
+        if what == "pressure"
+        else (val["velocity_min"], val["velocity_max"])
+    )
+    message = (
+        f"{len(outside)} of {len(models)} set(s) ({shown}) leave their model's validity "
+        f"{what}s (set {first}: {float(values[first]) / scale:.4g} {unit} against "
+        f"{low / scale:.4g}-{high / scale:.4g} {unit}): the friction is extrapolated there"
+    )
+    if strict:
+        raise ValueError(message)
+    warnings.warn(message, ValidityWarning, stacklevel=3)
+
+
 def _simulate(
     cylinder, friction, drive, duration, dt, pressure_a, pressure_b, method, step, rtol,
     x0, v0, z0, strict,
@@ -707,6 +745,7 @@ def simulate_batch(
     rtol: float | None = None,
     x0: float = 0.0,
     v0: float = 0.0,
+    strict: bool = False,
 ) -> BatchResult:
     """Simulate many heterogeneous sets at once on all cores (sweeps, Monte Carlo).
 
@@ -735,6 +774,10 @@ def simulate_batch(
         Relative tolerance of the integrator [-] (default as :func:`simulate`, 1e-6).
     x0, v0 : float
         Initial position [m] and velocity [m/s].
+    strict : bool
+        Raise instead of warning (:class:`cylfric.model.ValidityWarning`, one warning for
+        all sets) when a set's pressure leaves its model's validity pressures (before the
+        run) or its recorded speed leaves the validity speeds (after it).
 
     Returns
     -------
@@ -817,6 +860,7 @@ def simulate_batch(
             params_of[key] = _friction_params(model, p)
         for name in friction:
             friction[name][i] = float(params_of[key][name])
+    _batch_validity(models, "pressure", pressures, strict)
     try:  # all sets checked at once; on a failure, set by set to name the first bad one
         _check_lugre_arrays(friction)
     except ValueError:
@@ -841,6 +885,7 @@ def simulate_batch(
         )
     rec = np.arange(0, n, record_every) * dt
     position, velocity, z, force, drive_force = (out[:, q, :] for q in range(5))
+    _batch_validity(models, "speed", np.max(np.abs(velocity), axis=1), strict)
     return BatchResult(
         rec,
         position,
