@@ -244,3 +244,22 @@ def test_simulate_batch_warns_once_for_the_sets_outside_the_validity_ranges():
     assert messages[1].startswith("1 of 3 set(s) (1) leave their model's validity speeds (set 1: ")
     with pytest.raises(ValueError, match=r"\(2\) leave their model's validity pressures"):
         simulate_batch(Cylinder(mass=10.0), model, drives, 0.5, pressures=pressures, strict=True)
+
+
+def test_a_model_read_from_a_file_names_it_when_its_extrapolated_law_fails(tmp_path):
+    sheet = _model().to_datasheet()
+    sheet["parameters"]["sigma_2"] = {"intercept": 500.0, "slope": -500.0 / 200e5}
+    path = tmp_path / "falling.json"
+    path.write_text(json.dumps(sheet))
+    model = FrictionModel.from_datasheet(path)
+    assert model.source == str(path)
+    assert model.friction(0.01, 100e5) > 0  # inside the validity range: evaluates
+    with (
+        pytest.warns(ValidityWarning),
+        pytest.raises(
+            ValueError,
+            match=rf"^{re.escape(str(path))}: parameter sigma_2 = -250\.0 is out of range",
+        ),
+    ):
+        model.friction(0.01, 300e5)
+    assert FrictionModel.from_datasheet(sheet).source is None  # a dict has no file to name

@@ -576,7 +576,8 @@ def simulate(
         try:
             result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
         except ValueError as exc:  # e.g. a law extrapolated below 0 outside its validity
-            raise BadInput(f"{model}: {exc}") from None
+            named = str(exc).startswith(model) or not Path(model).is_file()
+            raise BadInput(str(exc) if named else f"{model}: {exc}") from None
     for note in dict.fromkeys(str(w.message) for w in caught):
         console.print(f"[yellow]note:[/yellow] {note}")
     frame = result.to_pandas()

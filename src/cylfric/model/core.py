@@ -235,6 +235,9 @@ def _stderr_items(spec, law):
 class FrictionModel:
     """Pressure-dependent friction of a cylinder: steady-state law, LuGre dynamics, uncertainty.
 
+    A model read with :meth:`from_datasheet` from a file keeps its path in ``source``, and
+    an evaluation error (a law extrapolated below its physical bound) names that file.
+
     Parameters
     ----------
     coefficients : mapping, optional
@@ -561,15 +564,31 @@ class FrictionModel:
         self.check(velocity, pressure, strict=strict)
         return self._friction(velocity, pressure, self.coefficients())
 
+    source: str | None = None
+    """The datasheet file this model was read from (None when built otherwise)."""
+
     def _friction(self, velocity, pressure, coefficients, *, checked=True):
         params = self._params(pressure, coefficients)
-        law = stribeck if checked else stribeck_unchecked
-        return law(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
+        if not checked:
+            return stribeck_unchecked(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
+        try:
+            return stribeck(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
+        except ValueError as exc:
+            raise self._named(exc) from None
+
+    def _named(self, exc: ValueError) -> ValueError:
+        """``exc`` with the datasheet file in front of its message (when there is one)."""
+        if self.source is None or str(exc).startswith(self.source):
+            return exc
+        return type(exc)(f"{self.source}: {exc}")
 
     def dynamic_force(self, velocity, z, pressure):
         """LuGre friction force [N] (eq. 2.5) at velocity [m/s], bristle deflection z [m]."""
         params = self.params_at(pressure)
-        return lugre_force(velocity, z, **{k: params[k] for k in PARAMETER_UNITS})
+        try:
+            return lugre_force(velocity, z, **{k: params[k] for k in PARAMETER_UNITS})
+        except ValueError as exc:
+            raise self._named(exc) from None
 
     def check(self, velocity, pressure, *, strict=False):
         """Where (velocity [m/s], pressure [Pa]) lie inside the validity ranges.

@@ -194,7 +194,7 @@ def from_datasheet(cls, source):
     names = _coefficient_names(parameters, model_part["pressure_law"])
     fixed = [name for name in (fit.get("fixed") or {}) if name in names]
     try:
-        return cls(
+        model = cls(
             {k: parameters.get(k) for k in STEADY_PARAMETERS},
             pressure_law=model_part["pressure_law"],
             friction_law=friction_law,
@@ -216,6 +216,9 @@ def from_datasheet(cls, source):
         )
     except (ValueError, TypeError) as exc:
         raise DatasheetError(f"{where}: {exc}") from None
+    if isinstance(source, str | Path):
+        model.source = str(source)  # evaluation errors name the file
+    return model
 
 
 def _coefficient_names(parameters, default_law):
