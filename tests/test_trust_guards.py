@@ -7,6 +7,7 @@ are refused naming the option."""
 from __future__ import annotations
 
 import json
+import math
 import re
 import warnings
 
@@ -263,3 +264,21 @@ def test_a_model_read_from_a_file_names_it_when_its_extrapolated_law_fails(tmp_p
     ):
         model.friction(0.01, 300e5)
     assert FrictionModel.from_datasheet(sheet).source is None  # a dict has no file to name
+
+
+@pytest.mark.parametrize(
+    ("fixed", "message"),
+    [
+        ({"v_r": 0.0}, r"fixed v_r = 0\.0 m/s is out of range; expected 1e-05 to 10 m/s"),
+        ({"F_c": -1.0}, r"fixed F_c = -1\.0 N is out of range; expected >= 0 N"),
+        ({"alpha": math.nan}, r"fixed alpha = nan - is out of range; expected 0\.2 to 5 -"),
+    ],
+)
+def test_identify_refuses_impossible_fixed_values(fixed, message):
+    from cylfric.identify import identify
+
+    speeds = np.array([1, 2, 5, 10, 20, 50, 100]) * 1e-3
+    v, p = (a.ravel() for a in np.meshgrid(speeds, np.array([10, 100]) * 1e5))
+    points = pd.DataFrame({"velocity [m/s]": v, "pressure [Pa]": p, "friction [N]": 100 + 500 * v})
+    with pytest.raises(ValueError, match=message):
+        identify(points, fixed=fixed, sensitivity=False)

@@ -22,7 +22,7 @@ from ..friction._checks import roundoff_tolerance
 from ..friction.laws import viscous
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..levels import pressure_levels
-from ..model import FrictionModel
+from ..model import PARAMETER_BOUNDS, FrictionModel
 from .linear_fit import fit_linear_surface
 from .pressure_fit import (
     FITTED_LAWS,
@@ -441,6 +441,14 @@ def identify(
     unknown = set(fixed) - set(PARAMETERS)
     if unknown:
         raise ValueError(f"unknown fixed parameters {sorted(unknown)}; valid: {list(PARAMETERS)}")
+    for name, value in fixed.items():  # a held value the model cannot have: refused here
+        low, high = PARAMETER_BOUNDS[name]
+        if not (math.isfinite(value) and low <= value <= high and (value > 0 or name != "v_r")):
+            unit = _TABLE_UNITS[name]
+            span = f"{low:g} to {high:g}" if math.isfinite(high) else f">= {low:g}"
+            raise ValueError(
+                f"fixed {name} = {value!r} {unit} is out of range; expected {span} {unit}"
+            )
     if pressure_law not in LAWS_COMPARED:
         raise ValueError(f"unknown pressure law {pressure_law!r}; valid: {list(LAWS_COMPARED)}")
     needed = {"velocity [m/s]", "pressure [Pa]", "friction [N]"}
