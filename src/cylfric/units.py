@@ -149,9 +149,10 @@ def _lookup(unit: str) -> tuple[str, float]:
         return CASED_UNITS[exact]
     key = _key(unit)
     mega = [i for i in _MILLI_AT.get(key, ()) if exact[i : i + 1] == "M"]
-    if mega and len(exact) == len(key):
+    # all capitals (an export's 'SEC MM KN' units row) carry no case: a unit whose only
+    # prefixed form is milli is read as that (MM is mm, MBAR mbar); mixed case is not guessed
+    if mega and len(exact) == len(key) and not exact.isupper():
         milli = "".join("m" if i in mega else c for i, c in enumerate(exact))
-        milli = key if exact.isupper() else milli  # MM/S -> mm/s, not mM/S
         raise UnitError(
             f"unit {unit!r}: M is the mega prefix (m is milli), and cylfric reads no mega "
             f"{UNITS[key][0]} unit; write {milli} for the milli unit. Unit prefixes are "
