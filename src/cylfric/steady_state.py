@@ -225,6 +225,11 @@ def _longest_true(mask):
     return int(starts[i]), int(stops[i])
 
 
+SPIKE_SIGMA = 5.0
+"""Samples further than this many robust sigmas from the rolling median of the force are
+spikes: left out of the cushion trimming's rolling mean (:func:`find_windows`) [-]."""
+
+
 def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     """Trim ends where the rolling median of the force leaves the centre level."""
     n = len(force)
@@ -240,7 +245,13 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     w_long = max(w, n // 10)
     if w_long > w:
         sigma = 1.4826 * np.median(np.abs(force - np.median(force)))
-        mean = rolling_mean(force, w_long)
+        # isolated spikes (a sample or a few, far from the rolling median) are replaced by
+        # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
+        # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
+        residual = force - rolling
+        noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
+        spikes = np.abs(residual) > SPIKE_SIGMA * noise if noise > 0 else residual != 0
+        mean = rolling_mean(np.where(spikes, rolling, force), w_long)
         outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
     outside = np.flatnonzero(outside)
     mid = n // 2
