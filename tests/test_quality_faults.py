@@ -4,7 +4,6 @@ audit, F1-F13): each with its exact expected outcome."""
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pandas as pd
@@ -71,3 +70,238 @@ def test_seed_1_loses_no_run_and_run_008_keeps_both_strokes(seed1, tmp_path):
     result, out = _fit(seed1, tmp_path, "--strict")
     assert result.exit_code == 0, result.output
     assert not (out / "excluded.csv").exists()
+
+
+# ---- helpers for edited copies of the seed-1 campaign --------------------------------------
+
+
+def _copy(folder, tmp_path, name="campaign"):
+    import shutil
+
+    target = tmp_path / name
+    shutil.copytree(folder, target)
+    return target
+
+
+def _edit(path, old, new):
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+
+
+def _within_tolerance(out):
+    """The virtual bench's truth: F_c = 70.2 N + 0.5 N/bar p, F_s = 112.9 N + 0.6 N/bar p
+    (cylfric.simulate.bench defaults), within 2 %."""
+    sheet = json.loads((out / "datasheet.json").read_text())
+    parameters = sheet["parameters"]
+    np.testing.assert_allclose(parameters["F_c"]["intercept"], 70.2, rtol=0.02)
+    np.testing.assert_allclose(parameters["F_c"]["slope"] * 1e5, 0.5, rtol=0.02)
+    np.testing.assert_allclose(parameters["F_s"]["intercept"], 112.9, rtol=0.02)
+    assert sheet["fit"]["rmse"] < 0.1  # N (0.02 N clean; 34.8 N with the level in N kept)
+    return sheet
+
+
+def _force_in_n(folder, pattern):
+    for path in sorted(folder.glob(pattern)):
+        _edit(path, "s\tmm\tkN\n", "s\tmm\tN\n")
+
+
+# ---- F1: a whole pressure level with its force unit wrong ----------------------------------
+
+
+@pytest.mark.parametrize("level", ["10", "159"])
+def test_a_level_whose_force_unit_is_n_instead_of_kn_is_excluded(seed1, tmp_path, level):
+    """F1: every run of one level labelled N while the values are kN gave exit 0, nothing
+    excluded and F_c(p) = -13.5 + 1.378 p (10 bar) or 131.1 - 0.82 p (159 bar): the scale
+    check only compared runs within a level. Now the level's median friction (0.1 N) is
+    compared with the other levels' (about 150 N)."""
+    folder = _copy(seed1, tmp_path)
+    _force_in_n(folder, f"*_p{level}bar_*")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    names = sorted(p.name for p in folder.glob(f"*_p{level}bar_*"))
+    assert sorted(excluded["file"]) == names and len(names) == 7
+    assert set(excluded["check"]) == {"scale"}
+    assert (
+        excluded["reason"]
+        .str.contains(
+            rf"its pressure level \({level} bar\) has a median of 0\.\d+ N against 1\d\d\.?\d* N "
+            r"for the other levels \(a force unit, N or kN, for the whole level\?\)"
+        )
+        .all()
+    )
+    sheet = _within_tolerance(out)
+    low, high = sheet["validity"]["pressure_min"], sheet["validity"]["pressure_max"]
+    expected = (55e5, 159e5) if level == "10" else (10e5, 103e5)
+    np.testing.assert_allclose((low, high), expected, rtol=0.01)  # measured (no column)
+
+
+def test_most_runs_with_a_wrong_force_unit_exit_2(seed1, tmp_path):
+    """F1: with runs 000-019 of 28 in N (levels 10, 55 and six of 103 bar), the gate used to
+    keep the wrong majority and exclude the right runs. Now the scale check refuses when it
+    would flag more than a quarter of the runs (quality.assess max_scale_fraction)."""
+    folder = _copy(seed1, tmp_path)
+    _force_in_n(folder, "run_0[01]*.txt")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    message = " ".join(result.output.split())
+    assert "the friction of 8 of 28 runs (run_020_p103bar_v100mms.txt, run_021_p159bar" in (message)
+    assert "correct the force unit (N or kN) in the unit row of the files that are wrong" in (
+        message
+    )
+    assert not (out / "datasheet.json").exists()
+
+
+def test_two_levels_1000x_apart_cannot_be_told_apart():
+    """With two levels 1000x apart neither is a majority: QualityError (exit 2)."""
+    from cylfric.quality import QualityError
+    from cylfric.steady_state import Extraction
+
+    rows, runs = [], []
+    for run in range(8):
+        pressure = 20e5 if run < 4 else 80e5
+        friction = (100.0 + run) * (1e-3 if run < 4 else 1.0)
+        runs.append(
+            {
+                "file": f"r{run}.txt",
+                "run": run,
+                "pressure [Pa]": pressure,
+                "velocity [m/s]": 1e-3 * (1 + run % 4),
+            }
+        )
+        rows.append(
+            {
+                "run": run,
+                "file": f"r{run}.txt",
+                "direction [-]": 1,
+                "pressure [Pa]": pressure,
+                "velocity [m/s]": 1e-3 * (1 + run % 4),
+                "friction [N]": friction,
+                "n [-]": 100,
+                "flag": "ok",
+            }
+        )
+    extraction = Extraction(pd.DataFrame(rows), runs=runs, folder="two-levels")
+    with pytest.raises(QualityError, match=r"two-levels: the friction of 8 of 8 runs"):
+        assess(extraction)
+
+
+# ---- F2: a pressure column in the wrong unit -----------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def seed3_pressure(tmp_path_factory):
+    """The grid with a measured pressure column (`--pressure-channel --seed 3`)."""
+    folder = tmp_path_factory.mktemp("seed3")
+    generate_campaign(folder, BenchSettings(**GRID, seed=3, pressure_channel=True))
+    return folder
+
+
+def _scale_pressure_column(path, factor):
+    lines = path.read_text().splitlines()
+    for i, line in enumerate(lines):
+        cells = line.split("\t")
+        if len(cells) == 4 and cells[0][:1].isdigit():
+            cells[3] = f"{float(cells[3]) * factor:.6g}"
+            lines[i] = "\t".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize(
+    "factor, cause",
+    [
+        (
+            14.5037738,
+            "14.5 times the nominal: a pressure column with values in psi whose unit says bar?",
+        ),
+        (0.1, "0.1 times the nominal: a pressure column with values in MPa whose unit says bar?"),
+    ],
+)
+def test_a_pressure_column_in_psi_or_mpa_labelled_bar_is_excluded(
+    seed3_pressure, tmp_path, factor, cause
+):
+    """F2: run_010 (55 bar by manifest, header and name) with its pressure column in psi
+    gave exit 0 and validity '9.94-798 bar': the measured column was never compared."""
+    folder = _copy(seed3_pressure, tmp_path)
+    name = "run_010_p55bar_v10mms.txt"
+    _scale_pressure_column(folder / name, factor)
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    assert list(excluded["file"]) == [name] and list(excluded["check"]) == ["metadata"]
+    measured = f"{55 * factor:.4g}"
+    reason = excluded["reason"].iloc[0]
+    assert reason.startswith(f"metadata conflict: measured pressure {measured[:3]}"), reason
+    assert reason.endswith(
+        " bar (the pressure column, the value used) but 55 bar in manifest.csv line 12 and 55 "
+        "bar in the file header (Pressure: 55 bar) and 55 bar in the file name (p55bar) "
+        f"({cause})"
+    ), reason
+    sheet = _within_tolerance(out)
+    assert sheet["validity"]["pressure_max"] < 170e5  # was 798 bar
+
+
+# ---- F3: a 0 bar typo with nothing to contradict it ----------------------------------------
+
+
+def test_a_lone_0_bar_run_is_a_metadata_conflict(seed1, tmp_path):
+    """F3: run_017 typed 0 bar in manifest.csv, without a header line or a name token and
+    without a low-pressure level: kept with exit 0 and RMSE 10.7 N."""
+    folder = _copy(seed1, tmp_path)
+    name = "run_017_p103bar_v10mms.txt"
+    _edit(folder / name, "Pressure: 103 bar\n", "")
+    (folder / name).rename(folder / "run_017.txt")
+    _edit(folder / "manifest.csv", f"{name},103,10", "run_017.txt,0,10")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    excluded = _excluded(out)
+    assert list(excluded["file"]) == ["run_017.txt"]
+    assert list(excluded["check"]) == ["metadata"]
+    assert excluded["reason"].iloc[0] == (
+        "metadata conflict: nominal pressure 0 bar in manifest.csv line 19, and no 0-bar "
+        "level it belongs to (pressures must be above 0, finite, and in bar): check this "
+        "run's pressure"
+    )
+    _within_tolerance(out)
+
+
+@pytest.mark.parametrize("typed", ["-55", "inf"])
+def test_a_negative_or_infinite_manifest_pressure_exits_2_naming_the_line(seed1, tmp_path, typed):
+    """The manifest reader refuses these itself (the gate flags them from other sources)."""
+    folder = _copy(seed1, tmp_path)
+    name = "run_017_p103bar_v10mms.txt"
+    _edit(folder / "manifest.csv", f"{name},103,10", f"{name},{typed},10")
+    result, _ = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    assert "manifest.csv, line 19: pressure_bar = " in " ".join(result.output.split())
+
+
+def test_a_negative_header_pressure_is_a_metadata_conflict(seed1, tmp_path):
+    """Without manifest.csv and a name token, the header's 'Pressure: -103 bar' is used and
+    flagged."""
+    folder = _copy(seed1, tmp_path)
+    (folder / "manifest.csv").unlink()
+    name = "run_017_p103bar_v10mms.txt"
+    _edit(folder / name, "Pressure: 103 bar\n", "Pressure: -103 bar\n")
+    (folder / name).rename(folder / "run_017.txt")
+    excluded = assess(extract_campaign(folder, workers=1)).excluded
+    assert list(excluded["file"]) == ["run_017.txt"]
+    assert (
+        excluded["reason"]
+        .iloc[0]
+        .startswith(
+            "metadata conflict: nominal pressure -103 bar in the file header (Pressure: -103 bar)"
+        )
+    )
+
+
+def test_a_deliberate_0_bar_level_is_kept(tmp_path):
+    """Four runs at 0 bar (half the median runs per level, and at least 3): a level."""
+    folder = tmp_path / "zero"
+    generate_campaign(
+        folder, BenchSettings(pressures_bar=(0.0, 50.0, 100.0), speeds_mm_s=(2, 5, 10, 20))
+    )
+    extraction = extract_campaign(folder, workers=1)
+    assert {info["pressure [Pa]"] for info in extraction.runs} == {0.0, 50e5, 100e5}
+    assert assess(extraction).excluded.empty
