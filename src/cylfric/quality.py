@@ -6,7 +6,9 @@ those that would mislead the fit:
 - ``speed``: the measured window speed differs from the run's nominal speed by more than
   ``speed_tolerance`` (a position column in m instead of mm reads 1000x off);
 - ``scale``: the run's friction differs from the other runs at its pressure level by a
-  factor of more than ``scale_factor`` (a force column in N instead of kN);
+  factor of more than ``scale_factor`` (a force column in N instead of kN), or its whole
+  level's median friction differs by that factor from the median of the other levels' (a
+  test day whose files all say N while the values are kN);
 - ``outlier``: the run's friction is far from what its neighbours in speed at the same
   pressure level say (interpolated in log speed), beyond ``outlier_sigma`` robust sigmas of
   all such residuals (a run typed as 0 bar in manifest.csv while measured at 80 bar);
@@ -15,7 +17,17 @@ those that would mislead the fit:
   (manifest.csv, campaign.toml's name_pattern, a header line such as ``Pressure: 103 bar``,
   a file-name token such as ``p103bar``) by more than ``metadata_tolerance`` (a run typed
   as 0 bar in manifest.csv whose file says 103 bar). A pressure the file measures (a
-  pressure column) is what the fit uses, so its nominal sources are not compared.
+  pressure column) is what the fit uses; it is compared with each nominal value with a
+  looser limit (``measured_tolerance``, ``measured_floor``: 20 % and 2 bar), so a column in
+  psi or MPa whose unit says bar is found. A nominal pressure of 0, below 0 or not finite
+  on a run without a pressure column is a conflict by itself unless it belongs to a 0-bar
+  level (at least ``zero_level_runs`` runs, and half the median number of runs per level,
+  at 0 bar).
+
+The gate refuses (:class:`QualityError`, a ValueError: exit 2) rather than pick a side when
+the data contradict each other: when the ``scale`` check would flag more than a quarter of
+the runs (groups about 1000x apart, no clear majority: with most runs in the wrong unit the
+right ones would be the ones left out) or when more than half of the runs would be excluded.
 
 Flagged runs are kept in the points table with the flag ``"excluded: <check>"``, so that
 :func:`cylfric.identify.identify` leaves them out, and listed in :attr:`QualityReport.excluded`
