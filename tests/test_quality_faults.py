@@ -305,3 +305,91 @@ def test_a_deliberate_0_bar_level_is_kept(tmp_path):
     extraction = extract_campaign(folder, workers=1)
     assert {info["pressure [Pa]"] for info in extraction.runs} == {0.0, 50e5, 100e5}
     assert assess(extraction).excluded.empty
+
+
+# ---- F10: manifest.csv problems ------------------------------------------------------------
+
+
+def test_a_utf16_manifest_is_read(seed1, tmp_path):
+    """Excel's 'Unicode text' (UTF-16 with a BOM) gave "'utf-8' codec can't decode" with no
+    file named."""
+    folder = _copy(seed1, tmp_path)
+    manifest = folder / "manifest.csv"
+    manifest.write_bytes(manifest.read_text().encode("utf-16"))
+    from cylfric.io.campaign import discover_runs
+
+    runs = discover_runs(folder)
+    assert len(runs) == 28 and runs[8].pressure == 55e5 and runs[8].velocity == 2e-3
+
+
+def test_a_manifest_that_is_not_utf8_names_the_file_and_line(tmp_path):
+    from cylfric.io import BenchFileError
+    from cylfric.io.campaign import discover_runs
+
+    (tmp_path / "run.txt").write_text("x")
+    (tmp_path / "manifest.csv").write_bytes(
+        b"file,pressure_bar,velocity_mm_s,seal\nrun.txt,55,10,M\xfcller\n"
+    )
+    with pytest.raises(
+        BenchFileError,
+        match=r"manifest.csv, line 2: byte 0xfc is not UTF-8 text; expected a CSV file in UTF-8",
+    ):
+        discover_runs(tmp_path)
+
+
+def test_manifest_columns_without_a_unit_exit_2_naming_them(seed1, tmp_path):
+    """'file,pressure,velocity' was silently ignored: a 0 bar typed there was neither used
+    nor reported, and bare files said 'expected manifest.csv' though one was there."""
+    folder = _copy(seed1, tmp_path)
+    manifest = folder / "manifest.csv"
+    lines = manifest.read_text().splitlines()
+    manifest.write_text("\n".join(["file,pressure,velocity", *lines[1:]]) + "\n")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    assert " ".join(result.output.split()).endswith(
+        "manifest.csv, line 1: column(s) ['pressure', 'velocity'] not understood (found "
+        "['file', 'pressure', 'velocity']); expected file,pressure_bar,velocity_mm_s: the "
+        "pressure in bar as pressure_bar and the speed in mm/s as velocity_mm_s (other "
+        "columns, such as seal or test, are kept as labels)"
+    )
+    assert not out.exists()
+
+
+def test_a_manifest_row_for_a_missing_file_is_named_and_skippable(seed1, tmp_path):
+    folder = _copy(seed1, tmp_path)
+    with (folder / "manifest.csv").open("a") as handle:
+        handle.write("run_999_p55bar_v10mms.txt,55,10\n")
+    expected = (
+        "manifest.csv, line 30: lists run_999_p55bar_v10mms.txt, which is not in the campaign "
+        "folder; expected an existing run file (correct or remove the row)"
+    )
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    assert expected in " ".join(result.output.split())
+    result, out = _fit(folder, tmp_path, "--skip-bad")
+    assert result.exit_code == 0, result.output
+    skipped = pd.read_csv(out / "skipped.csv")
+    assert len(skipped) == 1 and skipped["file"].iloc[0].endswith("run_999_p55bar_v10mms.txt")
+    assert expected in skipped["reason"].iloc[0]
+    _within_tolerance(out)
+
+
+@pytest.mark.parametrize("separator", [";", "\t"])
+def test_a_semicolon_or_tab_separated_manifest_is_read(seed1, tmp_path, separator):
+    """A semicolon-separated manifest said "expected a header row starting with 'file'"
+    though it did; a decimal comma goes with the semicolon."""
+    folder = _copy(seed1, tmp_path)
+    manifest = folder / "manifest.csv"
+    text = manifest.read_text().replace(",", separator)
+    manifest.write_text(
+        text.replace(
+            f"run_000_p10bar_v1mms.txt{separator}10", f"run_000_p10bar_v1mms.txt{separator}10,0"
+        )
+    )
+    from cylfric.io.campaign import discover_runs
+
+    runs = discover_runs(folder)
+    assert len(runs) == 28
+    assert [run.manifest_line for run in runs[:2]] == [2, 3]
+    assert runs[0].pressure == 10e5 and runs[8].pressure == 55e5 and runs[8].velocity == 2e-3
+    assert runs[0].source["pressure"] == "manifest"

@@ -671,7 +671,7 @@ def extract_campaign(
         else:
             per_run.append(rows)
             runs.append(summary)
-        total += info.path.stat().st_size
+        total += info.path.stat().st_size if info.path.is_file() else 0
     if not per_run:
         reasons = "; ".join(item["reason"] for item in skipped[:3])
         raise BenchFileError(
