@@ -393,3 +393,53 @@ def test_a_semicolon_or_tab_separated_manifest_is_read(seed1, tmp_path, separato
     assert [run.manifest_line for run in runs[:2]] == [2, 3]
     assert runs[0].pressure == 10e5 and runs[8].pressure == 55e5 and runs[8].velocity == 2e-3
     assert runs[0].source["pressure"] == "manifest"
+
+
+# ---- F12, F5: reader -----------------------------------------------------------------------
+
+
+def test_mts_export_whose_names_and_units_rows_begin_with_a_tab_is_read(tmp_path):
+    """F12: TestSuite writes the names and unit rows with a leading tab too, like the data
+    rows; they were refused with 'no header row with column names'."""
+    from cylfric.io import read_bench_text
+
+    path = tmp_path / "run.txt"
+    path.write_text(
+        "Test Run Name: run_000\n\n"
+        "\tTime\tAxial Displacement\tAxial Force\n\ts\tmm\tkN\n"
+        "\t0,000\t72,0000\t0,01423\n\t0,010\t72,0100\t0,01424\n\t0,020\t72,0200\t0,01425\n"
+    )
+    data, metadata = read_bench_text(path)
+    assert metadata["columns"] == ["Time", "Axial Displacement", "Axial Force"]
+    np.testing.assert_allclose(data["time [s]"], [0.0, 0.01, 0.02])
+    np.testing.assert_allclose(data["position [m]"], [0.072, 0.07201, 0.07202])
+    np.testing.assert_allclose(data["force [N]"], [14.23, 14.24, 14.25])
+
+
+def test_nul_bytes_after_64_kib_name_the_file_and_line(seed1, tmp_path):
+    """F5: 200 NUL bytes at the start of a line after 64 KiB gave 'the columns change
+    between segments' with no line, and echoed the raw NULs."""
+    folder = _copy(seed1, tmp_path)
+    path = folder / "run_010_p55bar_v10mms.txt"
+    raw = path.read_bytes()
+    cut = raw.index(b"\n", 70000) + 1
+    path.write_bytes(raw[:cut] + b"\x00" * 200 + raw[cut:])
+    line = raw[:cut].count(b"\n") + 1
+    result, _ = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    message = " ".join(result.output.split())
+    assert "\x00" not in result.output
+    assert f"run_010_p55bar_v10mms.txt, line {line}: binary content (NUL bytes)" in message
+
+
+def test_messages_escape_control_characters_and_a_segment_change_names_its_line(tmp_path):
+    from cylfric.io import BenchFileError, read_bench_text
+
+    path = tmp_path / "run.txt"
+    path.write_text(
+        "Time\tPosition\tForce\ns\tmm\tN\n0\t1\t2\n0.01\t1.1\t2\n"
+        "\x07bell [s]\tPosition [mm]\tForce [N]\n0.02\t1.2\t2\n0.03\t1.3\t2\n"
+    )
+    with pytest.raises(BenchFileError, match=r"run.txt, line 5: the columns change") as info:
+        read_bench_text(path)
+    assert "\x07" not in str(info.value) and "\\x07bell" in str(info.value)

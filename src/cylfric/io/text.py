@@ -37,6 +37,16 @@ __all__ = [
 ]
 
 
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+def escape_control(text: str) -> str:
+    """``text`` with control characters written as escapes (``\\x00``, ``\\t``): a message
+    must stay one readable line whatever bytes a file holds."""
+    named = {"\t": "\\t", "\n": "\\n", "\r": "\\r"}
+    return _CONTROL.sub(lambda m: named.get(m.group(), f"\\x{ord(m.group()):02x}"), text)
+
+
 class BenchFileError(ValueError):
     """A bench file cannot be read; the message names the file, the line and what was expected."""
 
@@ -45,7 +55,7 @@ class BenchFileError(ValueError):
         self.line = line
         self.message = message
         where = f"{self.path}" + (f", line {line}" if line is not None else "")
-        super().__init__(f"{where}: {message}")
+        super().__init__(escape_control(f"{where}: {message}"))
 
     def __reduce__(self):  # pickled whole (extraction sends errors between processes)
         return (type(self), (self.path, self.message, self.line))
@@ -263,11 +273,14 @@ def read_bench_arrays(
         raise BenchFileError(path, f"cannot read the file ({exc.strerror})") from None
     if not raw.strip():
         raise BenchFileError(path, "the file is empty; expected a bench record")
-    if b"\x00" in raw[:65536]:
+    nul = raw.find(b"\x00")
+    if nul >= 0:
         raise BenchFileError(
             path,
             "binary content (NUL bytes); expected a text export "
-            "(UTF-8 or latin-1), not UTF-16 or a binary file",
+            "(UTF-8 or latin-1), not UTF-16 or a binary file"
+            + ("" if nul < 65536 else " (a corrupt stretch in an otherwise text file?)"),
+            line=raw.count(b"\n", 0, nul) + 1,
         )
     buf = np.frombuffer(raw, dtype=np.uint8)
     starts, ends, kinds = scan_lines(buf)
@@ -390,7 +403,7 @@ def read_bench_arrays(
                     f"(decimal separator {decimal!r})"
                 )
             raise BenchFileError(path, message, line=int(bad) + 1)
-        frames.append((seg, hdr, values))
+        frames.append((seg, hdr, values, int(run[0]) + 1))
 
     data, col_units = _assemble(frames, path, roles or {})
     metadata = {
@@ -410,6 +423,8 @@ def read_bench_arrays(
 def _split_header(line: str, delim, ncols: int) -> list[str]:
     """Cells of a header row; whitespace rows may hold names with spaces or ``[unit]``."""
     cells = _split(line, delim)
+    if delim is not None and len(cells) == ncols + 1 and cells[0] == "":
+        return cells[1:]  # MTS/TestSuite: the names and units rows begin with a separator too
     if delim is not None or len(cells) == ncols:
         return cells
     wide = [c for c in re.split(r"\s{2,}|\t", line.strip()) if c]
@@ -489,7 +504,9 @@ def _assemble(frames, path, roles):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
     parts = []
     col_units = {}
-    for seg, hdr, values in frames:
+    lines = []
+    for seg, hdr, values, first in frames:
+        lines.append(hdr.line or first)
         cols = {}
         quantities = _column_roles(hdr.names, roles, path, hdr.line or None)
         for j, (name, unit) in enumerate(zip(hdr.names, hdr.units, strict=True)):
@@ -526,12 +543,13 @@ def _assemble(frames, path, roles):
         cols["segment [-]"] = np.full(values.shape[0], seg, dtype=np.int32)
         parts.append(cols)
     keys = list(parts[0])
-    for cols in parts[1:]:
+    for cols, line in zip(parts[1:], lines[1:], strict=True):
         if list(cols) != keys:
             raise BenchFileError(
                 path,
                 "the columns change between segments; expected the same "
                 f"columns in every block ({keys} vs {list(cols)})",
+                line=line,
             )
     if len(parts) == 1:
         return parts[0], col_units
