@@ -443,3 +443,76 @@ def test_messages_escape_control_characters_and_a_segment_change_names_its_line(
     with pytest.raises(BenchFileError, match=r"run.txt, line 5: the columns change") as info:
         read_bench_text(path)
     assert "\x07" not in str(info.value) and "\\x07bell" in str(info.value)
+
+
+# ---- F13: campaign.toml ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "toml, message",
+    [
+        (
+            "[extraction]\nmin_samples = -5\n",
+            r"campaign.toml, line 2: extraction.min_samples: -5 is less than the minimum of 1",
+        ),
+        (
+            "[extraction]\nmin_samples = 2.5\n",
+            r"campaign.toml, line 2: extraction.min_samples: 2.5 is not of type 'integer'",
+        ),
+        (
+            '[force_balance]\nmoving_mass = "-3 kg"\n',
+            r"campaign.toml, line 2: force_balance.moving_mass is '-3 kg'; expected a mass >= 0",
+        ),
+        (
+            '[cylinder]\nbore = "-25 mm"\n',
+            r"campaign.toml, line 2: cylinder.bore is negative \(-25 mm\); expected a diameter",
+        ),
+        (
+            '[cylinder]\n"bore " = "25 mm"\n',
+            r"campaign.toml, line 2: unknown key 'bore ' in \[cylinder\]",
+        ),
+    ],
+)
+def test_campaign_toml_values_are_checked_naming_key_and_line(tmp_path, toml, message):
+    from cylfric.io import BenchFileError, load_config
+
+    (tmp_path / "campaign.toml").write_text(toml)
+    with pytest.raises(BenchFileError, match=message):
+        load_config(tmp_path)
+
+
+def test_a_whole_number_written_as_a_float_is_a_sample_count(tmp_path):
+    from cylfric.io import load_config
+
+    (tmp_path / "campaign.toml").write_text("[extraction]\nmin_samples = 10.0\n")
+    assert load_config(tmp_path).extraction == {"min_samples": 10.0}
+
+
+def _two_force_columns(path):
+    path.write_text(
+        "Time\tPosition\tAxial Force\tAxial Force\ns\tmm\tkN\tkN\n"
+        "0.00\t10.0\t0.000\t0.071\n0.01\t10.1\t0.000\t0.072\n0.02\t10.2\t0.000\t0.073\n"
+    )
+
+
+def test_two_columns_of_one_name_are_chosen_by_place(tmp_path):
+    """F13: with two 'Axial Force' columns the advice `force = "Axial Force"` gave the same
+    error again; now each is named by its place."""
+    from cylfric.io import BenchFileError, read_bench_text
+
+    path = tmp_path / "run.txt"
+    _two_force_columns(path)
+    with pytest.raises(
+        BenchFileError,
+        match=r"columns \['Axial Force#1', 'Axial Force#2'\] all look like the measured force; "
+        r'choose one in campaign.toml: \[columns\] force = "Axial Force#1"',
+    ):
+        read_bench_text(path)
+    with pytest.raises(
+        BenchFileError,
+        match=r"force = 'Axial Force' names 2 columns of that name; choose one by its place: "
+        r'force = "Axial Force#1" or "Axial Force#2"',
+    ):
+        read_bench_text(path, roles={"force": "Axial Force"})
+    data, _ = read_bench_text(path, roles={"force": "Axial Force#2"})
+    np.testing.assert_allclose(data["force [N]"], [71.0, 72.0, 73.0])  # kN -> N

@@ -79,13 +79,16 @@ class QualityReport:
 def _runs_table(extraction):
     """Per run: file, nominal and measured speed [m/s], pressure [Pa], friction [N]."""
     ok = extraction.points[extraction.points["flag"].eq("ok")]
+    n = ok["n [-]"].clip(lower=1) if "n [-]" in ok else 1
+    std = ok["friction_std [N]"] if "friction_std [N]" in ok else np.nan
     measured = (
-        ok.assign(speed=ok["velocity [m/s]"].abs())
+        ok.assign(speed=ok["velocity [m/s]"].abs(), se=std / np.sqrt(n))
         .groupby("run")
         .agg(
             speed=("speed", "median"),
             friction=("friction [N]", "median"),
             pressure=("pressure [Pa]", "median"),
+            se=("se", "median"),
         )
     )
     extra = [
@@ -303,6 +306,13 @@ class QualityError(ValueError):
     """The data contradict each other too much for the gate to pick the runs to keep."""
 
 
+def _above_noise(median, runs):
+    """Whether a median friction [N] stands out of the noise of the window means of
+    ``runs`` (5 standard errors; a table without them always does)."""
+    se = float(np.nanmedian(runs["se"])) if "se" in runs and runs["se"].notna().any() else 0.0
+    return abs(median) > 5 * se and abs(median) > 0
+
+
 def _level_scale(rest, scale_factor):
     """(row, level median, median of the other levels) of runs whose whole pressure level is
     more than ``scale_factor`` off the other levels of its group (a level in N, not kN).
@@ -314,6 +324,7 @@ def _level_scale(rest, scale_factor):
     out = []
     for _, group in rest.groupby("group", dropna=False):
         medians = group.groupby("level")["friction"].median().abs()
+        medians = medians[[_above_noise(m, group[group["level"] == k]) for k, m in medians.items()]]
         if len(medians) < 2:
             continue
         for level, median in medians.items():
@@ -505,6 +516,8 @@ def assess(
             if len(level) < 3:
                 continue
             median = float(np.median(level["friction"]))
+            if not _above_noise(median, level):
+                continue  # a force column of zeros (or noise): no scale to compare
             ratio = level["friction"].abs() / max(abs(median), 1e-12)
             for row in level[(ratio > scale_factor) | (ratio < 1 / scale_factor)].to_dict(
                 "records"

@@ -165,6 +165,14 @@ def load_config(folder) -> CampaignConfig:
         }
         if kind not in kinds:
             raise BenchFileError(path, f"unknown cylinder kind {kind!r}; valid: {sorted(kinds)}")
+        if bore < 0 or rod < 0:
+            key, value = ("bore", bore) if bore < 0 else ("rod", rod)
+            raise BenchFileError(
+                path,
+                f"cylinder.{key} is negative ({value * 1e3:g} mm); expected a diameter > 0, "
+                'e.g. bore = "40 mm"',
+                line=_line_of(path, key),
+            )
         if not bore > 0:
             raise BenchFileError(
                 path,
@@ -185,6 +193,14 @@ def load_config(folder) -> CampaignConfig:
     for key in ("load_cell_sign", "position_sign"):
         if fb.get(key, 1) not in (1, -1):
             raise BenchFileError(path, f"force_balance.{key} must be 1 or -1")
+    moving_mass = _quantity(fb.get("moving_mass", "0 kg"), "mass", "kg", path)
+    if not (math.isfinite(moving_mass) and moving_mass >= 0):
+        raise BenchFileError(
+            path,
+            f"force_balance.moving_mass is {fb['moving_mass']!r}; expected a mass >= 0, "
+            'e.g. moving_mass = "12 kg"',
+            line=_line_of(path, "moving_mass"),
+        )
     return CampaignConfig(
         glob=files.get("glob", "*"),
         name_pattern=files.get("name_pattern"),
@@ -196,7 +212,7 @@ def load_config(folder) -> CampaignConfig:
         area_b=area_b,
         load_cell_sign=float(fb.get("load_cell_sign", 1)),
         position_sign=float(fb.get("position_sign", 1)),
-        moving_mass=_quantity(fb.get("moving_mass", "0 kg"), "mass", "kg", path),
+        moving_mass=moving_mass,
         extraction=dict(doc.get("extraction", {})),
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
@@ -249,7 +265,26 @@ CONFIG_SCHEMA = {
         },
         "extraction": {
             "type": "object",
-            "properties": {"method": {"type": "string"}},
+            "properties": {
+                "method": {"type": "string"},
+                # counts of samples: whole numbers (10.0 is accepted as 10)
+                "min_samples": {"type": "integer", "minimum": 1},
+                "median_window": {"type": "integer", "minimum": 1},
+                "skip_start": {"type": "integer", "minimum": 0},
+                "skip_end": {"type": "integer", "minimum": 0},
+                # thresholds [-] and the velocity window [s]: positive
+                **{
+                    key: {"type": "number", "exclusiveMinimum": 0}
+                    for key in (
+                        "moving_fraction",
+                        "settle_tolerance",
+                        "trim_sigma",
+                        "spike_sigma",
+                        "velocity_window",
+                    )
+                },
+                "trim_floor": {"type": "number", "minimum": 0},
+            },
             "additionalProperties": {"type": "number"},
         },
     },
@@ -259,7 +294,8 @@ CONFIG_SCHEMA = {
 
 def _line_of(path, key) -> int | None:
     """1-based line of ``key = ...`` (or ``[key]``) in a TOML file, for error messages."""
-    pattern = re.compile(rf"^\s*(\[\s*{re.escape(key)}\s*\]|{re.escape(key)}\s*=)")
+    name = re.escape(key)  # bare, or quoted as "bore " (a quoted key may hold spaces)
+    pattern = re.compile(rf"""^\s*(\[\s*{name}\s*\]|{name}\s*=|(["']){name}\2\s*=)""")
     for number, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
         if pattern.match(line):
             return number

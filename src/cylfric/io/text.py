@@ -236,7 +236,8 @@ def read_bench_arrays(
         Text encoding of the preamble (default: UTF-8, falling back to latin-1).
     roles : dict, optional
         Quantity -> column name (``{"force": "Axial Force"}``, campaign.toml ``[columns]``):
-        that column is the quantity, other candidates are kept as read. Without it, two
+        that column is the quantity, other candidates are kept as read (a name that two
+        columns share is told apart by its place: ``"Axial Force#2"``). Without it, two
         measured candidates for one quantity are an error listing them; setpoint, command,
         target or demand columns are never taken for a measured quantity.
 
@@ -472,24 +473,37 @@ def _column_roles(names, roles, path, line):
     Raises BenchFileError when a role names no column, or when two columns are measured
     candidates for one quantity and no role chooses.
     """
-    unknown = {q: c for q, c in roles.items() if c not in names}
+    labels = _column_labels(names)
+    repeated = {n for n in names if names.count(n) > 1}
+    for quantity, column in roles.items():
+        if column in repeated:
+            options = " or ".join(
+                f'"{label}"' for label, n in zip(labels, names, strict=True) if n == column
+            )
+            raise BenchFileError(
+                path,
+                f"campaign.toml [columns] {quantity} = {column!r} names {names.count(column)} "
+                f"columns of that name; choose one by its place: {quantity} = {options}",
+                line=line,
+            )
+    unknown = {q: c for q, c in roles.items() if c not in names and c not in labels}
     if unknown:
         quantity, column = next(iter(unknown.items()))
         raise BenchFileError(
             path,
             f"campaign.toml [columns] {quantity} = {column!r} names no column; the file has "
-            f"{names}",
+            f"{labels}",
             line=line,
         )
     chosen = {c: q for q, c in roles.items()}
     quantities = []
-    for name in names:
-        quantity = chosen.get(name) or canonical_name(name)
-        if name not in chosen and quantity in roles:
+    for name, label in zip(names, labels, strict=True):
+        quantity = chosen.get(label) or chosen.get(name) or canonical_name(name)
+        if label not in chosen and name not in chosen and quantity in roles:
             quantity = None  # another column was chosen for this quantity
         quantities.append(quantity)
     for quantity in set(q for q in quantities if q in QUANTITY_DIMENSIONS):
-        candidates = [n for n, q in zip(names, quantities, strict=True) if q == quantity]
+        candidates = [n for n, q in zip(labels, quantities, strict=True) if q == quantity]
         if len(candidates) > 1:
             raise BenchFileError(
                 path,
@@ -498,6 +512,20 @@ def _column_roles(names, roles, path, line):
                 line=line,
             )
     return quantities
+
+
+def _column_labels(names):
+    """Names that tell every column apart: a name used more than once gets ``#1``, ``#2``
+    ... by its place (``Axial Force#2``, as campaign.toml ``[columns]`` may name it)."""
+    seen = {}
+    labels = []
+    for name in names:
+        if names.count(name) > 1:
+            seen[name] = seen.get(name, 0) + 1
+            labels.append(f"{name}#{seen[name]}")
+        else:
+            labels.append(name)
+    return labels
 
 
 def _assemble(frames, path, roles):
