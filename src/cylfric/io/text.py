@@ -276,12 +276,13 @@ def read_bench_arrays(
         raise BenchFileError(path, "the file is empty; expected a bench record")
     nul = raw.find(b"\x00")
     if nul >= 0:
+        line = raw.count(b"\n", 0, nul) + 1  # on line 1: a binary or UTF-16 file, no line
         raise BenchFileError(
             path,
             "binary content (NUL bytes); expected a text export "
             "(UTF-8 or latin-1), not UTF-16 or a binary file"
             + ("" if nul < 65536 else " (a corrupt stretch in an otherwise text file?)"),
-            line=raw.count(b"\n", 0, nul) + 1,
+            line=line if line > 1 else None,
         )
     buf = np.frombuffer(raw, dtype=np.uint8)
     starts, ends, kinds = scan_lines(buf)
