@@ -516,3 +516,26 @@ def test_two_columns_of_one_name_are_chosen_by_place(tmp_path):
         read_bench_text(path, roles={"force": "Axial Force"})
     data, _ = read_bench_text(path, roles={"force": "Axial Force#2"})
     np.testing.assert_allclose(data["force [N]"], [71.0, 72.0, 73.0])  # kN -> N
+
+
+def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
+    """F1 (decision): when the gate would exclude more than half of the runs the data
+    contradict each other; no datasheet is fitted from the rest. 15 of 28 runs with their
+    position in m instead of mm (each one flagged by the speed check)."""
+    folder = _copy(seed1, tmp_path)
+    for path in sorted(folder.glob("run_0*.txt"))[:15]:
+        _edit(path, "s\tmm\tkN\n", "s\tm\tkN\n")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    message = " ".join(result.output.split())
+    assert (
+        "the data-quality gate would exclude 15 of 28 runs (15 by speed): the data contradict "
+        "each other, so no datasheet is fitted from the remainder (at most 50% may be "
+        "excluded); the first: run_000_p10bar_v1mms.txt: measured speed"
+    ) in message
+    assert not (out / "datasheet.json").exists()
+    for path in sorted(folder.glob("run_0*.txt"))[1:15]:  # 1 of 28 left: fitted, listed
+        _edit(path, "s\tm\tkN\n", "s\tmm\tkN\n")
+    result, out = _fit(folder, tmp_path)
+    assert result.exit_code == 0, result.output
+    assert list(_excluded(out)["check"]) == ["speed"]
