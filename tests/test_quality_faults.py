@@ -539,3 +539,19 @@ def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
     result, out = _fit(folder, tmp_path)
     assert result.exit_code == 0, result.output
     assert list(_excluded(out)["check"]) == ["speed"]
+
+
+def test_a_manifest_row_without_a_pressure_says_so(seed1, tmp_path):
+    """F10: 'no pressure ... expected manifest.csv' was said although manifest.csv was
+    there; now its line is named."""
+    folder = _copy(seed1, tmp_path)
+    name = "run_017_p103bar_v10mms.txt"
+    _edit(folder / name, "Pressure: 103 bar\n", "")
+    (folder / name).rename(folder / "run_017.txt")
+    _edit(folder / "manifest.csv", f"{name},103,10", "run_017.txt,,10")
+    result, _ = _fit(folder, tmp_path)
+    assert result.exit_code == 2
+    assert (
+        "run_017.txt: no pressure for this run; expected a pressure_bar value in manifest.csv "
+        "(line 19 gives none)"
+    ) in " ".join(result.output.split())

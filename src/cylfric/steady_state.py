@@ -367,9 +367,15 @@ def _point_rows(data, metadata, config, run, options):
     )
     pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
     if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
+        listed = metadata.get("manifest_line")
+        manifest = (
+            f"a pressure_bar value in manifest.csv (line {listed} gives none)"
+            if listed is not None
+            else "manifest.csv"
+        )
         raise BenchFileError(
             file,
-            "no pressure for this run; expected manifest.csv, a "
+            f"no pressure for this run; expected {manifest}, a "
             "'Pressure: 55 bar' header line, a file-name token such as "
             "55bar, or a pressure column",
         )

@@ -632,6 +632,11 @@ def read_run(info: RunInfo, config: CampaignConfig):
     if math.isnan(velocity) and "velocity" in tokens:
         velocity, source["velocity"] = tokens["velocity"][0], "file name"
     metadata.update(
-        pressure=pressure, velocity=velocity, extra=extra, source=source, nominal=nominal
+        pressure=pressure,
+        velocity=velocity,
+        extra=extra,
+        source=source,
+        nominal=nominal,
+        manifest_line=info.manifest_line,
     )
     return data, metadata
