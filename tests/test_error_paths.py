@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cylfric.identify import fit_surface
-from cylfric.io import BenchFileError, discover_runs, load_config
+from cylfric.io import BenchFileError, CampaignConfig, discover_runs, load_config, read_run
 from cylfric.simulate import Cylinder, FrictionModel, SpringPull, simulate, simulate_batch
 from cylfric.simulate.bench import run_virtual_test
 from cylfric.steady_state import extract_points
@@ -73,10 +73,6 @@ def test_virtual_bench_checks():
     ("manifest", "message"),
     [
         (
-            "file,pressure_bar,velocity_mm_s\nmissing.txt,55,10\n",
-            r"lists files that do not exist: \['missing.txt'\]",
-        ),
-        (
             "file,pressure_bar,velocity_mm_s\nrun.txt,high,10\n",
             r"manifest.csv, line 2: pressure_bar and velocity_mm_s must be numbers",
         ),
@@ -88,6 +84,18 @@ def test_manifest_errors(tmp_path, manifest, message):
     (tmp_path / "manifest.csv").write_text(manifest)
     with pytest.raises(BenchFileError, match=message):
         discover_runs(tmp_path)
+
+
+def test_a_manifest_row_for_a_missing_file_names_its_line(tmp_path):
+    """Raised when the run is read (so --skip-bad can skip it), not by discover_runs
+    (issue 11, F10: the error named no line and stopped every fit)."""
+    (tmp_path / "manifest.csv").write_text("file,pressure_bar,velocity_mm_s\nmissing.txt,55,10\n")
+    (info,) = discover_runs(tmp_path)
+    with pytest.raises(
+        BenchFileError,
+        match=r"manifest.csv, line 2: lists missing.txt, which is not in the campaign folder",
+    ):
+        read_run(info, CampaignConfig())
 
 
 @pytest.mark.parametrize(

@@ -265,5 +265,5 @@ def test_nul_bytes_past_64_kib_name_the_line(tmp_path):
     data = body.encode()
     path = tmp_path / "run.txt"
     path.write_bytes(data[:70000] + b"\x00\x00" + data[70000:])
-    with pytest.raises(BenchFileError, match=r"run.txt, line 7100: expected a number in column 1"):
+    with pytest.raises(BenchFileError, match=r"run.txt, line 7100: binary content \(NUL bytes\)"):
         read_bench_text(path)

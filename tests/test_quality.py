@@ -82,18 +82,27 @@ def test_a_unit_slip_in_one_run_is_excluded(clean, tmp_path, name, old, new, che
     _within_tolerance(out)
 
 
-def test_a_run_typed_as_0_bar_while_measured_at_103_bar_is_excluded(clean, tmp_path):
-    """Only manifest.csv knows the run's pressure (no header line, no file-name token): the
-    outlier check finds it from its neighbours in speed at 0.1 bar."""
+@pytest.mark.parametrize(
+    "typed, check",
+    [
+        # 0 bar on one run, not a 0-bar level: a metadata conflict by itself (issue 11, F3;
+        # the outlier check found it before)
+        ("0", "metadata"),
+        # 0.1 bar joins the 0.1 bar level: the outlier check finds it from its neighbours
+        ("0.1", "outlier"),
+    ],
+)
+def test_a_run_typed_as_0_bar_while_measured_at_103_bar_is_excluded(clean, tmp_path, typed, check):
+    """Only manifest.csv knows the run's pressure (no header line, no file-name token)."""
     folder = _copy(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
     _edit(folder / name, "Pressure: 103 bar\n", "")
     (folder / name).rename(folder / "run_024.txt")
-    _edit(folder / "manifest.csv", f"{name},103,10", "run_024.txt,0,10")
+    _edit(folder / "manifest.csv", f"{name},103,10", f"run_024.txt,{typed},10")
     result, out = _fit(folder, tmp_path)
     assert result.exit_code == 0, result.output
     excluded = _excluded(out)
-    assert list(excluded["check"]) == ["outlier"] and list(excluded["file"]) == ["run_024.txt"]
+    assert list(excluded["check"]) == [check] and list(excluded["file"]) == ["run_024.txt"]
     _within_tolerance(out)
 
 
@@ -174,8 +183,23 @@ def test_nominal_sources_are_compared(clean, tmp_path, edit, check, expected):
         assert expected in excluded["reason"].iloc[0]
 
 
-def test_a_measured_pressure_column_is_not_second_guessed(tmp_path):
-    """The fit uses the pressure a file measures: its nominal sources may differ."""
+@pytest.mark.parametrize(
+    "typed, reason",
+    [
+        # within 20 % (and 2 bar) of the measured 20 bar: nominal rounding, the column wins
+        ("17", None),
+        # issue 11, F2: 0 bar against a measured 20 bar was kept silently (the column won)
+        (
+            "0",
+            "metadata conflict: measured pressure 20 bar (the pressure column, the value used) "
+            "but 0 bar in manifest.csv line 2 (check the pressure column's unit and the run's "
+            "nominal pressure)",
+        ),
+    ],
+)
+def test_a_measured_pressure_column_is_compared_with_the_nominal_values(tmp_path, typed, reason):
+    """The fit uses the pressure a file measures; a nominal value beyond 20 % and 2 bar of
+    it is a metadata conflict naming both (quality.assess measured_tolerance)."""
     folder = tmp_path / "measured"
     generate_campaign(
         folder,
@@ -185,9 +209,15 @@ def test_a_measured_pressure_column_is_not_second_guessed(tmp_path):
     )
     manifest = folder / "manifest.csv"
     rows = manifest.read_text().splitlines()
-    rows[1] = ",".join([rows[1].split(",")[0], "0", rows[1].split(",")[2]])
+    rows[1] = ",".join([rows[1].split(",")[0], typed, rows[1].split(",")[2]])
     manifest.write_text("\n".join(rows) + "\n")
-    assert assess(extract_campaign(folder, workers=1)).excluded.empty
+    excluded = assess(extract_campaign(folder, workers=1)).excluded
+    if reason is None:
+        assert excluded.empty
+    else:
+        assert list(excluded["file"]) == ["run_000_p20bar_v2mms.txt"]
+        assert list(excluded["check"]) == ["metadata"]
+        assert excluded["reason"].iloc[0] == reason
 
 
 def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):

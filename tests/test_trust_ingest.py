@@ -140,7 +140,9 @@ def test_fuzzed_campaign_toml_gives_a_config_or_a_bench_file_error(tmp_path, tab
 )
 @given(
     header=st.lists(
-        st.sampled_from(["file", " File", "pressure_bar", " PRESSURE_BAR ", "velocity_mm_s", "x"]),
+        st.sampled_from(
+            ["file", " File", "pressure_bar", " PRESSURE_BAR ", "velocity_mm_s", "x", "pressure"]
+        ),
         min_size=1,
         max_size=4,
     ),

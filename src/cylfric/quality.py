@@ -6,7 +6,9 @@ those that would mislead the fit:
 - ``speed``: the measured window speed differs from the run's nominal speed by more than
   ``speed_tolerance`` (a position column in m instead of mm reads 1000x off);
 - ``scale``: the run's friction differs from the other runs at its pressure level by a
-  factor of more than ``scale_factor`` (a force column in N instead of kN);
+  factor of more than ``scale_factor`` (a force column in N instead of kN), or its whole
+  level's median friction differs by that factor from the median of the other levels' (a
+  test day whose files all say N while the values are kN);
 - ``outlier``: the run's friction is far from what its neighbours in speed at the same
   pressure level say (interpolated in log speed), beyond ``outlier_sigma`` robust sigmas of
   all such residuals (a run typed as 0 bar in manifest.csv while measured at 80 bar);
@@ -15,7 +17,17 @@ those that would mislead the fit:
   (manifest.csv, campaign.toml's name_pattern, a header line such as ``Pressure: 103 bar``,
   a file-name token such as ``p103bar``) by more than ``metadata_tolerance`` (a run typed
   as 0 bar in manifest.csv whose file says 103 bar). A pressure the file measures (a
-  pressure column) is what the fit uses, so its nominal sources are not compared.
+  pressure column) is what the fit uses; it is compared with each nominal value with a
+  looser limit (``measured_tolerance``, ``measured_floor``: 20 % and 2 bar), so a column in
+  psi or MPa whose unit says bar is found. A nominal pressure of 0, below 0 or not finite
+  on a run without a pressure column is a conflict by itself unless it belongs to a 0-bar
+  level (at least ``zero_level_runs`` runs, and half the median number of runs per level,
+  at 0 bar).
+
+The gate refuses (:class:`QualityError`, a ValueError: exit 2) rather than pick a side when
+the data contradict each other: when the ``scale`` check would flag more than a quarter of
+the runs (groups about 1000x apart, no clear majority: with most runs in the wrong unit the
+right ones would be the ones left out) or when more than half of the runs would be excluded.
 
 Flagged runs are kept in the points table with the flag ``"excluded: <check>"``, so that
 :func:`cylfric.identify.identify` leaves them out, and listed in :attr:`QualityReport.excluded`
@@ -34,7 +46,7 @@ import pandas as pd
 
 from .levels import pressure_levels
 
-__all__ = ["assess", "QualityReport", "CHECKS"]
+__all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
 CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted")
 """Names of the checks, as they appear in ``excluded.csv``."""
@@ -67,13 +79,16 @@ class QualityReport:
 def _runs_table(extraction):
     """Per run: file, nominal and measured speed [m/s], pressure [Pa], friction [N]."""
     ok = extraction.points[extraction.points["flag"].eq("ok")]
+    n = ok["n [-]"].clip(lower=1) if "n [-]" in ok else 1
+    std = ok["friction_std [N]"] if "friction_std [N]" in ok else np.nan
     measured = (
-        ok.assign(speed=ok["velocity [m/s]"].abs())
+        ok.assign(speed=ok["velocity [m/s]"].abs(), se=std / np.sqrt(n))
         .groupby("run")
         .agg(
             speed=("speed", "median"),
             friction=("friction [N]", "median"),
             pressure=("pressure [Pa]", "median"),
+            se=("se", "median"),
         )
     )
     extra = [
@@ -166,6 +181,64 @@ def _conflicts(info, tolerance, floors):
     return "; ".join(texts)
 
 
+def _measured_conflict(info, measured, tolerance, floor):
+    """Text naming a run's measured pressure and the nominal values it contradicts, or ''.
+
+    ``measured`` is the median over the run's windows of the pressure column [Pa]. A
+    measured pressure varies more than a nominal one (hand-pumped levels, hose drops), so
+    the limit is looser than between nominal sources: ``tolerance`` of the larger and at
+    least ``floor`` [Pa]. A column in psi or MPa labelled bar reads 14.5 or 0.1 times the
+    nominal and is far outside.
+    """
+    values = info.get("nominal", {}).get("pressure", {})
+    if not math.isfinite(measured):
+        return ""
+    off = [
+        (source, value, where)
+        for source, (value, where) in values.items()
+        if not math.isfinite(value)
+        or abs(measured - value) > max(tolerance * max(abs(measured), abs(value)), floor)
+    ]
+    if not off:
+        return ""
+    said = " and ".join(_said("pressure", *item) for item in off)
+    return (
+        f"measured pressure {measured / 1e5:.4g} bar (the pressure column, the value used) "
+        f"but {said} ({_pressure_cause(measured, off[0][1])})"
+    )
+
+
+_PRESSURE_SLIPS = (
+    (14.5038, "values in psi whose unit says bar"),
+    (1 / 14.5038, "values in bar whose unit says psi"),
+    (0.1, "values in MPa whose unit says bar"),
+    (10.0, "values in bar whose unit says MPa"),
+    (100.0, "values in kPa whose unit says bar"),
+    (1e5, "values in Pa whose unit says bar"),
+    (1e-5, "values in bar whose unit says Pa"),
+)
+"""(measured / nominal pressure, the unit slip that gives it)."""
+
+
+def _pressure_cause(measured, nominal):
+    """Likely cause of a measured pressure far from the nominal one, in words."""
+    if math.isfinite(nominal) and nominal > 0 and measured > 0:
+        ratio = measured / nominal
+        for factor, slip in _PRESSURE_SLIPS:
+            if abs(ratio / factor - 1) < 0.2:
+                return f"{ratio:.3g} times the nominal: a pressure column with {slip}?"
+    return "check the pressure column's unit and the run's nominal pressure"
+
+
+def _deliberate_zero(runs, pressures, min_runs):
+    """Runs whose nominal pressure is <= 0 or not finite and not one of a 0-bar level."""
+    bad = [run for run, p in zip(runs, pressures, strict=True) if not p > 0]
+    zero = [run for run, p in zip(runs, pressures, strict=True) if p == 0]
+    if len(zero) >= min_runs:  # a deliberate unpressurised level
+        bad = [run for run in bad if run not in set(zero)]
+    return set(bad)
+
+
 _POINT_NAMES = {
     "run",
     "file",
@@ -229,6 +302,71 @@ def _outliers(groups, outlier_sigma, min_speeds, floor):
     return out
 
 
+class QualityError(ValueError):
+    """The data contradict each other too much for the gate to pick the runs to keep."""
+
+
+def _above_noise(median, runs):
+    """Whether a median friction [N] stands out of the noise of the window means of
+    ``runs`` (5 standard errors; a table without them always does)."""
+    se = float(np.nanmedian(runs["se"])) if "se" in runs and runs["se"].notna().any() else 0.0
+    return abs(median) > 5 * se and abs(median) > 0
+
+
+def _level_scale(rest, scale_factor):
+    """(row, level median, median of the other levels) of runs whose whole pressure level is
+    more than ``scale_factor`` off the other levels of its group (a level in N, not kN).
+
+    A level is compared with the median of the other levels' medians (within a group of
+    runs); with two levels each one is compared with the other, so both are flagged and
+    :func:`_refuse_scale` refuses (which of the two is right cannot be told).
+    """
+    out = []
+    for _, group in rest.groupby("group", dropna=False):
+        medians = group.groupby("level")["friction"].median().abs()
+        medians = medians[[_above_noise(m, group[group["level"] == k]) for k, m in medians.items()]]
+        if len(medians) < 2:
+            continue
+        for level, median in medians.items():
+            others = float(np.median(medians.drop(level)))
+            ratio = median / max(others, 1e-12)
+            if ratio > scale_factor or ratio < 1 / scale_factor:
+                rows = group[group["level"] == level].to_dict("records")
+                out += [(row, float(median), others) for row in rows]
+    return out
+
+
+def _folder(extraction):
+    return getattr(extraction, "folder", None) or "the campaign"
+
+
+def _refuse_scale(excluded, n_runs, max_fraction, factor, extraction):
+    scale = [e for e in excluded if e["check"] == "scale"]
+    if n_runs and len(scale) > max_fraction * n_runs:
+        files = ", ".join(e["file"] for e in scale[:4]) + (", ..." if len(scale) > 4 else "")
+        raise QualityError(
+            f"{_folder(extraction)}: the friction of {len(scale)} of {n_runs} runs ({files}) "
+            f"differs from the rest by more than {factor:g}x: the runs fall in groups about "
+            "1000x apart and none is a clear majority (at most "
+            f"{max_fraction:.0%} of the runs may be flagged by scale); expected one force unit "
+            "in every file: correct the force unit (N or kN) in the unit row of the files "
+            "that are wrong"
+        )
+
+
+def _refuse_most(frame, n_runs, max_fraction, extraction):
+    runs = frame[frame["run"] >= 0]
+    if n_runs and runs["run"].nunique() > max_fraction * n_runs:
+        counts = ", ".join(f"{n} by {check}" for check, n in runs["check"].value_counts().items())
+        first = "; ".join(f"{r.file}: {r.reason}" for r in runs.head(3).itertuples())
+        raise QualityError(
+            f"{_folder(extraction)}: the data-quality gate would exclude "
+            f"{runs['run'].nunique()} of {n_runs} runs ({counts}): the data contradict each "
+            f"other, so no datasheet is fitted from the remainder (at most "
+            f"{max_fraction:.0%} may be excluded); the first: {first}"
+        )
+
+
 def assess(
     extraction,
     *,
@@ -240,6 +378,11 @@ def assess(
     metadata_tolerance=0.05,
     pressure_floor=0.2e5,
     speed_floor=0.05e-3,
+    measured_tolerance=0.20,
+    measured_floor=2e5,
+    zero_level_runs=3,
+    max_scale_fraction=0.25,
+    max_excluded_fraction=0.5,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -273,9 +416,34 @@ def assess(
     speed_floor : float
         Speed differences up to this are never a conflict [m/s] (0.05 mm/s).
 
+    measured_tolerance : float
+        Largest relative difference between a run's measured pressure (median of its
+        pressure column over the windows) and each of its nominal values [-] (0.20: a rig's
+        measured pressure sags and scatters more than a nominal value).
+    measured_floor : float
+        Differences between measured and nominal pressure up to this are never a conflict
+        [Pa] (2 bar: an unpressurised run may read 1 bar of back pressure).
+    zero_level_runs : int
+        A nominal pressure of 0 (or below, or not finite) on a run without a pressure column
+        is a metadata conflict unless at least this many runs, and at least half the median
+        number of runs per level, share 0 bar (a deliberate unpressurised level) [-].
+    max_scale_fraction : float
+        When the ``scale`` check would flag more than this fraction of the runs [-], the
+        runs' friction falls in groups about 10^3 apart without a clear majority: raise
+        :class:`QualityError` (exit 2) rather than guess which group is right.
+    max_excluded_fraction : float
+        When the gate would exclude more than this fraction of the runs [-], the data
+        contradict each other: raise :class:`QualityError` rather than fit the remainder.
+
     Returns
     -------
     QualityReport
+
+    Raises
+    ------
+    QualityError
+        When the gate would exclude more than ``max_excluded_fraction`` of the runs, or the
+        ``scale`` check more than ``max_scale_fraction``.
     """
     table = _runs_table(extraction)
     excluded = []
@@ -284,8 +452,42 @@ def assess(
         excluded.append({"file": row["file"], "run": row["run"], "check": check, "reason": reason})
 
     floors = {"pressure": pressure_floor, "velocity": speed_floor}
+    points = extraction.points
+    windows = points[points["n [-]"] > 0] if "n [-]" in points else points
+    measured = windows.groupby("run")["pressure [Pa]"].median()
+    unmeasured = [info for info in extraction.runs if not info.get("pressure measured")]
+    nominal_p = np.array([info.get("pressure [Pa]", math.nan) for info in extraction.runs])
+    finite = nominal_p[np.isfinite(nominal_p)]
+    per_level = float(np.median(np.bincount(pressure_levels(finite)[0]))) if finite.size else 0.0
+    nonpositive = _deliberate_zero(
+        [info.get("run") for info in unmeasured],
+        [info.get("pressure [Pa]", math.nan) for info in unmeasured],
+        max(zero_level_runs, math.ceil(per_level / 2)),
+    )
     for info in extraction.runs:
-        text = _conflicts(info, metadata_tolerance, floors)
+        texts = [_conflicts(info, metadata_tolerance, floors)]
+        if info.get("pressure measured"):
+            texts.append(
+                _measured_conflict(
+                    info,
+                    float(measured.get(info.get("run"), math.nan)),
+                    measured_tolerance,
+                    measured_floor,
+                )
+            )
+        elif info.get("run") in nonpositive and not texts[0].startswith("pressure"):
+            used = info.get("source", {}).get("pressure")
+            value, where = (
+                info.get("nominal", {})
+                .get("pressure", {})
+                .get(used, (info.get("pressure [Pa]", math.nan), "the metadata"))
+            )
+            texts.append(
+                f"nominal pressure {_said('pressure', used or '', value, where)}, "
+                "and no 0-bar level it belongs to (pressures must be above 0, finite, and "
+                "in bar): check this run's pressure"
+            )
+        text = "; ".join(t for t in texts if t)
         if text:
             row = {"file": _relative(info["file"], extraction), "run": info.get("run")}
             exclude(row, "metadata", f"metadata conflict: {text}")
@@ -314,6 +516,8 @@ def assess(
             if len(level) < 3:
                 continue
             median = float(np.median(level["friction"]))
+            if not _above_noise(median, level):
+                continue  # a force column of zeros (or noise): no scale to compare
             ratio = level["friction"].abs() / max(abs(median), 1e-12)
             for row in level[(ratio > scale_factor) | (ratio < 1 / scale_factor)].to_dict(
                 "records"
@@ -324,6 +528,18 @@ def assess(
                     f"friction {row['friction']:.4g} N against {median:.4g} N for the "
                     f"runs at {row['pressure'] / 1e5:.3g} bar (a force unit, N or kN?)",
                 )
+        flagged = {e["run"] for e in excluded}
+        rest = rest[~rest["run"].isin(flagged)]
+        for row, median, others in _level_scale(rest, scale_factor):
+            exclude(
+                row,
+                "scale",
+                f"friction {row['friction']:.4g} N; its pressure level "
+                f"({row['pressure'] / 1e5:.3g} bar) has a median of {median:.4g} N against "
+                f"{others:.4g} N for the other levels (a force unit, N or kN, for the whole "
+                "level?)",
+            )
+        _refuse_scale(excluded, len(extraction.runs), max_scale_fraction, scale_factor, extraction)
         flagged = {e["run"] for e in excluded}
         rest = rest[~rest["run"].isin(flagged)]
         groups = [
@@ -357,7 +573,7 @@ def assess(
             }
         )
     frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
-    points = extraction.points
+    _refuse_most(frame, len(extraction.runs), max_excluded_fraction, extraction)
     runs = frame[frame["run"] >= 0]
     if len(runs):
         checks = dict(zip(runs["run"], runs["check"], strict=True))

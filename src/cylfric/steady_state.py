@@ -225,6 +225,11 @@ def _longest_true(mask):
     return int(starts[i]), int(stops[i])
 
 
+SPIKE_SIGMA = 5.0
+"""Samples further than this many robust sigmas from the rolling median of the force are
+spikes: left out of the cushion trimming's rolling mean (:func:`find_windows`) [-]."""
+
+
 def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     """Trim ends where the rolling median of the force leaves the centre level."""
     n = len(force)
@@ -240,7 +245,13 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     w_long = max(w, n // 10)
     if w_long > w:
         sigma = 1.4826 * np.median(np.abs(force - np.median(force)))
-        mean = rolling_mean(force, w_long)
+        # isolated spikes (a sample or a few, far from the rolling median) are replaced by
+        # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
+        # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
+        residual = force - rolling
+        noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
+        spikes = np.abs(residual) > SPIKE_SIGMA * noise if noise > 0 else residual != 0
+        mean = rolling_mean(np.where(spikes, rolling, force), w_long)
         outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
     outside = np.flatnonzero(outside)
     mid = n // 2
@@ -356,9 +367,15 @@ def _point_rows(data, metadata, config, run, options):
     )
     pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
     if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
+        listed = metadata.get("manifest_line")
+        manifest = (
+            f"a pressure_bar value in manifest.csv (line {listed} gives none)"
+            if listed is not None
+            else "manifest.csv"
+        )
         raise BenchFileError(
             file,
-            "no pressure for this run; expected manifest.csv, a "
+            f"no pressure for this run; expected {manifest}, a "
             "'Pressure: 55 bar' header line, a file-name token such as "
             "55bar, or a pressure column",
         )
@@ -660,7 +677,7 @@ def extract_campaign(
         else:
             per_run.append(rows)
             runs.append(summary)
-        total += info.path.stat().st_size
+        total += info.path.stat().st_size if info.path.is_file() else 0
     if not per_run:
         reasons = "; ".join(item["reason"] for item in skipped[:3])
         raise BenchFileError(

@@ -112,6 +112,8 @@ class RunInfo:
     extra: dict = field(default_factory=dict)
     source: dict = field(default_factory=dict)
     nominal: dict = field(default_factory=dict)
+    manifest_line: int | None = None  # the run's row in manifest.csv (1 = the header)
+    manifest: Path | None = None  # the manifest.csv that lists the run
 
 
 class _Manifest(dict):
@@ -163,6 +165,14 @@ def load_config(folder) -> CampaignConfig:
         }
         if kind not in kinds:
             raise BenchFileError(path, f"unknown cylinder kind {kind!r}; valid: {sorted(kinds)}")
+        if bore < 0 or rod < 0:
+            key, value = ("bore", bore) if bore < 0 else ("rod", rod)
+            raise BenchFileError(
+                path,
+                f"cylinder.{key} is negative ({value * 1e3:g} mm); expected a diameter > 0, "
+                'e.g. bore = "40 mm"',
+                line=_line_of(path, key),
+            )
         if not bore > 0:
             raise BenchFileError(
                 path,
@@ -183,6 +193,14 @@ def load_config(folder) -> CampaignConfig:
     for key in ("load_cell_sign", "position_sign"):
         if fb.get(key, 1) not in (1, -1):
             raise BenchFileError(path, f"force_balance.{key} must be 1 or -1")
+    moving_mass = _quantity(fb.get("moving_mass", "0 kg"), "mass", "kg", path)
+    if not (math.isfinite(moving_mass) and moving_mass >= 0):
+        raise BenchFileError(
+            path,
+            f"force_balance.moving_mass is {fb['moving_mass']!r}; expected a mass >= 0, "
+            'e.g. moving_mass = "12 kg"',
+            line=_line_of(path, "moving_mass"),
+        )
     return CampaignConfig(
         glob=files.get("glob", "*"),
         name_pattern=files.get("name_pattern"),
@@ -194,7 +212,7 @@ def load_config(folder) -> CampaignConfig:
         area_b=area_b,
         load_cell_sign=float(fb.get("load_cell_sign", 1)),
         position_sign=float(fb.get("position_sign", 1)),
-        moving_mass=_quantity(fb.get("moving_mass", "0 kg"), "mass", "kg", path),
+        moving_mass=moving_mass,
         extraction=dict(doc.get("extraction", {})),
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
@@ -247,7 +265,26 @@ CONFIG_SCHEMA = {
         },
         "extraction": {
             "type": "object",
-            "properties": {"method": {"type": "string"}},
+            "properties": {
+                "method": {"type": "string"},
+                # counts of samples: whole numbers (10.0 is accepted as 10)
+                "min_samples": {"type": "integer", "minimum": 1},
+                "median_window": {"type": "integer", "minimum": 1},
+                "skip_start": {"type": "integer", "minimum": 0},
+                "skip_end": {"type": "integer", "minimum": 0},
+                # thresholds [-] and the velocity window [s]: positive
+                **{
+                    key: {"type": "number", "exclusiveMinimum": 0}
+                    for key in (
+                        "moving_fraction",
+                        "settle_tolerance",
+                        "trim_sigma",
+                        "spike_sigma",
+                        "velocity_window",
+                    )
+                },
+                "trim_floor": {"type": "number", "minimum": 0},
+            },
             "additionalProperties": {"type": "number"},
         },
     },
@@ -257,7 +294,8 @@ CONFIG_SCHEMA = {
 
 def _line_of(path, key) -> int | None:
     """1-based line of ``key = ...`` (or ``[key]``) in a TOML file, for error messages."""
-    pattern = re.compile(rf"^\s*(\[\s*{re.escape(key)}\s*\]|{re.escape(key)}\s*=)")
+    name = re.escape(key)  # bare, or quoted as "bore " (a quoted key may hold spaces)
+    pattern = re.compile(rf"""^\s*(\[\s*{name}\s*\]|{name}\s*=|(["']){name}\2\s*=)""")
     for number, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
         if pattern.match(line):
             return number
@@ -317,57 +355,134 @@ def _tokens(name: str) -> dict:
     return out
 
 
+_MANIFEST_COLUMNS = ("file", "pressure_bar", "velocity_mm_s")
+# a column named like a pressure or a speed without the unit the manifest needs: refused, not
+# kept as a label ('pressure' in bar or psi? 'velocity' in mm/s or m/s?)
+_QUANTITY_COLUMN = re.compile(
+    r"^(p|pressure|press|druck|tryck|v|vel|velocity|speed|geschwindigkeit|hastighet)"
+    r"($|[\s_\[(/.-])"
+)
+
+
+def _manifest_text(path: Path) -> str:
+    """Text of manifest.csv: UTF-8 (with or without a BOM) or UTF-16 with a BOM."""
+    data = path.read_bytes()
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        try:
+            return data.decode("utf-16")
+        except UnicodeDecodeError as exc:
+            raise BenchFileError(
+                path, f"starts like UTF-16 text but does not decode ({exc.reason})"
+            ) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise BenchFileError(
+            path,
+            f"byte 0x{data[exc.start]:02x} is not UTF-8 text; expected a CSV file in UTF-8 "
+            "(or UTF-16 with a byte-order mark, as Excel's 'Unicode text' writes)",
+            line=line,
+        ) from None
+
+
+def _manifest_delimiter(path: Path, header: str) -> str:
+    """The separator of manifest.csv's header row: a comma, else a semicolon or a tab."""
+    if "," in header:
+        return ","
+    for delimiter in (";", "\t"):
+        if delimiter in header:
+            return delimiter
+    if header.strip().lower() == "file":
+        return ","
+    raise BenchFileError(
+        path,
+        f"header row {header.strip()!r} has no separator; expected comma-separated columns "
+        "starting with 'file' (file,pressure_bar,velocity_mm_s)",
+        line=1,
+    )
+
+
+def _number(text: str, delimiter: str) -> float:
+    """A manifest cell as a float (a decimal comma where the separator is not a comma)."""
+    return float(text.replace(",", ".") if delimiter != "," else text)
+
+
 def _read_manifest(folder: Path) -> dict:
     path = folder / MANIFEST_NAME
     rows = _Manifest()
     if not path.is_file():
         return rows
-    with path.open(newline="", encoding="utf-8-sig") as handle:
-        reader = csv.DictReader(handle, skipinitialspace=True)
-        if reader.fieldnames:  # 'file, pressure_bar' or 'File' are the same columns
-            reader.fieldnames = [name.strip().lower() for name in reader.fieldnames]
-        if not reader.fieldnames or "file" not in reader.fieldnames:
+    text = _manifest_text(path)
+    delimiter = _manifest_delimiter(path, text.split("\n", 1)[0])
+    reader = csv.DictReader(
+        text.splitlines(keepends=True), delimiter=delimiter, skipinitialspace=True
+    )
+    if reader.fieldnames:  # 'file, pressure_bar' or 'File' are the same columns
+        reader.fieldnames = [name.strip().lower() for name in reader.fieldnames]
+    expected = ",".join(_MANIFEST_COLUMNS)
+    if not reader.fieldnames or "file" not in reader.fieldnames:
+        raise BenchFileError(
+            path,
+            f"expected a header row starting with 'file' ({expected}); found "
+            f"{reader.fieldnames or 'an empty first line'}",
+            line=1,
+        )
+    unclear = [
+        name
+        for name in reader.fieldnames
+        if name not in _MANIFEST_COLUMNS and _QUANTITY_COLUMN.match(name)
+    ]
+    if unclear:
+        raise BenchFileError(
+            path,
+            f"column(s) {unclear} not understood (found {reader.fieldnames}); expected "
+            f"{expected}: the pressure in bar as pressure_bar and the speed in mm/s as "
+            "velocity_mm_s (other columns, such as seal or test, are kept as labels)",
+            line=1,
+        )
+    for number, row in enumerate(reader, start=2):
+        row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
+        if not any(v for k, v in row.items() if k):  # a blank line
+            continue
+        extra = {k: v for k, v in row.items() if k not in _MANIFEST_COLUMNS and k}
+        try:
+            pressure = (
+                _number(row["pressure_bar"], delimiter) * 1e5
+                if row.get("pressure_bar")
+                else math.nan
+            )
+            velocity = (
+                _number(row["velocity_mm_s"], delimiter) * 1e-3
+                if row.get("velocity_mm_s")
+                else math.nan
+            )
+        except ValueError:
+            raise BenchFileError(
+                path, "pressure_bar and velocity_mm_s must be numbers", line=number
+            ) from None
+        if not (math.isnan(pressure) or (math.isfinite(pressure) and pressure >= 0)):
             raise BenchFileError(
                 path,
-                "expected a header row starting with 'file' (file,pressure_bar,velocity_mm_s)",
-                line=1,
+                f"pressure_bar = {row['pressure_bar']} of {row['file']}; expected a finite "
+                "pressure >= 0 bar",
+                line=number,
             )
-        for number, row in enumerate(reader, start=2):
-            row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
-            extra = {
-                k: v
-                for k, v in row.items()
-                if k not in ("file", "pressure_bar", "velocity_mm_s") and k
-            }
-            try:
-                pressure = float(row["pressure_bar"]) * 1e5 if row.get("pressure_bar") else math.nan
-                velocity = (
-                    float(row["velocity_mm_s"]) * 1e-3 if row.get("velocity_mm_s") else math.nan
-                )
-            except ValueError:
-                raise BenchFileError(
-                    path, "pressure_bar and velocity_mm_s must be numbers", line=number
-                ) from None
-            if not (math.isnan(pressure) or (math.isfinite(pressure) and pressure >= 0)):
-                raise BenchFileError(
-                    path,
-                    f"pressure_bar = {row['pressure_bar']} of {row['file']}; expected a finite "
-                    "pressure >= 0 bar",
-                    line=number,
-                )
-            if not (math.isnan(velocity) or (math.isfinite(velocity) and velocity != 0)):
-                raise BenchFileError(
-                    path,
-                    f"velocity_mm_s = {row['velocity_mm_s']} of {row['file']}; expected a "
-                    "finite speed other than 0 mm/s",
-                    line=number,
-                )
-            if row["file"] in rows:
-                raise BenchFileError(
-                    path, f"{row['file']} is listed twice; expected one row per file", line=number
-                )
-            rows[row["file"]] = (pressure, velocity, extra)
-            rows.lines[row["file"]] = number
+        if not (math.isnan(velocity) or (math.isfinite(velocity) and velocity != 0)):
+            raise BenchFileError(
+                path,
+                f"velocity_mm_s = {row['velocity_mm_s']} of {row['file']}; expected a "
+                "finite speed other than 0 mm/s",
+                line=number,
+            )
+        if not row.get("file"):
+            raise BenchFileError(path, "no file name; expected one in the 'file' column", number)
+        if row["file"] in rows:
+            raise BenchFileError(
+                path, f"{row['file']} is listed twice; expected one row per file", line=number
+            )
+        rows[row["file"]] = (pressure, velocity, extra)
+        rows.lines[row["file"]] = number
     return rows
 
 
@@ -385,12 +500,7 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
         for p in folder.glob(config.glob)
         if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
     )
-    if manifest:
-        missing = [name for name in manifest if not (folder / name).is_file()]
-        if missing:
-            raise BenchFileError(
-                folder / MANIFEST_NAME, f"lists files that do not exist: {missing[:5]}"
-            )
+    if manifest:  # a row for a missing file stops its run in read_run (skippable)
         candidates = [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
     for path in candidates:
         pressure = velocity = math.nan
@@ -431,7 +541,9 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
                         velocity = value
                         source["velocity"] = "campaign.toml name_pattern"
                 extra = {**groups, **extra}
-        runs.append(RunInfo(path, pressure, velocity, extra, source, nominal))
+        line = manifest.lines.get(path.name)
+        listed = folder / MANIFEST_NAME if line is not None else None
+        runs.append(RunInfo(path, pressure, velocity, extra, source, nominal, line, listed))
     if not runs:
         raise BenchFileError(folder, f"no run files matching {config.glob!r}")
     return runs
@@ -463,6 +575,13 @@ def read_run(info: RunInfo, config: CampaignConfig):
     ``velocity`` [m/s], ``extra``, ``source`` (where each value came from) and ``nominal``
     (every value found, ``{quantity: {source: (value [SI], where)}}``) added.
     """
+    if not info.path.is_file():
+        raise BenchFileError(
+            info.manifest or info.path,
+            f"lists {info.path.name}, which is not in the campaign folder; expected an "
+            "existing run file (correct or remove the row)",
+            line=info.manifest_line,
+        )
     if info.path.suffix.lower() == ".mat":
         frame, metadata = read_mat(info.path)
         data = {name: frame[name].to_numpy() for name in frame.columns}
@@ -513,6 +632,11 @@ def read_run(info: RunInfo, config: CampaignConfig):
     if math.isnan(velocity) and "velocity" in tokens:
         velocity, source["velocity"] = tokens["velocity"][0], "file name"
     metadata.update(
-        pressure=pressure, velocity=velocity, extra=extra, source=source, nominal=nominal
+        pressure=pressure,
+        velocity=velocity,
+        extra=extra,
+        source=source,
+        nominal=nominal,
+        manifest_line=info.manifest_line,
     )
     return data, metadata

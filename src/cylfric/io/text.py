@@ -37,6 +37,16 @@ __all__ = [
 ]
 
 
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+def escape_control(text: str) -> str:
+    """``text`` with control characters written as escapes (``\\x00``, ``\\t``): a message
+    must stay one readable line whatever bytes a file holds."""
+    named = {"\t": "\\t", "\n": "\\n", "\r": "\\r"}
+    return _CONTROL.sub(lambda m: named.get(m.group(), f"\\x{ord(m.group()):02x}"), text)
+
+
 class BenchFileError(ValueError):
     """A bench file cannot be read; the message names the file, the line and what was expected."""
 
@@ -45,7 +55,7 @@ class BenchFileError(ValueError):
         self.line = line
         self.message = message
         where = f"{self.path}" + (f", line {line}" if line is not None else "")
-        super().__init__(f"{where}: {message}")
+        super().__init__(escape_control(f"{where}: {message}"))
 
     def __reduce__(self):  # pickled whole (extraction sends errors between processes)
         return (type(self), (self.path, self.message, self.line))
@@ -226,7 +236,8 @@ def read_bench_arrays(
         Text encoding of the preamble (default: UTF-8, falling back to latin-1).
     roles : dict, optional
         Quantity -> column name (``{"force": "Axial Force"}``, campaign.toml ``[columns]``):
-        that column is the quantity, other candidates are kept as read. Without it, two
+        that column is the quantity, other candidates are kept as read (a name that two
+        columns share is told apart by its place: ``"Axial Force#2"``). Without it, two
         measured candidates for one quantity are an error listing them; setpoint, command,
         target or demand columns are never taken for a measured quantity.
 
@@ -263,11 +274,15 @@ def read_bench_arrays(
         raise BenchFileError(path, f"cannot read the file ({exc.strerror})") from None
     if not raw.strip():
         raise BenchFileError(path, "the file is empty; expected a bench record")
-    if b"\x00" in raw[:65536]:
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        line = raw.count(b"\n", 0, nul) + 1  # on line 1: a binary or UTF-16 file, no line
         raise BenchFileError(
             path,
             "binary content (NUL bytes); expected a text export "
-            "(UTF-8 or latin-1), not UTF-16 or a binary file",
+            "(UTF-8 or latin-1), not UTF-16 or a binary file"
+            + ("" if nul < 65536 else " (a corrupt stretch in an otherwise text file?)"),
+            line=line if line > 1 else None,
         )
     buf = np.frombuffer(raw, dtype=np.uint8)
     starts, ends, kinds = scan_lines(buf)
@@ -390,7 +405,7 @@ def read_bench_arrays(
                     f"(decimal separator {decimal!r})"
                 )
             raise BenchFileError(path, message, line=int(bad) + 1)
-        frames.append((seg, hdr, values))
+        frames.append((seg, hdr, values, int(run[0]) + 1))
 
     data, col_units = _assemble(frames, path, roles or {})
     metadata = {
@@ -410,6 +425,8 @@ def read_bench_arrays(
 def _split_header(line: str, delim, ncols: int) -> list[str]:
     """Cells of a header row; whitespace rows may hold names with spaces or ``[unit]``."""
     cells = _split(line, delim)
+    if delim is not None and len(cells) == ncols + 1 and cells[0] == "":
+        return cells[1:]  # MTS/TestSuite: the names and units rows begin with a separator too
     if delim is not None or len(cells) == ncols:
         return cells
     wide = [c for c in re.split(r"\s{2,}|\t", line.strip()) if c]
@@ -457,24 +474,37 @@ def _column_roles(names, roles, path, line):
     Raises BenchFileError when a role names no column, or when two columns are measured
     candidates for one quantity and no role chooses.
     """
-    unknown = {q: c for q, c in roles.items() if c not in names}
+    labels = _column_labels(names)
+    repeated = {n for n in names if names.count(n) > 1}
+    for quantity, column in roles.items():
+        if column in repeated:
+            options = " or ".join(
+                f'"{label}"' for label, n in zip(labels, names, strict=True) if n == column
+            )
+            raise BenchFileError(
+                path,
+                f"campaign.toml [columns] {quantity} = {column!r} names {names.count(column)} "
+                f"columns of that name; choose one by its place: {quantity} = {options}",
+                line=line,
+            )
+    unknown = {q: c for q, c in roles.items() if c not in names and c not in labels}
     if unknown:
         quantity, column = next(iter(unknown.items()))
         raise BenchFileError(
             path,
             f"campaign.toml [columns] {quantity} = {column!r} names no column; the file has "
-            f"{names}",
+            f"{labels}",
             line=line,
         )
     chosen = {c: q for q, c in roles.items()}
     quantities = []
-    for name in names:
-        quantity = chosen.get(name) or canonical_name(name)
-        if name not in chosen and quantity in roles:
+    for name, label in zip(names, labels, strict=True):
+        quantity = chosen.get(label) or chosen.get(name) or canonical_name(name)
+        if label not in chosen and name not in chosen and quantity in roles:
             quantity = None  # another column was chosen for this quantity
         quantities.append(quantity)
     for quantity in set(q for q in quantities if q in QUANTITY_DIMENSIONS):
-        candidates = [n for n, q in zip(names, quantities, strict=True) if q == quantity]
+        candidates = [n for n, q in zip(labels, quantities, strict=True) if q == quantity]
         if len(candidates) > 1:
             raise BenchFileError(
                 path,
@@ -485,11 +515,27 @@ def _column_roles(names, roles, path, line):
     return quantities
 
 
+def _column_labels(names):
+    """Names that tell every column apart: a name used more than once gets ``#1``, ``#2``
+    ... by its place (``Axial Force#2``, as campaign.toml ``[columns]`` may name it)."""
+    seen = {}
+    labels = []
+    for name in names:
+        if names.count(name) > 1:
+            seen[name] = seen.get(name, 0) + 1
+            labels.append(f"{name}#{seen[name]}")
+        else:
+            labels.append(name)
+    return labels
+
+
 def _assemble(frames, path, roles):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
     parts = []
     col_units = {}
-    for seg, hdr, values in frames:
+    lines = []
+    for seg, hdr, values, first in frames:
+        lines.append(hdr.line or first)
         cols = {}
         quantities = _column_roles(hdr.names, roles, path, hdr.line or None)
         for j, (name, unit) in enumerate(zip(hdr.names, hdr.units, strict=True)):
@@ -526,12 +572,13 @@ def _assemble(frames, path, roles):
         cols["segment [-]"] = np.full(values.shape[0], seg, dtype=np.int32)
         parts.append(cols)
     keys = list(parts[0])
-    for cols in parts[1:]:
+    for cols, line in zip(parts[1:], lines[1:], strict=True):
         if list(cols) != keys:
             raise BenchFileError(
                 path,
                 "the columns change between segments; expected the same "
                 f"columns in every block ({keys} vs {list(cols)})",
+                line=line,
             )
     if len(parts) == 1:
         return parts[0], col_units
