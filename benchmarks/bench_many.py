@@ -61,9 +61,15 @@ def _busy_seconds() -> float:
     return (sum(ticks[:8]) - idle) / os.sysconf("SC_CLK_TCK")
 
 
-def _processes() -> dict:
-    """Parent id and processor time [s] of every process visible here, by process id."""
-    tick = os.sysconf("SC_CLK_TCK")
+_SAMPLER = r"""
+import os, select, sys
+from pathlib import Path
+
+root, interval = int(sys.argv[1]), float(sys.argv[2])
+tick = os.sysconf("SC_CLK_TCK")
+
+
+def table():
     out = {}
     for entry in os.scandir("/proc"):
         if entry.name.isdigit():
@@ -71,50 +77,57 @@ def _processes() -> dict:
                 fields = Path(entry.path, "stat").read_text().rsplit(")", 1)[1].split()
             except OSError:
                 continue
-            # fields[1] ppid; fields[11], fields[12] utime, stime [ticks]
             out[int(entry.name)] = (int(fields[1]), (int(fields[11]) + int(fields[12])) / tick)
     return out
+
+
+ours, last = {root}, {}
+
+
+def sample():
+    now = table()
+    grew = True
+    while grew:
+        new = {pid for pid, (ppid, _) in now.items() if ppid in ours} - ours
+        ours.update(new)
+        grew = bool(new)
+    last.update({pid: cpu for pid, (_, cpu) in now.items() if pid in ours})
+
+
+sample()
+first = dict(last)
+print("ready", flush=True)
+while not select.select([sys.stdin], [], [], interval)[0]:
+    sample()
+sample()
+print(sum(cpu - first.get(pid, 0.0) for pid, cpu in last.items()), flush=True)
+"""
+"""Run as a separate process (no share of this process's interpreter lock): sums the
+processor time [s] of a process and all its descendants, sampled every ``interval`` [s]
+from /proc until a line arrives on its standard input."""
 
 
 def _timed(run, interval=0.02):
     """(wall seconds of ``run()``, processor seconds other jobs on the machine took meanwhile).
 
     Other jobs: the machine's busy time (/proc/stat) less the processor time of this
-    process and its descendants (its commands, their workers), sampled every ``interval``
-    [s] while ``run`` goes on (a process that ends loses at most its last ``interval``:
-    a small overestimate of the other jobs)."""
-    import threading
-
-    me = os.getpid()
-    start = {pid: cpu for pid, (_, cpu) in _processes().items() if pid == me}
-    ours, last = {me}, dict(start)
-    stop = threading.Event()
-
-    def sample():
-        table = _processes()
-        grew = True
-        while grew:
-            new = {pid for pid, (ppid, _) in table.items() if ppid in ours} - ours
-            ours.update(new)
-            grew = bool(new)
-        last.update({pid: cpu for pid, (_, cpu) in table.items() if pid in ours})
-
-    def loop():
-        while not stop.wait(interval):
-            sample()
-
-    sampler = threading.Thread(target=loop, daemon=True)
+    process and its descendants (its commands, their workers, the sampler), sampled every
+    ``interval`` [s] by a separate process while ``run`` goes on (a process that ends
+    loses at most its last ``interval``: a small overestimate of the other jobs)."""
+    sampler = subprocess.Popen(
+        [sys.executable, "-c", _SAMPLER, str(os.getpid()), str(interval)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert sampler.stdout.readline().strip() == "ready"
     busy = _busy_seconds()
-    sampler.start()
     try:
         seconds = run()
     finally:
-        stop.set()
-        sampler.join()
-    sample()
-    busy = _busy_seconds() - busy
-    mine = sum(cpu - start.get(pid, 0.0) for pid, cpu in last.items())
-    return seconds, max(busy - mine, 0.0)
+        busy = _busy_seconds() - busy
+        ours, _ = sampler.communicate("stop\n")
+    return seconds, max(busy - float(ours), 0.0)
 
 
 def _generate(root: Path):
