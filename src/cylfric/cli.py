@@ -237,6 +237,7 @@ def run_fit(
     glob=None,
     strict=False,
     export=(),
+    viscosity_correction=None,
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
     from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config
@@ -270,6 +271,7 @@ def run_fit(
                 glob=glob,
                 strict=strict,
                 export=export,
+                viscosity_correction=viscosity_correction,
             )
         finally:
             progress.stop()
@@ -286,7 +288,7 @@ def run_fit(
             for _, item in excluded.head(10).iterrows():
                 console.print(f"  {item['file']}: {item['reason']}", markup=False)
         for note in result.identification.notes:
-            console.print(f"[yellow]note:[/yellow] {note}")
+            console.print(f"[yellow]note:[/yellow] {escape(note)}")
         for exported in result.exports.values():
             console.print(exported.summary(), markup=False, highlight=False)
         console.print(f"outputs in {out}" + (f"; open {out / 'report.html'}" if report else ""))
@@ -324,6 +326,12 @@ def fit(
         help="Also export to simulators into OUT/export/<target>: e.g. fmu,simscape "
         "(fmu, modelica, simscape, hopsan, matlab).",
     ),
+    viscosity_correction: bool = typer.Option(
+        None,
+        "--viscosity-correction/--no-viscosity-correction",
+        help="Identify at campaign.toml [oil] reference_temperature, each run's speeds "
+        "mapped by its oil viscosity (default: on when [oil] and run temperatures are given).",
+    ),
 ):
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
@@ -349,6 +357,7 @@ def fit(
         glob=glob,
         strict=strict,
         export=targets,
+        viscosity_correction=viscosity_correction,
     )
 
 

@@ -24,6 +24,8 @@ oils, from two points of the oil's data sheet) and :func:`viscosity_corrected`, 
 each point's speed to the speed with the same Hersey number (thesis eq. 2.8) at a reference
 temperature, so that runs made at different oil temperatures can be identified as one
 campaign at that temperature: ``identify(viscosity_corrected(points, oil=..., ...))``.
+:func:`correct_campaign` does it for ``cylfric fit`` from ``campaign.toml [oil]`` and the
+runs' oil temperatures (``manifest.csv``), and says what it did.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +46,9 @@ __all__ = [
     "figure_run_order",
     "walther_viscosity",
     "viscosity_corrected",
+    "correct_campaign",
+    "ViscosityCorrection",
+    "VISCOSITY_RULE",
 ]
 
 _ORDERS = ("run", "mtime")
@@ -494,8 +499,172 @@ def viscosity_corrected(points, *, oil, reference_temperature, temperature=None)
     velocity = table["velocity [m/s]"].to_numpy(dtype=float)
     nu = walther_viscosity(t, oil)
     nu_ref = walther_viscosity(reference_temperature, oil)
-    # equal Hersey number (eq. 2.8) at equal load per length: |v_eq| nu_ref = |v| nu(T)
-    speed = hersey_number(velocity, nu, 1.0) / nu_ref
+    # equal Hersey number (eq. 2.8) at equal load per length: |v_eq| nu_ref = |v| nu(T);
+    # windows without a speed (NaN, flagged by the extraction) stay NaN
+    nu = np.broadcast_to(nu, velocity.shape)
+    finite = np.isfinite(velocity)
+    speed = np.full(velocity.shape, np.nan)
+    speed[finite] = hersey_number(velocity[finite], nu[finite], 1.0) / nu_ref
     table["velocity measured [m/s]"] = velocity
     table["velocity [m/s]"] = np.sign(velocity) * speed
     return table
+
+
+VISCOSITY_RULE = (
+    "equal Hersey number (thesis eq. 2.8) at equal load per length: each point's speed v at "
+    "oil temperature T is identified as v nu(T) / nu(T_ref), kinematic viscosities nu by the "
+    "Walther equation (ASTM D341) through the oil's two data-sheet points"
+)
+"""The rule of the viscosity correction, as the datasheet records it."""
+
+
+@dataclass(frozen=True)
+class ViscosityCorrection:
+    """What :func:`correct_campaign` did.
+
+    Attributes
+    ----------
+    points : pandas.DataFrame
+        The points, corrected (``velocity [m/s]`` at the reference temperature,
+        ``velocity measured [m/s]``, ``temperature [K]``) or as given.
+    runs : list of dict
+        The extraction's runs, nominal ``velocity [m/s]`` scaled alike when corrected.
+    record : dict or None
+        The datasheet's ``fit.viscosity_correction`` (rule, oil points, reference
+        temperature [K], temperatures [K] and speed ratios [-] met); None when not corrected.
+    note : str or None
+        One line for the datasheet notes, the summary and the report.
+    """
+
+    points: object
+    runs: list
+    record: dict | None
+    note: str | None
+
+
+def _celsius(kelvin) -> str:
+    return f"{kelvin - 273.15:.4g} degC"
+
+
+def correct_campaign(points, runs, oil, *, enabled=None) -> ViscosityCorrection:
+    """Map a campaign's points to the oil's reference temperature, or say why not.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        Points table of the extraction (a ``temperature [K]`` column from ``manifest.csv``
+        when the runs carry oil temperatures).
+    runs : list of dict
+        The extraction's runs (``run``, nominal ``velocity [m/s]``).
+    oil : cylfric.io.campaign.OilSettings or None
+        ``campaign.toml [oil]``: the two data-sheet viscosities, the reference temperature
+        [K] and a campaign-wide oil temperature [K] for runs without their own.
+    enabled : bool or None
+        None (default): correct when both ``[oil]`` and temperatures are there, else a note
+        says which is missing. True: correct or raise. False: do not correct (a note says
+        so when there was something to correct).
+
+    Returns
+    -------
+    ViscosityCorrection
+
+    Raises
+    ------
+    ValueError
+        Correction asked for (``enabled=True``) without ``[oil]`` or temperatures; some
+        runs with a temperature and others without (and no campaign-wide one).
+    """
+    unchanged = ViscosityCorrection(points, list(runs), None, None)
+    column = "temperature [K]"
+    listed = points[column].to_numpy(dtype=float) if column in points else None
+    has_listed = listed is not None and bool(np.isfinite(listed).any())
+    if enabled is False:
+        if oil is None and not has_listed:
+            return unchanged
+        return replace(
+            unchanged,
+            note="viscosity correction turned off (--no-viscosity-correction): identified at "
+            "the measured speeds, whatever the oil temperature of each run",
+        )
+    if oil is None:
+        if enabled:
+            raise ValueError(
+                "--viscosity-correction: campaign.toml has no [oil] table; expected "
+                '[oil] viscosity_40C = "46 mm2/s", viscosity_100C = "6.8 mm2/s"'
+            )
+        if not has_listed:
+            return unchanged
+        t = listed[np.isfinite(listed)]
+        return replace(
+            unchanged,
+            note=f"the runs carry oil temperatures ({_celsius(t.min())} to {_celsius(t.max())}, "
+            "manifest.csv) but campaign.toml has no [oil] table: identified at the measured "
+            "speeds without viscosity correction; add [oil] viscosity_40C and viscosity_100C "
+            "to correct, or --no-viscosity-correction to silence this note",
+        )
+    temperature = listed if listed is not None else np.full(len(points), np.nan)
+    sources = ["manifest.csv"] if has_listed else []
+    if oil.temperature is not None and not np.isfinite(temperature).all():
+        temperature = np.where(np.isfinite(temperature), temperature, oil.temperature)
+        sources.append("campaign.toml [oil] temperature")
+    if not np.isfinite(temperature).any():
+        if enabled:
+            raise ValueError(
+                f"--viscosity-correction: {oil.source} has [oil] but no run has an oil "
+                "temperature; expected a temperature_C column in manifest.csv or [oil] "
+                'temperature = "45 degC"'
+            )
+        return replace(
+            unchanged,
+            note=f"{oil.source} has [oil] but no run has an oil temperature (no temperature_C "
+            "column in manifest.csv, no [oil] temperature): identified at the measured speeds "
+            "without viscosity correction",
+        )
+    missing = sorted({Path(f).name for f in points.loc[~np.isfinite(temperature), "file"]})
+    if missing:
+        manifest = Path(points["file"].iloc[0]).parent / "manifest.csv"
+        raise ValueError(
+            f"{manifest}: no oil temperature for {len(missing)} run(s) "
+            f"({', '.join(missing[:3])}{', ...' if len(missing) > 3 else ''}) while others "
+            "have one; expected a temperature for every run, an [oil] temperature for the "
+            "rest, or --no-viscosity-correction"
+        )
+    table = points.copy()
+    table[column] = temperature
+    corrected = viscosity_corrected(
+        table, oil=oil.points, reference_temperature=oil.reference_temperature
+    )
+    nu_ref = walther_viscosity(oil.reference_temperature, oil.points)
+    ratio = walther_viscosity(temperature, oil.points) / nu_ref
+    per_run = dict(zip(table["run"], ratio, strict=True))
+    new_runs = []
+    for info in runs:
+        info = dict(info)
+        if info.get("run") in per_run:
+            info["velocity [m/s]"] = info.get("velocity [m/s]", math.nan) * per_run[info["run"]]
+        new_runs.append(info)
+    (t40, nu40), (t100, nu100) = oil.points
+    record = {
+        "rule": VISCOSITY_RULE,
+        "oil": {
+            "temperature": [t40, t100],
+            "viscosity": [nu40, nu100],
+            "source": oil.source,
+        },
+        "reference_temperature": oil.reference_temperature,
+        "temperature_min": float(temperature.min()),
+        "temperature_max": float(temperature.max()),
+        "temperature_source": " and ".join(sources),
+        "speed_ratio_min": float(ratio.min()),
+        "speed_ratio_max": float(ratio.max()),
+    }
+    outside = temperature.min() < t40 or temperature.max() > t100
+    note = (
+        f"viscosity correction: runs at {_celsius(temperature.min())} to "
+        f"{_celsius(temperature.max())} identified as at {_celsius(oil.reference_temperature)} "
+        f"(equal Hersey number, eq. 2.8; Walther viscosities through {nu40 * 1e6:g} and "
+        f"{nu100 * 1e6:g} mm2/s; speeds scaled by {ratio.min():.3g} to {ratio.max():.3g}): "
+        f"the datasheet holds at {_celsius(oil.reference_temperature)}"
+        + ("; the Walther line is extrapolated outside 40-100 degC" if outside else "")
+    )
+    return ViscosityCorrection(corrected, new_runs, record, note)

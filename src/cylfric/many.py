@@ -162,7 +162,16 @@ def fit_one(folder, out, name, options, started=None) -> dict:
     return row
 
 
-_FIT_OPTIONS = ("fixed", "pressure_law", "per_direction", "skip_bad", "report", "glob", "strict")
+_FIT_OPTIONS = (
+    "fixed",
+    "pressure_law",
+    "per_direction",
+    "skip_bad",
+    "report",
+    "glob",
+    "strict",
+    "viscosity_correction",
+)
 
 
 def fit_many(
@@ -197,7 +206,8 @@ def fit_many(
         Called with each campaign's summary row (a dict) as it finishes.
     **fit_options
         Passed to :func:`~cylfric.pipeline.fit_campaign`: ``fixed``, ``pressure_law``,
-        ``per_direction``, ``skip_bad``, ``report``, ``glob``, ``strict``.
+        ``per_direction``, ``skip_bad``, ``report``, ``glob``, ``strict``,
+        ``viscosity_correction``.
 
     Returns
     -------

@@ -70,6 +70,7 @@ def fit_campaign(
     strict=False,
     export=(),
     workers=None,
+    viscosity_correction=None,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -121,6 +122,13 @@ def fit_campaign(
         Processes for the extraction and the figures (default 2 on Linux, else 1; see
         :func:`~cylfric.steady_state.extract_campaign`); 1 keeps the fit on one core, as
         the workers of :func:`cylfric.many.fit_many` do when several fits run at once.
+    viscosity_correction : bool, optional
+        Identify at the reference temperature of ``campaign.toml [oil]``, each point's speed
+        mapped by the oil's viscosity at its run's temperature (equal Hersey number; see
+        :func:`cylfric.drift.correct_campaign`). None (default): when both ``[oil]`` and
+        temperatures are there; a note says which is missing otherwise. True: required
+        (ValueError without them). False: never. The datasheet records the correction in
+        ``fit.viscosity_correction``.
     """
     folder, out = Path(folder), Path(out)
     if export:
@@ -151,6 +159,7 @@ def fit_campaign(
                 strict,
                 export or (),
                 workers,
+                viscosity_correction,
             )
             _write_marker(staging)
             _check_reusable(out)  # again: a file may have been added during the fit
@@ -368,6 +377,7 @@ def _fit(
     strict,
     export=(),
     workers=None,
+    viscosity_correction=None,
 ):
     timings = {}
     t0 = time.perf_counter()
@@ -388,7 +398,12 @@ def _fit(
     finally:
         if after_extraction is not None:
             after_extraction()
-    quality = assess(extraction)
+    quality = assess(extraction)  # the data as measured: the gate looks for data errors
+    correction = _correct_viscosity(extraction, config, viscosity_correction)
+    if correction.record is not None:  # the points the gate passed, at the reference temperature
+        gated = _correct_viscosity(replace(extraction, points=quality.points), config, True)
+        extraction = replace(extraction, points=correction.points, runs=correction.runs)
+        quality = replace(quality, points=gated.points)
     if strict and not quality.excluded.empty:
         raise ValueError(_strict_message(quality.excluded))
     timings["extract"] = time.perf_counter() - t0
@@ -404,6 +419,8 @@ def _fit(
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder)}") from None
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
+    if correction.note:
+        ident.notes.insert(0, correction.note)
     dynamic = None
     if dynamic_runs:
         dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model)
@@ -412,6 +429,8 @@ def _fit(
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
+    if correction.record is not None:
+        sheet["fit"]["viscosity_correction"] = correction.record
     if dynamic is not None:
         from .model.serialize import clean
 
@@ -503,6 +522,13 @@ def _export_summary(out: Path, result) -> dict:
             for report in result.loss
         ],
     }
+
+
+def _correct_viscosity(extraction, config, enabled):
+    """The points at the reference temperature of ``[oil]`` (or as they are, with a note)."""
+    from .drift import correct_campaign
+
+    return correct_campaign(extraction.points, extraction.runs, config.oil, enabled=enabled)
 
 
 def _dynamic_runs(folder, config):

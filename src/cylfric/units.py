@@ -24,6 +24,7 @@ __all__ = [
     "to_si",
     "from_si",
     "parse_quantity",
+    "parse_temperature",
     "unit_dimension",
     "BAR",
     "MM",
@@ -91,6 +92,14 @@ UNITS: dict[str, tuple[str, float]] = {
     # mass
     "kg": ("mass", 1.0),
     "g": ("mass", 1e-3),
+    # kinematic viscosity (oil data sheets: mm^2/s = cSt)
+    "mm2/s": ("kinematic viscosity", 1e-6),
+    "mm^2/s": ("kinematic viscosity", 1e-6),
+    "mm²/s": ("kinematic viscosity", 1e-6),
+    "cst": ("kinematic viscosity", 1e-6),
+    "m2/s": ("kinematic viscosity", 1.0),
+    "m^2/s": ("kinematic viscosity", 1.0),
+    "m²/s": ("kinematic viscosity", 1.0),
     # electric (raw sensor channels)
     "v": ("voltage", 1.0),
     # dimensionless
@@ -241,3 +250,45 @@ def parse_quantity(text: str, dimension: str, default_unit: str | None = None) -
             return number
         unit = default_unit
     return float(to_si(number, unit, dimension))
+
+
+ZERO_CELSIUS = 273.15
+"""0 degC in kelvin [K]."""
+_TEMPERATURE_UNITS = {"k": 0.0, "degc": ZERO_CELSIUS, "°c": ZERO_CELSIUS, "c": ZERO_CELSIUS}
+
+
+def parse_temperature(text, default_unit: str = "degC") -> float:
+    """Parse ``"40 degC"``, ``"40°C"`` or ``"313.15 K"`` into kelvin [K].
+
+    Temperatures are affine (0 degC = 273.15 K), so they are not in :data:`UNITS`.
+
+    Parameters
+    ----------
+    text : str or float
+        A number with an optional unit (``degC``, ``°C``, ``C`` or ``K``).
+    default_unit : str
+        Unit of a bare number (``"degC"`` or ``"K"``).
+
+    Raises
+    ------
+    UnitError
+        If the text is not a temperature or lies at or below absolute zero.
+
+    Examples
+    --------
+    >>> parse_temperature("40 degC")
+    313.15
+    >>> parse_temperature("300K")
+    300.0
+    """
+    match = _QUANTITY.match(str(text).replace(",", "."))
+    unit = (match.group(2) if match else None) or default_unit
+    offset = _TEMPERATURE_UNITS.get(_key(unit))
+    if not match or offset is None:
+        raise UnitError(
+            f"cannot read {text!r} as a temperature (expected e.g. '40 degC' or '313.15 K')"
+        )
+    kelvin = float(match.group(1)) + offset
+    if not kelvin > 0:
+        raise UnitError(f"temperature {text!r} is at or below absolute zero")
+    return kelvin

@@ -46,6 +46,12 @@ def register(app: typer.Typer) -> None:
         strict: bool = typer.Option(
             False, "--strict", help="A campaign with runs the quality gate flags fails."
         ),
+        viscosity_correction: bool = typer.Option(
+            None,
+            "--viscosity-correction/--no-viscosity-correction",
+            help="As for cylfric fit (default: on where campaign.toml has [oil] and the runs "
+            "temperatures).",
+        ),
     ):
         """Fit every campaign folder under ROOT in parallel; OUT/fit_many.csv says how each went.
 
@@ -63,6 +69,7 @@ def register(app: typer.Typer) -> None:
             "report": not no_report,
             "glob": glob,
             "strict": strict,
+            "viscosity_correction": viscosity_correction,
         }
         from rich.table import Table
         from rich.text import Text

@@ -4,7 +4,15 @@
 :mod:`cylfric.io.campaign`.
 """
 
-from .campaign import CampaignConfig, RunInfo, discover_runs, load_config, name_tokens, read_run
+from .campaign import (
+    CampaignConfig,
+    OilSettings,
+    RunInfo,
+    discover_runs,
+    load_config,
+    name_tokens,
+    read_run,
+)
 from .matfile import read_mat
 from .text import BenchFileError, read_bench_text, read_delimited, read_mts_text
 from .writers import atomic_write_bytes, atomic_write_text, write_manifest, write_mts_text
@@ -12,6 +20,7 @@ from .writers import atomic_write_bytes, atomic_write_text, write_manifest, writ
 __all__ = [
     "BenchFileError",
     "CampaignConfig",
+    "OilSettings",
     "RunInfo",
     "discover_runs",
     "load_config",

@@ -1,7 +1,9 @@
 """Campaigns: a folder of runs, their per-run metadata and the rig configuration.
 
 Per-run metadata (chamber pressure, nominal speed, temperature) comes from, in this order:
-``manifest.csv`` in the folder (``file,pressure_bar,velocity_mm_s`` and optional columns),
+``manifest.csv`` in the folder (``file,pressure_bar,velocity_mm_s`` and optional columns;
+an oil temperature column ``temperature_C`` or ``temperature [degC]`` (or in kelvin
+``temperature_K``, ``temperature [K]``) becomes the points' ``temperature [K]``),
 ``campaign.toml`` (a file-name pattern with named groups), ``key: value`` header lines of the
 file, and file-name tokens (``55bar``, ``p55bar``, ``55.5bar``, ``10mms``, ``v10mms``,
 ``10mm_s``). Measured pressure and velocity columns win over these nominal values.
@@ -17,12 +19,13 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..units import UnitError, parse_quantity
+from ..units import UnitError, parse_quantity, parse_temperature
 from .matfile import read_mat
 from .text import BenchFileError, read_bench_arrays
 
 __all__ = [
     "CampaignConfig",
+    "OilSettings",
     "RunInfo",
     "load_config",
     "discover_runs",
@@ -38,6 +41,14 @@ DYNAMIC_TESTS = ("presliding", "breakaway")
 """Test kinds of manifest.csv's ``test`` column that are not constant-velocity runs: they
 go to :mod:`cylfric.identify.dynamic`, never to the steady-state extraction."""
 MANIFEST_NAME = "manifest.csv"
+TEMPERATURE_COLUMNS = {
+    "temperature_c": 273.15,
+    "temperature [degc]": 273.15,
+    "temperature_k": 0.0,
+    "temperature [k]": 0.0,
+}
+"""manifest.csv columns of the oil temperature of each run (lower-cased) -> offset to
+kelvin; read into the points' ``temperature [K]`` column."""
 _SKIP_NAMES = {CONFIG_NAME, MANIFEST_NAME, "points.csv", "datasheet.json", "README.md", "LICENSE"}
 _PRESSURE_TOKEN = re.compile(
     r"(?:^|[^A-Za-z0-9.])p?(\d+(?:[.,]\d+)?)\s*(bar|mpa|kpa|psi)(?![a-z])", re.IGNORECASE
@@ -50,6 +61,31 @@ _HEADER_KEYS = {
     "velocity": ("nominal velocity", "velocity", "speed", "test speed", "geschwindigkeit"),
     "temperature": ("temperature", "oil temperature", "temp"),
 }
+
+
+@dataclass(frozen=True)
+class OilSettings:
+    """The oil of a campaign (``campaign.toml [oil]``), for the viscosity correction.
+
+    Attributes
+    ----------
+    points : ((float, float), (float, float))
+        Two (temperature [K], kinematic viscosity [m^2/s]) points of the oil's data sheet
+        (``viscosity_40C``, ``viscosity_100C``), as :func:`cylfric.drift.walther_viscosity`
+        takes them.
+    reference_temperature : float
+        Temperature the datasheet is identified at [K] (default 40 degC, where ISO 3448
+        grades oils).
+    temperature : float or None
+        Oil temperature of every run without its own in ``manifest.csv`` [K].
+    source : str
+        The campaign.toml it came from.
+    """
+
+    points: tuple
+    reference_temperature: float = 313.15
+    temperature: float | None = None
+    source: str = ""
 
 
 @dataclass(frozen=True)
@@ -79,6 +115,8 @@ class CampaignConfig:
         Keyword options for :func:`cylfric.steady_state.extract_points`.
     roles : dict
         Quantity -> column name chosen in ``[columns]`` (``force = "Axial Force"``).
+    oil : OilSettings or None
+        The ``[oil]`` table (viscosity correction), None without it.
     """
 
     glob: str = "*"
@@ -95,6 +133,7 @@ class CampaignConfig:
     extraction: dict = field(default_factory=dict)
     source: str | None = None
     roles: dict = field(default_factory=dict)
+    oil: OilSettings | None = None
 
 
 @dataclass(frozen=True)
@@ -138,8 +177,9 @@ def load_config(folder) -> CampaignConfig:
     The file has the tables ``[files]`` (``glob``, ``name_pattern``), ``[columns]``
     (``names``, ``units``, ``delimiter``, ``decimal``), ``[cylinder]`` (``bore``, ``rod``,
     ``kind`` = ``"double-rod"``, ``"single-rod"`` or ``"single-acting"``), ``[force_balance]``
-    (``load_cell_sign``, ``position_sign``, ``moving_mass``) and ``[extraction]``. Values
-    with units are strings such as ``"25 mm"``.
+    (``load_cell_sign``, ``position_sign``, ``moving_mass``), ``[extraction]`` and ``[oil]``
+    (``viscosity_40C``, ``viscosity_100C``, ``reference_temperature``, ``temperature``).
+    Values with units are strings such as ``"25 mm"``, ``"46 mm2/s"``, ``"40 degC"``.
     """
     path = Path(folder) / CONFIG_NAME
     if not path.is_file():
@@ -216,6 +256,57 @@ def load_config(folder) -> CampaignConfig:
         extraction=dict(doc.get("extraction", {})),
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
+        oil=_oil(doc["oil"], path) if "oil" in doc else None,
+    )
+
+
+def _oil(table: dict, path: Path) -> OilSettings:
+    """``[oil]`` in SI, checked: two data-sheet viscosities falling with temperature, within
+    the Walther equation's range, and temperatures in 200-450 K."""
+
+    def quantity(key, parse):
+        try:
+            return parse(table[key])
+        except UnitError as exc:
+            raise BenchFileError(path, f"oil.{key}: {exc}", line=_line_of(path, key)) from None
+
+    def viscosity(key):
+        return quantity(key, lambda text: parse_quantity(text, "kinematic viscosity", "mm2/s"))
+
+    def temperature(key):
+        kelvin = quantity(key, parse_temperature)
+        if not 200.0 <= kelvin <= 450.0:
+            raise BenchFileError(
+                path,
+                f"oil.{key} = {table[key]!r} ({kelvin - 273.15:.4g} degC): expected an oil "
+                "temperature between -73 and 177 degC (200-450 K)",
+                line=_line_of(path, key),
+            )
+        return kelvin
+
+    nu40, nu100 = viscosity("viscosity_40C"), viscosity("viscosity_100C")
+    for key, nu in (("viscosity_40C", nu40), ("viscosity_100C", nu100)):
+        if not 2e-6 <= nu <= 1e-2:
+            raise BenchFileError(
+                path,
+                f"oil.{key} = {table[key]!r}: expected a kinematic viscosity of 2 to 10000 "
+                "mm2/s (the Walther equation of ASTM D341 holds from 2 mm2/s)",
+                line=_line_of(path, key),
+            )
+    if not nu40 > nu100:
+        raise BenchFileError(
+            path,
+            f"oil.viscosity_40C ({nu40 * 1e6:g} mm2/s) must be larger than oil.viscosity_100C "
+            f"({nu100 * 1e6:g} mm2/s): an oil thins as it warms",
+            line=_line_of(path, "viscosity_100C"),
+        )
+    return OilSettings(
+        points=((313.15, nu40), (373.15, nu100)),
+        reference_temperature=(
+            temperature("reference_temperature") if "reference_temperature" in table else 313.15
+        ),
+        temperature=temperature("temperature") if "temperature" in table else None,
+        source=str(path),
     )
 
 
@@ -286,6 +377,17 @@ CONFIG_SCHEMA = {
                 "trim_floor": {"type": "number", "minimum": 0},
             },
             "additionalProperties": {"type": "number"},
+        },
+        "oil": {
+            "type": "object",
+            "additionalProperties": False,
+            "required": ["viscosity_40C", "viscosity_100C"],
+            "properties": {
+                "viscosity_40C": _QUANTITY_TEXT,
+                "viscosity_100C": _QUANTITY_TEXT,
+                "reference_temperature": _QUANTITY_TEXT,
+                "temperature": _QUANTITY_TEXT,
+            },
         },
     },
 }
@@ -445,7 +547,14 @@ def _read_manifest(folder: Path) -> dict:
         row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
         if not any(v for k, v in row.items() if k):  # a blank line
             continue
-        extra = {k: v for k, v in row.items() if k not in _MANIFEST_COLUMNS and k}
+        extra = {
+            k: v
+            for k, v in row.items()
+            if k not in (*_MANIFEST_COLUMNS, *TEMPERATURE_COLUMNS) and k
+        }
+        temperature = _manifest_temperature(row, path, number, delimiter)
+        if temperature is not None:
+            extra["temperature [K]"] = temperature
         try:
             pressure = (
                 _number(row["pressure_bar"], delimiter) * 1e5
@@ -484,6 +593,34 @@ def _read_manifest(folder: Path) -> dict:
         rows[row["file"]] = (pressure, velocity, extra)
         rows.lines[row["file"]] = number
     return rows
+
+
+def _manifest_temperature(row: dict, path: Path, number: int, delimiter: str = ",") -> float | None:
+    """The oil temperature [K] of a manifest row (NaN for an empty cell; None without a
+    temperature column)."""
+    columns = [name for name in TEMPERATURE_COLUMNS if name in row]
+    if not columns:
+        return None
+    if len(columns) > 1:
+        raise BenchFileError(path, f"two temperature columns {columns}; expected one", line=1)
+    (name,) = columns
+    text = row[name]
+    if text is None or text == "":
+        return math.nan
+    try:
+        value = _number(text, delimiter)
+    except ValueError:
+        value = math.nan
+    kelvin = value + TEMPERATURE_COLUMNS[name]
+    if not 200.0 <= kelvin <= 450.0:
+        expected = "in degC, -73 to 177" if TEMPERATURE_COLUMNS[name] else "in K, 200 to 450"
+        raise BenchFileError(
+            path,
+            f"{name} = {text!r} of {row['file']}: expected an oil temperature {expected} "
+            "(or an empty cell)",
+            line=number,
+        )
+    return kelvin
 
 
 def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]:
