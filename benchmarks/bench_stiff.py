@@ -457,13 +457,17 @@ def bench_stiff_batch(n_sets=10_000, sample=20, record_every=10):
         )
 
     run(slice(0, 2))  # compile or load from the cache
-    times = {}
-    for threads in (1, numba.config.NUMBA_NUM_THREADS):
-        numba.set_num_threads(threads)
-        plant._PARAMS.clear()  # no model evaluated before: each run starts as a user's would
-        t0 = time.perf_counter()
-        batch = run(slice(0, n_sets))
-        times[threads] = time.perf_counter() - t0
+    # one and all threads alternating, best of 3 each: a single 2 s timing on a shared
+    # machine moved the second core's speed-up between 1.43x and 1.76x
+    all_times = {1: [], numba.config.NUMBA_NUM_THREADS: []}
+    for _ in range(3):
+        for threads in all_times:
+            numba.set_num_threads(threads)
+            plant._PARAMS.clear()  # no model evaluated before: each run starts as a user's would
+            t0 = time.perf_counter()
+            batch = run(slice(0, n_sets))
+            all_times[threads].append(time.perf_counter() - t0)
+    times = {threads: min(seconds) for threads, seconds in all_times.items()}
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     control = _parallel_control()
     idx = rng.choice(n_sets, sample, replace=False)
@@ -493,6 +497,8 @@ def bench_stiff_batch(n_sets=10_000, sample=20, record_every=10):
         "sets": n_sets,
         "record_grid_seconds": record_every * 1e-3,
         "seconds_by_threads": times,
+        "seconds_by_threads_all_rounds": all_times,
+        "timing": "best of 3 rounds, one and all threads alternating",
         "speedup_second_core": times[1] / times[cores] if cores > 1 else None,
         "lsoda_rule": "each sampled set at its own loosest passing (rtol, atol), tighter "
         "neighbours passing too, on the batch's record grid",

@@ -14,6 +14,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from cylfric.datasheet import validate
 from cylfric.friction import params_at_pressure, stribeck
@@ -128,3 +130,22 @@ def test_out_of_range_messages_print_plain_numbers():
     with pytest.raises(ValueError, match=r"parameter F_c = -2\.0 is out of range") as info:
         stribeck(np.array([0.01]), F_c=np.array([-2.0]), F_s=1.0, v_r=0.01, sigma_2=1.0)
     assert "np.float64" not in str(info.value)
+
+
+
+_near_bound = st.one_of(
+    st.floats(-1e-6, 1e3),
+    st.sampled_from([0.0, -1e-16, -1e-12, -1e-10, -1e-9, -2e-9, -1e-7]),
+)
+
+
+@given(F_c=_near_bound, dF=_near_bound, sigma_2=_near_bound)
+def test_scalar_clamp_is_the_array_clamp(F_c, dF, sigma_2):
+    """The plain-number path of clamp_roundoff (no numpy, for the batch's set-up) puts exactly
+    the values the array path puts onto their bounds, and leaves the rest alone."""
+    params = {"F_c": F_c, "F_s": F_c + dF, "sigma_2": sigma_2}
+    scalar = clamp_roundoff(params)
+    array = clamp_roundoff({k: np.array([v]) for k, v in params.items()})
+    for name in params:
+        assert isinstance(scalar[name], float)
+        assert scalar[name] == float(np.asarray(array[name])[0]), name

@@ -53,6 +53,8 @@ def clamp_roundoff(params: dict) -> dict:
     F_c, F_s, sigma_2 = out.get("F_c"), out.get("F_s"), out.get("sigma_2")
     if F_c is None:
         return out
+    if all(isinstance(x, float | int) for x in (F_c, F_s, sigma_2) if x is not None):
+        return _clamp_scalars(out, F_c, F_s, sigma_2)  # one set: no numpy (batch set-up)
     tol, tol_2 = roundoff_tolerance(F_c, F_s, sigma_2)
 
     def onto(value, bound, tolerance):
@@ -70,6 +72,18 @@ def clamp_roundoff(params: dict) -> dict:
         out["F_s"] = new
     if sigma_2 is not None and (new := onto(sigma_2, 0.0, tol_2)) is not None:
         out["sigma_2"] = new
+    return out
+
+
+def _clamp_scalars(out: dict, F_c, F_s, sigma_2) -> dict:
+    """:func:`clamp_roundoff` of plain numbers, as floats, with the same tolerances."""
+    tol = ROUNDOFF * max(abs(F_c), abs(F_c if F_s is None else F_s), 1.0)
+    if -tol <= F_c < 0.0:
+        out["F_c"] = F_c = 0.0
+    if F_s is not None and F_c - tol <= F_s < F_c:
+        out["F_s"] = float(F_c)
+    if sigma_2 is not None and -ROUNDOFF * max(abs(sigma_2), 1.0) <= sigma_2 < 0.0:
+        out["sigma_2"] = 0.0
     return out
 
 
