@@ -288,3 +288,51 @@ def test_identify_refuses_impossible_fixed_values(fixed, message):
     points = pd.DataFrame({"velocity [m/s]": v, "pressure [Pa]": p, "friction [N]": 100 + 500 * v})
     with pytest.raises(ValueError, match=message):
         identify(points, fixed=fixed, sensitivity=False)
+
+
+# ------------------------------------------------- validity ranges (re-check after the fixes)
+def _demo_sheet():
+    model = FrictionModel().replace(
+        validity={
+            "pressure_min": 0.0,
+            "pressure_max": 159e5,
+            "velocity_min": 1e-3,
+            "velocity_max": 0.135,
+        }
+    )
+    return model.to_datasheet()
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("pressure_min", 200e5, "validity/pressure_min: 200-159 bar is not a range"),
+        ("velocity_min", 0.2, "validity/velocity_min: 200-135 mm/s is not a range"),
+        ("pressure_min", -1e4, "validity/pressure_min: -0.1-159 bar is not a range"),
+    ],
+)
+def test_a_datasheet_with_an_inverted_or_negative_validity_range_is_refused(key, value, message):
+    from cylfric.datasheet import validate
+    from cylfric.model.serialize import DatasheetError
+
+    sheet = _demo_sheet()
+    validate(sheet)  # the untouched sheet is valid
+    sheet["validity"][key] = value
+    with pytest.raises(DatasheetError, match=re.escape(message)):
+        validate(sheet, source="inv.json")
+
+
+def test_a_noisy_zero_bar_channel_does_not_put_the_validity_range_below_0_bar():
+    """The mean of a 0-bar pressure channel fell to -0.038 bar: the datasheet said 'valid
+    for -0.038-159 bar' and the Hopsan and Simscape exports refused it."""
+    from cylfric.identify.steady import validity_of
+
+    points = pd.DataFrame(
+        {"pressure [Pa]": [-3804.9, 55e5, 159e5], "velocity [m/s]": [0.001, -0.05, 0.1]}
+    )
+    assert validity_of(points) == {
+        "pressure_min": 0.0,
+        "pressure_max": 159e5,
+        "velocity_min": 0.001,
+        "velocity_max": 0.1,
+    }

@@ -79,10 +79,14 @@ def _distinct_speeds(speed, relative=0.1):
 
 
 def validity_of(points) -> dict:
-    """The ranges a points table covers: ``pressure_min/max`` [Pa], ``velocity_min/max`` [m/s]."""
+    """The ranges a points table covers: ``pressure_min/max`` [Pa], ``velocity_min/max`` [m/s].
+
+    The pressure range starts at 0 Pa at the lowest: the mean of a noisy pressure channel at
+    0 bar can fall slightly below 0, which is measurement noise, not a range to promise.
+    """
     speed = points["velocity [m/s]"].abs()
     return {
-        "pressure_min": float(points["pressure [Pa]"].min()),
+        "pressure_min": max(float(points["pressure [Pa]"].min()), 0.0),
         "pressure_max": float(points["pressure [Pa]"].max()),
         "velocity_min": float(speed.min()),
         "velocity_max": float(speed.max()),

@@ -304,6 +304,15 @@ def validate(sheet: dict, *, source="datasheet") -> dict:
     for where, number in _numbers({k: sheet[k] for k in sheet if k != "per_pressure"}):
         if not math.isfinite(number):
             raise DatasheetError(f"{source}: {where}: {number} is not finite; expected a number")
+    val = sheet.get("validity")
+    if val:
+        for quantity, unit, scale in (("pressure", "bar", 1e5), ("velocity", "mm/s", 1e-3)):
+            low, high = val[f"{quantity}_min"], val[f"{quantity}_max"]
+            if low > high or low < 0:
+                raise DatasheetError(
+                    f"{source}: validity/{quantity}_min: {low / scale:.6g}-{high / scale:.6g} "
+                    f"{unit} is not a range; expected 0 <= {quantity}_min <= {quantity}_max"
+                )
     problem = _physical(sheet)
     if problem:
         raise DatasheetError(f"{source}: {problem}")
