@@ -7,8 +7,8 @@ import json
 import shutil
 from pathlib import Path
 
-import pandas as pd
 import pytest
+from fit_helpers import excluded_table, fit_no_report  # tests/fit_helpers.py
 from typer.testing import CliRunner
 
 from cylfric.cli import app
@@ -42,17 +42,6 @@ def _edit(path, old, new):
     path.write_text(text.replace(old, new))
 
 
-def _fit(folder, tmp_path, *extra):
-    out = tmp_path / "out"
-    result = runner.invoke(app, ["fit", str(folder), "--out", str(out), "--no-report", *extra])
-    return result, out
-
-
-def _excluded(out):
-    path = out / "excluded.csv"
-    return pd.read_csv(path) if path.exists() else pd.DataFrame(columns=["file", "check"])
-
-
 def _within_tolerance(out):
     sheet = json.loads((out / "datasheet.json").read_text())
     assert abs(sheet["parameters"]["F_c"]["intercept"] / 70.2 - 1) < 0.02
@@ -70,12 +59,12 @@ def test_a_clean_campaign_loses_no_run(clean):
         ("run_013_p55bar_v7mms.txt", "s\tmm\tkN", "s\tmm\tN", "scale"),  # force in N
     ],
 )
-def test_a_unit_slip_in_one_run_is_excluded(clean, tmp_path, name, old, new, check):
+def test_a_unit_slip_in_one_run_isexcluded_table(clean, tmp_path, name, old, new, check):
     folder = _copy(clean, tmp_path)
     _edit(folder / name, old, new)
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     assert list(excluded["check"]) == [check]
     assert excluded["file"].iloc[0].endswith(name)
     assert "1 run(s) excluded" in result.output and name in result.output
@@ -92,16 +81,18 @@ def test_a_unit_slip_in_one_run_is_excluded(clean, tmp_path, name, old, new, che
         ("0.1", "outlier"),
     ],
 )
-def test_a_run_typed_as_0_bar_while_measured_at_103_bar_is_excluded(clean, tmp_path, typed, check):
+def test_a_run_typed_as_0_bar_while_measured_at_103_bar_isexcluded_table(
+    clean, tmp_path, typed, check
+):
     """Only manifest.csv knows the run's pressure (no header line, no file-name token)."""
     folder = _copy(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
     _edit(folder / name, "Pressure: 103 bar\n", "")
     (folder / name).rename(folder / "run_024.txt")
     _edit(folder / "manifest.csv", f"{name},103,10", f"run_024.txt,{typed},10")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     assert list(excluded["check"]) == [check] and list(excluded["file"]) == ["run_024.txt"]
     _within_tolerance(out)
 
@@ -125,9 +116,9 @@ def test_a_manifest_pressure_that_the_file_contradicts_is_a_metadata_conflict(cl
     name = "run_024_p103bar_v10mms.txt"
     _edit(folder / "manifest.csv", f"{name},103,10", f"{name},0,10")
     line = folder.joinpath("manifest.csv").read_text().splitlines().index(f"{name},0,10") + 1
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     assert list(excluded["check"]) == ["metadata"] and list(excluded["file"]) == [name]
     assert excluded["reason"].iloc[0] == (
         f"metadata conflict: pressure 0 bar in manifest.csv line {line} (the value used) but "
@@ -139,7 +130,7 @@ def test_a_manifest_pressure_that_the_file_contradicts_is_a_metadata_conflict(cl
     assert abs(sheet["parameters"]["F_c"]["slope"] * 1e5 / 0.5 - 1) < 0.02
     assert sheet["fit"]["rmse"] < 0.1  # N; 9.7 N with the run typed 0 bar kept
     shutil.rmtree(out)
-    result, out = _fit(folder, tmp_path, "--strict")
+    result, out = fit_no_report(folder, tmp_path, "--strict")
     assert result.exit_code == 2
     assert f"{name}: metadata conflict: pressure 0 bar in manifest.csv line {line}" in (
         " ".join(result.output.split())
@@ -232,9 +223,9 @@ def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):
     ]
     path.write_text("\n".join(frozen) + "\n")
     shutil.copy(folder / "run_012_p55bar_v4mms.txt", folder / "extra_p55bar_v4mms.txt")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out).set_index("check")
+    excluded = excluded_table(out).set_index("check")
     assert excluded.loc["motion", "file"] == "run_011_p55bar_v2mms.txt"
     assert excluded.loc["unlisted", "file"] == "extra_p55bar_v4mms.txt"
 
@@ -252,9 +243,9 @@ def test_excluded_files_are_named_relative_to_the_campaign_folder(clean, tmp_pat
     (folder / "campaign.toml").write_text('[files]\nglob = "data/*.txt"\n')
     _edit(folder / "data" / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
     shutil.copy(folder / "data" / "run_013_p55bar_v7mms.txt", folder / "data" / "extra.txt")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     assert list(excluded["file"]) == ["data/run_012_p55bar_v4mms.txt", "data/extra.txt"]
     assert list(excluded["check"]) == ["speed", "unlisted"]
     # a position column in mm labelled m reads 1000 times the nominal speed
@@ -268,7 +259,7 @@ def test_excluded_files_are_named_relative_to_the_campaign_folder(clean, tmp_pat
 def test_strict_turns_an_exclusion_into_exit_2_naming_the_file(clean, tmp_path):
     folder = _copy(clean, tmp_path)
     _edit(folder / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
-    result, out = _fit(folder, tmp_path, "--strict")
+    result, out = fit_no_report(folder, tmp_path, "--strict")
     assert result.exit_code == 2
     assert "run_012_p55bar_v4mms.txt: measured speed" in result.output
     assert "--strict" in result.output and not out.exists()
@@ -304,7 +295,7 @@ def test_a_flipped_load_cell_sign_exits_2_naming_the_key_and_its_line(clean, tmp
     (folder / "campaign.toml").write_text(
         '[files]\nglob = "*.txt"\n\n[force_balance]\nload_cell_sign = -1\n'
     )
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2, result.output
     assert "friction level is pushed to 0 N" in result.output
     assert "campaign.toml, line 5: load_cell_sign" in result.output
@@ -328,7 +319,7 @@ def test_a_flipped_sign_with_one_speed_per_direction_names_the_key(tmp_path):
     folder = tmp_path / "campaign"
     generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50)))
     (folder / "campaign.toml").write_text("[force_balance]\nload_cell_sign = -1\n")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2, result.output
     assert "friction level is pushed to 0 N" in result.output
     assert "campaign.toml, line 2: load_cell_sign" in result.output

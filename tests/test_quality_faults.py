@@ -8,14 +8,12 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from typer.testing import CliRunner
+from fit_helpers import excluded_table, fit_no_report  # tests/fit_helpers.py
 
-from cylfric.cli import app
 from cylfric.quality import assess
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.steady_state import extract_campaign, find_windows
 
-runner = CliRunner()
 GRID = dict(pressures_bar=(10.0, 55.0, 103.0, 159.0), speeds_mm_s=(1, 2, 5, 10, 20, 50, 100))
 
 
@@ -25,17 +23,6 @@ def seed1(tmp_path_factory):
     folder = tmp_path_factory.mktemp("seed1")
     generate_campaign(folder, BenchSettings(**GRID, seed=1))
     return folder
-
-
-def _fit(folder, tmp_path, *extra):
-    out = tmp_path / "out"
-    result = runner.invoke(app, ["fit", str(folder), "--out", str(out), "--no-report", *extra])
-    return result, out
-
-
-def _excluded(out):
-    path = out / "excluded.csv"
-    return pd.read_csv(path) if path.exists() else pd.DataFrame(columns=["file", "check"])
 
 
 # ---- F4: one-sample spikes no longer cost a run ------------------------------------------
@@ -67,7 +54,7 @@ def test_seed_1_loses_no_run_and_run_008_keeps_both_strokes(seed1, tmp_path):
     # the bench's truth at 55 bar and 2 mm/s is about 138 N (friction of both directions)
     assert_allclose = np.testing.assert_allclose
     assert_allclose(run["friction [N]"], 137.95, atol=0.5)
-    result, out = _fit(seed1, tmp_path, "--strict")
+    result, out = fit_no_report(seed1, tmp_path, "--strict")
     assert result.exit_code == 0, result.output
     assert not (out / "excluded.csv").exists()
 
@@ -110,16 +97,16 @@ def _force_in_n(folder, pattern):
 
 
 @pytest.mark.parametrize("level", ["10", "159"])
-def test_a_level_whose_force_unit_is_n_instead_of_kn_is_excluded(seed1, tmp_path, level):
+def test_a_level_whose_force_unit_is_n_instead_of_kn_isexcluded_table(seed1, tmp_path, level):
     """F1: every run of one level labelled N while the values are kN gave exit 0, nothing
     excluded and F_c(p) = -13.5 + 1.378 p (10 bar) or 131.1 - 0.82 p (159 bar): the scale
     check only compared runs within a level. Now the level's median friction (0.1 N) is
     compared with the other levels' (about 150 N)."""
     folder = _copy(seed1, tmp_path)
     _force_in_n(folder, f"*_p{level}bar_*")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     names = sorted(p.name for p in folder.glob(f"*_p{level}bar_*"))
     assert sorted(excluded["file"]) == names and len(names) == 7
     assert set(excluded["check"]) == {"scale"}
@@ -143,7 +130,7 @@ def test_most_runs_with_a_wrong_force_unit_exit_2(seed1, tmp_path):
     would flag more than a quarter of the runs (quality.assess max_scale_fraction)."""
     folder = _copy(seed1, tmp_path)
     _force_in_n(folder, "run_0[01]*.txt")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     message = " ".join(result.output.split())
     assert "the friction of 8 of 28 runs (run_020_p103bar_v100mms.txt, run_021_p159bar" in (message)
@@ -218,7 +205,7 @@ def _scale_pressure_column(path, factor):
         (0.1, "0.1 times the nominal: a pressure column with values in MPa whose unit says bar?"),
     ],
 )
-def test_a_pressure_column_in_psi_or_mpa_labelled_bar_is_excluded(
+def test_a_pressure_column_in_psi_or_mpa_labelled_bar_isexcluded_table(
     seed3_pressure, tmp_path, factor, cause
 ):
     """F2: run_010 (55 bar by manifest, header and name) with its pressure column in psi
@@ -226,9 +213,9 @@ def test_a_pressure_column_in_psi_or_mpa_labelled_bar_is_excluded(
     folder = _copy(seed3_pressure, tmp_path)
     name = "run_010_p55bar_v10mms.txt"
     _scale_pressure_column(folder / name, factor)
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     assert list(excluded["file"]) == [name] and list(excluded["check"]) == ["metadata"]
     measured = f"{55 * factor:.4g}"
     reason = excluded["reason"].iloc[0]
@@ -253,9 +240,9 @@ def test_a_lone_0_bar_run_is_a_metadata_conflict(seed1, tmp_path):
     _edit(folder / name, "Pressure: 103 bar\n", "")
     (folder / name).rename(folder / "run_017.txt")
     _edit(folder / "manifest.csv", f"{name},103,10", "run_017.txt,0,10")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    excluded = _excluded(out)
+    excluded = excluded_table(out)
     assert list(excluded["file"]) == ["run_017.txt"]
     assert list(excluded["check"]) == ["metadata"]
     assert excluded["reason"].iloc[0] == (
@@ -272,7 +259,7 @@ def test_a_negative_or_infinite_manifest_pressure_exits_2_naming_the_line(seed1,
     folder = _copy(seed1, tmp_path)
     name = "run_017_p103bar_v10mms.txt"
     _edit(folder / "manifest.csv", f"{name},103,10", f"{name},{typed},10")
-    result, _ = _fit(folder, tmp_path)
+    result, _ = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     assert "manifest.csv, line 19: pressure_bar = " in " ".join(result.output.split())
 
@@ -344,7 +331,7 @@ def test_manifest_columns_without_a_unit_exit_2_naming_them(seed1, tmp_path):
     manifest = folder / "manifest.csv"
     lines = manifest.read_text().splitlines()
     manifest.write_text("\n".join(["file,pressure,velocity", *lines[1:]]) + "\n")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     assert " ".join(result.output.split()).endswith(
         "manifest.csv, line 1: column(s) ['pressure', 'velocity'] not understood (found "
@@ -363,10 +350,10 @@ def test_a_manifest_row_for_a_missing_file_is_named_and_skippable(seed1, tmp_pat
         "manifest.csv, line 30: lists run_999_p55bar_v10mms.txt, which is not in the campaign "
         "folder; expected an existing run file (correct or remove the row)"
     )
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     assert expected in " ".join(result.output.split())
-    result, out = _fit(folder, tmp_path, "--skip-bad")
+    result, out = fit_no_report(folder, tmp_path, "--skip-bad")
     assert result.exit_code == 0, result.output
     skipped = pd.read_csv(out / "skipped.csv")
     assert len(skipped) == 1 and skipped["file"].iloc[0].endswith("run_999_p55bar_v10mms.txt")
@@ -425,7 +412,7 @@ def test_nul_bytes_after_64_kib_name_the_file_and_line(seed1, tmp_path):
     cut = raw.index(b"\n", 70000) + 1
     path.write_bytes(raw[:cut] + b"\x00" * 200 + raw[cut:])
     line = raw[:cut].count(b"\n") + 1
-    result, _ = _fit(folder, tmp_path)
+    result, _ = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     message = " ".join(result.output.split())
     assert "\x00" not in result.output
@@ -525,7 +512,7 @@ def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
     folder = _copy(seed1, tmp_path)
     for path in sorted(folder.glob("run_0*.txt"))[:15]:
         _edit(path, "s\tmm\tkN\n", "s\tm\tkN\n")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     message = " ".join(result.output.split())
     assert (
@@ -536,9 +523,9 @@ def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
     assert not (out / "datasheet.json").exists()
     for path in sorted(folder.glob("run_0*.txt"))[1:15]:  # 1 of 28 left: fitted, listed
         _edit(path, "s\tm\tkN\n", "s\tmm\tkN\n")
-    result, out = _fit(folder, tmp_path)
+    result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
-    assert list(_excluded(out)["check"]) == ["speed"]
+    assert list(excluded_table(out)["check"]) == ["speed"]
 
 
 def test_a_manifest_row_without_a_pressure_says_so(seed1, tmp_path):
@@ -549,7 +536,7 @@ def test_a_manifest_row_without_a_pressure_says_so(seed1, tmp_path):
     _edit(folder / name, "Pressure: 103 bar\n", "")
     (folder / name).rename(folder / "run_017.txt")
     _edit(folder / "manifest.csv", f"{name},103,10", "run_017.txt,,10")
-    result, _ = _fit(folder, tmp_path)
+    result, _ = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     assert (
         "run_017.txt: no pressure for this run; expected a pressure_bar value in manifest.csv "
