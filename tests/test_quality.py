@@ -8,7 +8,12 @@ import shutil
 from pathlib import Path
 
 import pytest
-from fit_helpers import excluded_table, fit_no_report  # tests/fit_helpers.py
+from fit_helpers import (  # tests/fit_helpers.py
+    copy_campaign,
+    edit_file,
+    excluded_table,
+    fit_no_report,
+)
 from typer.testing import CliRunner
 
 from cylfric.cli import app
@@ -30,18 +35,6 @@ def clean(tmp_path_factory):
     return folder
 
 
-def _copy(clean, tmp_path):
-    folder = tmp_path / "campaign"
-    shutil.copytree(clean, folder)
-    return folder
-
-
-def _edit(path, old, new):
-    text = path.read_text()
-    assert old in text
-    path.write_text(text.replace(old, new))
-
-
 def _within_tolerance(out):
     sheet = json.loads((out / "datasheet.json").read_text())
     assert abs(sheet["parameters"]["F_c"]["intercept"] / 70.2 - 1) < 0.02
@@ -60,8 +53,8 @@ def test_a_clean_campaign_loses_no_run(clean):
     ],
 )
 def test_a_unit_slip_in_one_run_isexcluded_table(clean, tmp_path, name, old, new, check):
-    folder = _copy(clean, tmp_path)
-    _edit(folder / name, old, new)
+    folder = copy_campaign(clean, tmp_path)
+    edit_file(folder / name, old, new)
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
     excluded = excluded_table(out)
@@ -85,11 +78,11 @@ def test_a_run_typed_as_0_bar_while_measured_at_103_bar_isexcluded_table(
     clean, tmp_path, typed, check
 ):
     """Only manifest.csv knows the run's pressure (no header line, no file-name token)."""
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
-    _edit(folder / name, "Pressure: 103 bar\n", "")
+    edit_file(folder / name, "Pressure: 103 bar\n", "")
     (folder / name).rename(folder / "run_024.txt")
-    _edit(folder / "manifest.csv", f"{name},103,10", f"run_024.txt,{typed},10")
+    edit_file(folder / "manifest.csv", f"{name},103,10", f"run_024.txt,{typed},10")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
     excluded = excluded_table(out)
@@ -99,7 +92,7 @@ def test_a_run_typed_as_0_bar_while_measured_at_103_bar_isexcluded_table(
 
 def _without_low_pressure(clean, tmp_path):
     """The clean campaign without its 0.1 bar runs: no level a run typed 0 bar could join."""
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     for path in folder.glob("*_p0.1bar_*"):
         path.unlink()
     manifest = folder / "manifest.csv"
@@ -114,7 +107,7 @@ def test_a_manifest_pressure_that_the_file_contradicts_is_a_metadata_conflict(cl
     with exit 0, no exclusion and an RMSE of 9.7 N."""
     folder = _without_low_pressure(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
-    _edit(folder / "manifest.csv", f"{name},103,10", f"{name},0,10")
+    edit_file(folder / "manifest.csv", f"{name},103,10", f"{name},0,10")
     line = folder.joinpath("manifest.csv").read_text().splitlines().index(f"{name},0,10") + 1
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
@@ -160,10 +153,10 @@ def test_a_manifest_pressure_that_the_file_contradicts_is_a_metadata_conflict(cl
     ],
 )
 def test_nominal_sources_are_compared(clean, tmp_path, edit, check, expected):
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
     target, old, new = (part.format(name=name) for part in edit)
-    _edit(folder / target, old, new)
+    edit_file(folder / target, old, new)
     if target == name:
         (folder / "manifest.csv").unlink()
     excluded = assess(extract_campaign(folder, workers=1)).excluded
@@ -212,7 +205,7 @@ def test_a_measured_pressure_column_is_compared_with_the_nominal_values(tmp_path
 
 
 def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     path = folder / "run_011_p55bar_v2mms.txt"
     lines = path.read_text().splitlines()
     frozen = [
@@ -233,7 +226,7 @@ def test_a_run_without_motion_and_an_unlisted_file_are_listed(clean, tmp_path):
 def test_excluded_files_are_named_relative_to_the_campaign_folder(clean, tmp_path):
     """One form in excluded.csv's file column: the path relative to the campaign folder
     (it was the full path for runs and the bare name for unlisted files)."""
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     (folder / "data").mkdir()
     for path in folder.glob("run_*.txt"):
         path.rename(folder / "data" / path.name)
@@ -241,7 +234,7 @@ def test_excluded_files_are_named_relative_to_the_campaign_folder(clean, tmp_pat
     lines = manifest.read_text().splitlines()
     manifest.write_text("\n".join([lines[0]] + ["data/" + line for line in lines[1:]]) + "\n")
     (folder / "campaign.toml").write_text('[files]\nglob = "data/*.txt"\n')
-    _edit(folder / "data" / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
+    edit_file(folder / "data" / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
     shutil.copy(folder / "data" / "run_013_p55bar_v7mms.txt", folder / "data" / "extra.txt")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
@@ -257,8 +250,8 @@ def test_excluded_files_are_named_relative_to_the_campaign_folder(clean, tmp_pat
 
 
 def test_strict_turns_an_exclusion_into_exit_2_naming_the_file(clean, tmp_path):
-    folder = _copy(clean, tmp_path)
-    _edit(folder / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
+    folder = copy_campaign(clean, tmp_path)
+    edit_file(folder / "run_012_p55bar_v4mms.txt", "s\tmm\tkN", "s\tm\tkN")
     result, out = fit_no_report(folder, tmp_path, "--strict")
     assert result.exit_code == 2
     assert "run_012_p55bar_v4mms.txt: measured speed" in result.output
@@ -291,7 +284,7 @@ def test_fine_grids_lose_no_run_and_close_pressure_levels_stay_apart(tmp_path):
 
 
 def test_a_flipped_load_cell_sign_exits_2_naming_the_key_and_its_line(clean, tmp_path):
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     (folder / "campaign.toml").write_text(
         '[files]\nglob = "*.txt"\n\n[force_balance]\nload_cell_sign = -1\n'
     )
@@ -303,8 +296,8 @@ def test_a_flipped_load_cell_sign_exits_2_naming_the_key_and_its_line(clean, tmp
 
 
 def test_the_report_lists_the_excluded_runs(clean, tmp_path):
-    folder = _copy(clean, tmp_path)
-    _edit(folder / "run_013_p55bar_v7mms.txt", "s\tmm\tkN", "s\tmm\tN")  # force in N
+    folder = copy_campaign(clean, tmp_path)
+    edit_file(folder / "run_013_p55bar_v7mms.txt", "s\tmm\tkN", "s\tmm\tN")  # force in N
     out = tmp_path / "out"
     result = runner.invoke(app, ["fit", str(folder), "--out", str(out)])
     assert result.exit_code == 0, result.output
@@ -329,11 +322,11 @@ def test_a_flipped_sign_with_one_speed_per_direction_names_the_key(tmp_path):
 def test_the_speed_check_names_a_unit_only_for_a_factor_of_1000(clean, tmp_path):
     """A run measured at 10 mm/s that only manifest.csv calls 14 mm/s: 0.714 times the
     nominal is no unit slip, and the reason does not suggest one (issue 11 audit)."""
-    folder = _copy(clean, tmp_path)
+    folder = copy_campaign(clean, tmp_path)
     name = "run_024_p103bar_v10mms.txt"
-    _edit(folder / name, "Nominal velocity: 10 mm/s\n", "")
+    edit_file(folder / name, "Nominal velocity: 10 mm/s\n", "")
     (folder / name).rename(folder / "run_024.txt")
-    _edit(folder / "manifest.csv", f"{name},103,10", "run_024.txt,103,14")
+    edit_file(folder / "manifest.csv", f"{name},103,10", "run_024.txt,103,14")
     excluded = assess(extract_campaign(folder, workers=1)).excluded
     assert list(excluded["check"]) == ["speed"] and list(excluded["file"]) == ["run_024.txt"]
     reason = excluded["reason"].iloc[0]

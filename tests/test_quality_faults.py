@@ -8,7 +8,12 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from fit_helpers import excluded_table, fit_no_report  # tests/fit_helpers.py
+from fit_helpers import (  # tests/fit_helpers.py
+    copy_campaign,
+    edit_file,
+    excluded_table,
+    fit_no_report,
+)
 
 from cylfric.quality import assess
 from cylfric.simulate.bench import BenchSettings, generate_campaign
@@ -62,18 +67,15 @@ def test_seed_1_loses_no_run_and_run_008_keeps_both_strokes(seed1, tmp_path):
 # ---- helpers for edited copies of the seed-1 campaign --------------------------------------
 
 
-def _copy(folder, tmp_path, name="campaign"):
-    import shutil
-
-    target = tmp_path / name
-    shutil.copytree(folder, target)
-    return target
-
-
-def _edit(path, old, new):
-    text = path.read_text()
-    assert old in text
-    path.write_text(text.replace(old, new))
+def _bare_run_017(seed1, tmp_path, *, pressure_bar):
+    """A copy of the seed-1 campaign whose run_017 (103 bar, 10 mm/s) has no header line and
+    no name token, and ``pressure_bar`` (text) in its manifest.csv row."""
+    folder = copy_campaign(seed1, tmp_path)
+    name = "run_017_p103bar_v10mms.txt"
+    edit_file(folder / name, "Pressure: 103 bar\n", "")
+    (folder / name).rename(folder / "run_017.txt")
+    edit_file(folder / "manifest.csv", f"{name},103,10", f"run_017.txt,{pressure_bar},10")
+    return folder
 
 
 def _within_tolerance(out):
@@ -90,7 +92,7 @@ def _within_tolerance(out):
 
 def _force_in_n(folder, pattern):
     for path in sorted(folder.glob(pattern)):
-        _edit(path, "s\tmm\tkN\n", "s\tmm\tN\n")
+        edit_file(path, "s\tmm\tkN\n", "s\tmm\tN\n")
 
 
 # ---- F1: a whole pressure level with its force unit wrong ----------------------------------
@@ -102,7 +104,7 @@ def test_a_level_whose_force_unit_is_n_instead_of_kn_isexcluded_table(seed1, tmp
     excluded and F_c(p) = -13.5 + 1.378 p (10 bar) or 131.1 - 0.82 p (159 bar): the scale
     check only compared runs within a level. Now the level's median friction (0.1 N) is
     compared with the other levels' (about 150 N)."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     _force_in_n(folder, f"*_p{level}bar_*")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
@@ -128,7 +130,7 @@ def test_most_runs_with_a_wrong_force_unit_exit_2(seed1, tmp_path):
     """F1: with runs 000-019 of 28 in N (levels 10, 55 and six of 103 bar), the gate used to
     keep the wrong majority and exclude the right runs. Now the scale check refuses when it
     would flag more than a quarter of the runs (quality.assess max_scale_fraction)."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     _force_in_n(folder, "run_0[01]*.txt")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
@@ -210,7 +212,7 @@ def test_a_pressure_column_in_psi_or_mpa_labelled_bar_isexcluded_table(
 ):
     """F2: run_010 (55 bar by manifest, header and name) with its pressure column in psi
     gave exit 0 and validity '9.94-798 bar': the measured column was never compared."""
-    folder = _copy(seed3_pressure, tmp_path)
+    folder = copy_campaign(seed3_pressure, tmp_path)
     name = "run_010_p55bar_v10mms.txt"
     _scale_pressure_column(folder / name, factor)
     result, out = fit_no_report(folder, tmp_path)
@@ -235,11 +237,7 @@ def test_a_pressure_column_in_psi_or_mpa_labelled_bar_isexcluded_table(
 def test_a_lone_0_bar_run_is_a_metadata_conflict(seed1, tmp_path):
     """F3: run_017 typed 0 bar in manifest.csv, without a header line or a name token and
     without a low-pressure level: kept with exit 0 and RMSE 10.7 N."""
-    folder = _copy(seed1, tmp_path)
-    name = "run_017_p103bar_v10mms.txt"
-    _edit(folder / name, "Pressure: 103 bar\n", "")
-    (folder / name).rename(folder / "run_017.txt")
-    _edit(folder / "manifest.csv", f"{name},103,10", "run_017.txt,0,10")
+    folder = _bare_run_017(seed1, tmp_path, pressure_bar="0")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
     excluded = excluded_table(out)
@@ -256,9 +254,9 @@ def test_a_lone_0_bar_run_is_a_metadata_conflict(seed1, tmp_path):
 @pytest.mark.parametrize("typed", ["-55", "inf"])
 def test_a_negative_or_infinite_manifest_pressure_exits_2_naming_the_line(seed1, tmp_path, typed):
     """The manifest reader refuses these itself (the gate flags them from other sources)."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     name = "run_017_p103bar_v10mms.txt"
-    _edit(folder / "manifest.csv", f"{name},103,10", f"{name},{typed},10")
+    edit_file(folder / "manifest.csv", f"{name},103,10", f"{name},{typed},10")
     result, _ = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     assert "manifest.csv, line 19: pressure_bar = " in " ".join(result.output.split())
@@ -267,10 +265,10 @@ def test_a_negative_or_infinite_manifest_pressure_exits_2_naming_the_line(seed1,
 def test_a_negative_header_pressure_is_a_metadata_conflict(seed1, tmp_path):
     """Without manifest.csv and a name token, the header's 'Pressure: -103 bar' is used and
     flagged."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     (folder / "manifest.csv").unlink()
     name = "run_017_p103bar_v10mms.txt"
-    _edit(folder / name, "Pressure: 103 bar\n", "Pressure: -103 bar\n")
+    edit_file(folder / name, "Pressure: 103 bar\n", "Pressure: -103 bar\n")
     (folder / name).rename(folder / "run_017.txt")
     excluded = assess(extract_campaign(folder, workers=1)).excluded
     assert list(excluded["file"]) == ["run_017.txt"]
@@ -300,7 +298,7 @@ def test_a_deliberate_0_bar_level_is_kept(tmp_path):
 def test_a_utf16_manifest_is_read(seed1, tmp_path):
     """Excel's 'Unicode text' (UTF-16 with a BOM) gave "'utf-8' codec can't decode" with no
     file named."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     manifest = folder / "manifest.csv"
     manifest.write_bytes(manifest.read_text().encode("utf-16"))
     from cylfric.io.campaign import discover_runs
@@ -327,7 +325,7 @@ def test_a_manifest_that_is_not_utf8_names_the_file_and_line(tmp_path):
 def test_manifest_columns_without_a_unit_exit_2_naming_them(seed1, tmp_path):
     """'file,pressure,velocity' was silently ignored: a 0 bar typed there was neither used
     nor reported, and bare files said 'expected manifest.csv' though one was there."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     manifest = folder / "manifest.csv"
     lines = manifest.read_text().splitlines()
     manifest.write_text("\n".join(["file,pressure,velocity", *lines[1:]]) + "\n")
@@ -343,7 +341,7 @@ def test_manifest_columns_without_a_unit_exit_2_naming_them(seed1, tmp_path):
 
 
 def test_a_manifest_row_for_a_missing_file_is_named_and_skippable(seed1, tmp_path):
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     with (folder / "manifest.csv").open("a") as handle:
         handle.write("run_999_p55bar_v10mms.txt,55,10\n")
     expected = (
@@ -365,7 +363,7 @@ def test_a_manifest_row_for_a_missing_file_is_named_and_skippable(seed1, tmp_pat
 def test_a_semicolon_or_tab_separated_manifest_is_read(seed1, tmp_path, separator):
     """A semicolon-separated manifest said "expected a header row starting with 'file'"
     though it did; a decimal comma goes with the semicolon."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     manifest = folder / "manifest.csv"
     text = manifest.read_text().replace(",", separator)
     manifest.write_text(
@@ -406,7 +404,7 @@ def test_mts_export_whose_names_and_units_rows_begin_with_a_tab_is_read(tmp_path
 def test_nul_bytes_after_64_kib_name_the_file_and_line(seed1, tmp_path):
     """F5: 200 NUL bytes at the start of a line after 64 KiB gave 'the columns change
     between segments' with no line, and echoed the raw NULs."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     path = folder / "run_010_p55bar_v10mms.txt"
     raw = path.read_bytes()
     cut = raw.index(b"\n", 70000) + 1
@@ -509,9 +507,9 @@ def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
     """F1 (decision): when the gate would exclude more than half of the runs the data
     contradict each other; no datasheet is fitted from the rest. 15 of 28 runs with their
     position in m instead of mm (each one flagged by the speed check)."""
-    folder = _copy(seed1, tmp_path)
+    folder = copy_campaign(seed1, tmp_path)
     for path in sorted(folder.glob("run_0*.txt"))[:15]:
-        _edit(path, "s\tmm\tkN\n", "s\tm\tkN\n")
+        edit_file(path, "s\tmm\tkN\n", "s\tm\tkN\n")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     message = " ".join(result.output.split())
@@ -522,7 +520,7 @@ def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
     ) in message
     assert not (out / "datasheet.json").exists()
     for path in sorted(folder.glob("run_0*.txt"))[1:15]:  # 1 of 28 left: fitted, listed
-        _edit(path, "s\tm\tkN\n", "s\tmm\tkN\n")
+        edit_file(path, "s\tm\tkN\n", "s\tmm\tkN\n")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 0, result.output
     assert list(excluded_table(out)["check"]) == ["speed"]
@@ -531,11 +529,7 @@ def test_more_than_half_of_the_runs_excluded_exits_2(seed1, tmp_path):
 def test_a_manifest_row_without_a_pressure_says_so(seed1, tmp_path):
     """F10: 'no pressure ... expected manifest.csv' was said although manifest.csv was
     there; now its line is named."""
-    folder = _copy(seed1, tmp_path)
-    name = "run_017_p103bar_v10mms.txt"
-    _edit(folder / name, "Pressure: 103 bar\n", "")
-    (folder / name).rename(folder / "run_017.txt")
-    _edit(folder / "manifest.csv", f"{name},103,10", "run_017.txt,,10")
+    folder = _bare_run_017(seed1, tmp_path, pressure_bar="")
     result, _ = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2
     assert (
