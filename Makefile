@@ -12,6 +12,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m compileall -q src  # byte code once: PYTHONDONTWRITEBYTECODE machines would compile cylfric in every process
 	touch $(STAMP)
 
 demo: $(STAMP)

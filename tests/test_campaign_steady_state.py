@@ -285,3 +285,56 @@ def test_the_file_queue_refuses_more_indices_than_the_pipe_holds():
         assert os.read(fd, 4) == b""  # the write end is closed: end of the queue
     finally:
         os.close(fd)
+
+
+def test_the_caller_leaves_the_files_to_the_child_when_joining_costs_more(
+    campaign_of_20, monkeypatch
+):
+    """When joining does not pay (_worth_joining, tested below), the caller only collects
+    the child's results; the points are the serial ones."""
+    import os
+
+    import pandas as pd
+
+    ss = _forks(monkeypatch)
+    parent, original, here = os.getpid(), ss._point_rows, []
+    monkeypatch.setattr(
+        ss,
+        "_point_rows",
+        lambda *a, **k: (here.append(1) if os.getpid() == parent else None) or original(*a, **k),
+    )
+    monkeypatch.setattr(ss, "_worth_joining", lambda *args: False)
+    parallel = extract_campaign(campaign_of_20)
+    assert here == []  # every file was read by the child
+    monkeypatch.undo()
+    pd.testing.assert_frame_equal(
+        parallel.points, extract_campaign(campaign_of_20, workers=1).points
+    )
+
+
+@pytest.mark.parametrize(
+    ("queued", "elapsed", "loaded", "joins"),
+    [
+        (0, 1.0, False, False),  # nothing left
+        (10, 0.1, True, True),  # compiled code already here: joining is free
+        (20, 0.5, False, True),  # the child has taken none yet
+        (10, 0.5, False, True),  # 10 left at 10 files/0.5 s: 0.5 s > 0.35 s
+        (2, 0.5, False, False),  # 2 left at 18 files/0.5 s: 0.06 s < 0.35 s
+    ],
+)
+def test_the_caller_joins_when_the_childs_remaining_time_exceeds_the_load(
+    monkeypatch, queued, elapsed, loaded, joins
+):
+    import os
+    import struct
+
+    import cylfric.steady_state as ss
+
+    monkeypatch.setattr(ss, "_compiled_loaded", lambda: loaded)
+    read_end, write_end = os.pipe()
+    try:
+        os.write(write_end, struct.pack(f"<{queued}i", *range(queued)))
+        assert ss._worth_joining(read_end, 20, elapsed) is joins
+    finally:
+        os.close(read_end)
+        os.close(write_end)

@@ -55,12 +55,13 @@ def test_window_velocity_is_the_savitzky_golay_derivative():
 
 
 def test_the_pipeline_imports_the_identification_only_while_extracting():
-    """scipy.optimize, jsonschema and the identification load in extract_campaign's
-    ``meanwhile`` (beside the second extraction worker), not when the pipeline is imported."""
+    """pandas, the quality gate, scipy.optimize, jsonschema and the identification load in
+    extract_campaign's ``meanwhile`` (while the forked child reads the files), not when the
+    pipeline is imported: the reading needs none of them."""
     script = (
         "import sys\nimport cylfric.pipeline, cylfric.cli\n"
-        "print([m for m in ('scipy.optimize', 'scipy.ndimage', 'jsonschema', 'cylfric.identify')"
-        " if m in sys.modules])"
+        "print([m for m in ('scipy.optimize', 'scipy.ndimage', 'jsonschema', 'cylfric.identify',"
+        " 'pandas', 'cylfric.quality') if m in sys.modules])"
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -70,9 +71,19 @@ def test_the_pipeline_imports_the_identification_only_while_extracting():
 def test_the_pipelines_meanwhile_loads_the_identification():
     script = (
         "import sys\nfrom cylfric.pipeline import _import_next_stages\n_import_next_stages()\n"
-        "print([m for m in ('scipy.optimize', 'jsonschema', 'cylfric.identify.steady')"
-        " if m not in sys.modules])"
+        "print([m for m in ('scipy.optimize', 'jsonschema', 'cylfric.identify.steady', 'pandas',"
+        " 'cylfric.quality') if m not in sys.modules])"
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+def test_the_version_is_the_installed_one():
+    """cylfric.__version__ comes from cylfric/_version.py (no importlib.metadata at start-up);
+    the installed metadata is built from the same attribute (pyproject.toml)."""
+    from importlib.metadata import version
+
+    import cylfric
+
+    assert cylfric.__version__ == version("cylfric")

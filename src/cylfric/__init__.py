@@ -9,12 +9,7 @@ function (:mod:`cylfric.pipeline`) and the command line (:mod:`cylfric.cli`). SI
 engineering units at the edges (:mod:`cylfric.units`).
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("cylfric")
-except PackageNotFoundError:  # pragma: no cover - source tree without install
-    __version__ = "0.0.0"
+from ._version import __version__
 
 __all__ = ["friction", "units", "__version__"]
 

@@ -13,13 +13,14 @@ import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config, read_run
 from .io.writers import atomic_write_text
-from .quality import assess
 from .steady_state import extract_campaign
+
+if TYPE_CHECKING:  # pandas and the gate load while the files are read (_import_next_stages)
+    import pandas as pd
 
 __all__ = ["fit_campaign", "FitOutputs"]
 
@@ -354,11 +355,13 @@ def _sign_settings(folder) -> str:
 
 
 def _import_next_stages():
-    """Import the identification and the datasheet (scipy.optimize, jsonschema: about 0.4 s)
-    while the second extraction worker already reads files."""
+    """Import pandas, the quality gate, the identification and the datasheet (scipy.optimize,
+    jsonschema: about 0.7 s of processor time) while the forked extraction child already
+    reads files: the reading itself needs neither pandas nor scipy."""
     import jsonschema  # noqa: F401  (the datasheet's validation loads it on first use)
+    import pandas  # noqa: F401
 
-    from . import datasheet  # noqa: F401
+    from . import datasheet, quality  # noqa: F401
     from .identify import steady  # noqa: F401  (the package itself loads its names lazily)
 
 
@@ -398,6 +401,8 @@ def _fit(
     finally:
         if after_extraction is not None:
             after_extraction()
+    from .quality import assess
+
     quality = assess(extraction)  # the data as measured: the gate looks for data errors
     correction = _correct_viscosity(extraction, config, viscosity_correction)
     if correction.record is not None:  # the points the gate passed, at the reference temperature
@@ -444,6 +449,8 @@ def _fit(
     files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
     if ident.sensitivity is not None:
         files["sensitivity"] = _csv(out / "sensitivity.csv", ident.sensitivity)
+    import pandas as pd
+
     if extraction.skipped:
         files["skipped"] = _csv(out / "skipped.csv", pd.DataFrame(extraction.skipped))
     if not quality.excluded.empty:

@@ -23,14 +23,18 @@ import signal
 import struct
 import sys
 import threading
+import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ._filters import convolve_nearest, rolling_mean, rolling_median
 from .io.campaign import CampaignConfig, discover_runs, load_config, read_run, unlisted_files
 from .io.text import BenchFileError
+
+if TYPE_CHECKING:  # pandas loads while the files are read (see extract_campaign)
+    import pandas as pd
 
 __all__ = [
     "friction_signal",
@@ -279,6 +283,8 @@ def extract_points(
     rows = _offset_rows(
         _point_rows(data, metadata, config, run, extraction_options(config, options))
     )
+    import pandas as pd
+
     return pd.DataFrame(rows, columns=_columns(rows))
 
 
@@ -527,6 +533,41 @@ def _file_queue(n):
     return None
 
 
+COMPILED_LOAD_SECONDS = 0.35
+"""A process's first call of the reader's compiled code loads numba's CPU target: about
+0.3-0.4 s of processor time (measured on the 2-core CI machine)."""
+
+
+def _compiled_loaded() -> bool:
+    """Whether this process has already loaded the reader's compiled code."""
+    from .io._scan import scan_lines
+
+    return bool(scan_lines.signatures)
+
+
+def _worth_joining(queue_read, n, elapsed) -> bool:
+    """Whether this process should take files too, ``elapsed`` [s] after the fork.
+
+    The child alone would need ``remaining / rate`` more seconds; joining first costs this
+    process the load of the compiled code (``COMPILED_LOAD_SECONDS``, unless loaded), after
+    which both take files: joining pays exactly when the child's remaining time is longer
+    than that cost. The child's rate counts its own start, so it errs towards joining.
+    """
+    import fcntl
+    import termios
+
+    try:
+        queued = struct.unpack("i", fcntl.ioctl(queue_read, termios.FIONREAD, b"\0" * 4))[0]
+    except OSError:  # pragma: no cover - no FIONREAD on this pipe: always take files
+        return True
+    remaining, taken = queued // 4, n - queued // 4
+    if remaining == 0:
+        return False
+    if taken == 0 or _compiled_loaded():
+        return True
+    return remaining * elapsed / taken > COMPILED_LOAD_SECONDS
+
+
 def _extract_all(one, n, workers, report, meanwhile=None):
     """``[one(i) for i in range(n)]``, on two cores when allowed (see extract_campaign).
 
@@ -546,6 +587,7 @@ def _extract_all(one, n, workers, report, meanwhile=None):
             report(index)
         return results
     read_end, write_end = os.pipe()
+    started = time.perf_counter()
     pid = os.fork()
     if pid == 0:  # the child: take files from the queue, send each result, leave quietly
         status = 1
@@ -578,7 +620,8 @@ def _extract_all(one, n, workers, report, meanwhile=None):
             if meanwhile is not None:
                 meanwhile()
             alive = True
-            while len(token := os.read(queue_read, 4)) == 4:
+            join = _worth_joining(queue_read, n, time.perf_counter() - started)
+            while join and len(token := os.read(queue_read, 4)) == 4:
                 index = struct.unpack("<i", token)[0]
                 results[index] = one(index)
                 report(index)
@@ -695,6 +738,8 @@ def extract_campaign(
                 for r in rows:
                     r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
                 _offset_rows(rows, campaign_offset=offset)
+    import pandas as pd  # loaded meanwhile (pipeline): the reading runs without it
+
     rows = [r for run_rows in per_run for r in run_rows]
     points = (
         pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .text import BenchFileError
 
@@ -53,5 +52,7 @@ def read_mat(path, *, variables=None, units=None):
     if missing:
         raise BenchFileError(path, f"variables {missing} are missing; found {sorted(vectors)}")
     units = units or {}
+    import pandas as pd
+
     data = pd.DataFrame({f"{k} [{units.get(k, '-')}]": vectors[k] for k in variables})
     return data, {"file": str(path), "scalars": scalars, "variables": list(variables)}

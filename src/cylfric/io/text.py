@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..units import UnitError, to_si, unit_dimension
 from ._scan import NUMERIC, TEXT, parse_block, scan_lines
@@ -205,6 +204,8 @@ def read_bench_text(
         encoding=encoding,
         roles=roles,
     )
+    import pandas as pd  # here, not at the top: the reader runs without pandas
+
     return pd.DataFrame(arrays, copy=False), metadata
 
 

@@ -12,8 +12,6 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.csv as pacsv
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "write_mts_text", "write_manifest"]
 
@@ -44,6 +42,9 @@ def atomic_write_text(path, text: str, encoding: str = "utf-8") -> Path:
 
 def _block(columns: dict, decimals: dict) -> bytes:
     """Tab-separated numeric rows via pyarrow (fast), values rounded to ``decimals``."""
+    import pyarrow as pa  # here: reading a campaign (which imports this module) needs no pyarrow
+    import pyarrow.csv as pacsv
+
     arrays = [pa.array(np.round(values, decimals[name])) for name, values in columns.items()]
     table = pa.table(arrays, names=list(columns))
     sink = io.BytesIO()
