@@ -338,3 +338,22 @@ def test_the_caller_joins_when_the_childs_remaining_time_exceeds_the_load(
     finally:
         os.close(read_end)
         os.close(write_end)
+
+
+def test_the_datasheet_hashes_the_bytes_each_file_had_when_read(campaign_of_20):
+    """The reader hashes each file's bytes on the core that reads it (also in the forked
+    child); the datasheet's provenance lists exactly the files' SHA-256."""
+    import hashlib
+
+    from cylfric.datasheet import build_datasheet
+    from cylfric.identify import identify
+
+    extraction = extract_campaign(campaign_of_20)
+    expected = {
+        Path(r["file"]).name: hashlib.sha256(Path(r["file"]).read_bytes()).hexdigest()
+        for r in extraction.runs
+    }
+    assert {Path(r["file"]).name: r["sha256"] for r in extraction.runs} == expected
+    sheet = build_datasheet(identify(extraction.usable), extraction=extraction)
+    listed = {f["name"]: f["sha256"] for f in sheet["fit"]["source"]["files"]}
+    assert listed == expected and len(listed) == 20

@@ -71,8 +71,11 @@ def build_datasheet(
     """
     ident = identification
     model = ident.model
+    digests = {}
     if files is None and extraction is not None:
         files = [r["file"] for r in extraction.runs]
+        # the reader hashed the bytes it read (io.text); other files are hashed here
+        digests = {r["file"]: r["sha256"] for r in extraction.runs if r.get("sha256")}
     files = files or []
     per_pressure = []
     for _, row in ident.per_pressure.iterrows():
@@ -104,7 +107,9 @@ def build_datasheet(
     }
     source = {
         "campaign": str(campaign or ""),
-        "files": [{"name": Path(f).name, "sha256": file_digest(f)} for f in files],
+        "files": [
+            {"name": Path(f).name, "sha256": digests.get(f) or file_digest(f)} for f in files
+        ],
     }
     changes = {
         "record": clean(record),

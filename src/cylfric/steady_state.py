@@ -699,6 +699,7 @@ def extract_campaign(
             "nominal": metadata.get("nominal", {}),
             "pressure measured": "pressure [Pa]" in data or "pressure_a [Pa]" in data,
             "events": len(metadata.get("events", [])),
+            "sha256": metadata.get("sha256"),
         }
         return rows, summary, None
 

@@ -15,6 +15,7 @@ Python.
 from __future__ import annotations
 
 import codecs
+import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -252,7 +253,8 @@ def read_bench_arrays(
     metadata : dict
         ``file``, ``header`` (``key: value`` lines), ``columns`` (original names),
         ``units`` (original units), ``delimiter``, ``decimal``, ``events`` (status lines
-        with line numbers), ``rows`` and ``segments``.
+        with line numbers), ``rows``, ``segments`` and ``sha256`` (of the bytes read, for the
+        datasheet's provenance: hashed here, on the core that reads the file).
 
     Raises
     ------
@@ -419,6 +421,7 @@ def read_bench_arrays(
         "events": events,
         "rows": int(len(data["segment [-]"])),
         "segments": len(frames),
+        "sha256": hashlib.sha256(raw).hexdigest(),
     }
     return data, metadata
 
