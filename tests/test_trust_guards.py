@@ -366,6 +366,32 @@ def test_a_model_read_from_a_file_names_it_when_its_extrapolated_law_fails(tmp_p
     assert FrictionModel.from_datasheet(sheet).source is None  # a dict has no file to name
 
 
+def test_a_replaced_model_still_names_its_file_and_what_was_replaced(tmp_path):
+    """replace() dropped ``source``: a model read from a file and changed (the simulate
+    command's --sigma-0, a scaled catalogue model) raised errors naming no file."""
+    sheet = _model().to_datasheet()
+    sheet["parameters"]["sigma_2"] = {"intercept": 500.0, "slope": -500.0 / 200e5}
+    path = tmp_path / "falling.json"
+    path.write_text(json.dumps(sheet))
+    model = FrictionModel.from_datasheet(path)
+    assert model.replaced == ()
+    stiffer = model.replace(sigma_0=2e6).replace(sigma_1=1e3, sigma_0=3e6)
+    assert stiffer.source == str(path) and stiffer.replaced == ("sigma_0", "sigma_1")
+    assert model.replace().replaced == ()  # an unchanged copy is the file's model
+    at_300_bar = dict(velocity=0.01, pressure=300e5, strict=False)
+    for changed, prefix in [
+        (stiffer, rf"{re.escape(str(path))}, with sigma_0, sigma_1 replaced: "),
+        (model.replace(source="rig.json", sigma_0=2e6), r"rig\.json: "),  # a new source
+        (model.replace(source=None), ""),  # source=None: named by nobody
+    ]:
+        with (
+            pytest.warns(ValidityWarning),
+            pytest.raises(ValueError, match=rf"^{prefix}parameter sigma_2 = -250\.0 is out of"),
+        ):
+            changed.friction(**at_300_bar)
+    assert FrictionModel().replace(sigma_0=2e6).source is None  # built in Python: no file
+
+
 @pytest.mark.parametrize(
     ("fixed", "message"),
     [
