@@ -285,16 +285,26 @@ def _check_reusable(out: Path):
 def _check_out(folder: Path, out: Path):
     """Refuse an output folder that would read back as runs or whose files would be lost."""
     campaign, target = folder.resolve(), out.resolve()
-    if target == campaign or campaign in target.parents:
-        raise ValueError(
-            f"--out {out} is inside the campaign folder {folder}: its files would be read "
-            "back as runs; choose an output folder outside the campaign"
-        )
-    if target in campaign.parents:
-        raise ValueError(
-            f"--out {out} contains the campaign folder {folder}; the output folder is "
-            "replaced whole, so choose one that does not hold the raw files"
-        )
+    if target == campaign or campaign in target.parents or target in campaign.parents:
+        sibling = campaign.parent / f"{campaign.name or 'campaign'}-fit"
+        if not folder.is_absolute():  # as the user would type it: 'fit .' -> ../NAME-fit
+            with contextlib.suppress(ValueError):  # (another drive on Windows)
+                sibling = Path(os.path.relpath(sibling))
+        unnamed = folder.name in ("", ".", "..")  # 'fit .': which folder that is
+        where = f"{folder}" + (f" ({campaign})" if unnamed else "")
+        if target in campaign.parents:
+            problem = (
+                f"--out {out} contains the campaign folder {where}; the output folder is "
+                "replaced whole, so choose one that does not hold the raw files"
+            )
+        else:
+            problem = (
+                f"--out {out} is inside the campaign folder {where}: its files would be read "
+                "back as runs; choose an output folder outside the campaign"
+            )
+        import shlex
+
+        raise ValueError(f"{problem}, e.g. --out {shlex.quote(str(sibling))}")
     _check_reusable(out)
 
 
