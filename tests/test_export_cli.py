@@ -83,3 +83,53 @@ def test_fit_with_export_writes_exports_and_report_section(tmp_path):
     assert "<h2>Simulator exports</h2>" in report
     assert "lossless, the full pressure-dependent LuGre model" in report
     assert "rms [N]" in report
+
+
+def _leftovers(folder):
+    return sorted(p.name for p in folder.iterdir() if ".staging-" in p.name or p.suffix == ".lock")
+
+
+def test_fit_export_failure_names_campaign_and_target_and_writes_nothing(tmp_path):
+    """One pressure level: the lossy exports have no pressure range to report the loss over.
+    The error said only 'pressure_range = (5500000.0, 5500000.0) Pa is not a range'."""
+    campaign = tmp_path / "camp"
+    generate_campaign(campaign, BenchSettings(pressures_bar=(55.0,),
+                                              speeds_mm_s=(1, 4, 15, 60, 135)))
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report",
+                                 "--export", "modelica,hopsan"])
+    assert result.exit_code == 2
+    assert " ".join(result.output.split()) == (
+        f"error: {campaign}: --export hopsan failed: pressure_range = (5500000.0, 5500000.0) "
+        "Pa is not a range; expected 0 <= min < max. Nothing was written (--out "
+        f"{out} was not created); fit without --export hopsan to get the datasheet and the "
+        "other outputs"
+    )
+    assert not out.exists() and _leftovers(tmp_path) == []
+
+
+def test_fit_export_failure_keeps_the_earlier_output(tmp_path, monkeypatch):
+    """A C compiler that fails (here $CC=false): the FMU export raised 'unexpected
+    RuntimeError' (exit 1) and never said that the earlier --out was left as it was."""
+    campaign = tmp_path / "camp"
+    generate_campaign(campaign, BenchSettings(pressures_bar=(0.1, 159.0),
+                                              speeds_mm_s=(1, 4, 15, 60, 135)))
+    out = tmp_path / "out"
+    args = ["fit", str(campaign), "--out", str(out), "--no-report"]
+    assert runner.invoke(app, args).exit_code == 0
+    before = (out / "datasheet.json").read_bytes()
+    monkeypatch.setenv("CC", "false")
+    from cylfric.export.fmu import fmi_platform
+
+    if fmi_platform() is None:
+        pytest.skip("no FMI platform name for this machine: the FMU is not compiled")
+    result = runner.invoke(app, [*args, "--export", "fmu"])
+    assert result.exit_code == 2
+    flat = " ".join(result.output.split())
+    assert flat.startswith(f"error: {campaign}: --export fmu failed: compiling the FMU with ")
+    assert flat.endswith(
+        f"failed. Nothing was written (--out {out} keeps its earlier contents); fit without "
+        "--export fmu to get the datasheet and the other outputs"
+    )
+    assert (out / "datasheet.json").read_bytes() == before
+    assert not (out / "export").exists() and _leftovers(tmp_path) == []

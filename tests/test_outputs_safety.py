@@ -64,6 +64,36 @@ def test_out_inside_or_around_the_campaign_is_refused(campaign):
     assert result.exit_code == 2 and "contains the campaign folder" in result.output
 
 
+def test_fit_dot_inside_the_campaign_says_which_out_to_give(campaign, monkeypatch):
+    """'cylfric fit .' in the campaign folder: the default --out cylfric-out lies inside it.
+    The message said only 'choose an output folder outside the campaign' about a folder
+    named '.'; it now names the folder and an --out to type, and that --out works. (The
+    default stays cylfric-out here: a folder written beside the one the user stands in,
+    unasked, would surprise.)"""
+    monkeypatch.chdir(campaign)
+    result = runner.invoke(app, ["fit", ".", "--no-report"])
+    assert result.exit_code == 2
+    assert " ".join(result.output.split()) == (
+        f"error: --out cylfric-out is inside the campaign folder . ({campaign.resolve()}): its "
+        "files would be read back as runs; choose an output folder outside the campaign, "
+        f"e.g. --out ../{campaign.name}-fit"
+    )
+    assert not (campaign / "cylfric-out").exists()
+    result = runner.invoke(app, ["fit", ".", "--no-report", "--out", f"../{campaign.name}-fit"])
+    assert result.exit_code == 0, result.output
+    assert (campaign.parent / f"{campaign.name}-fit" / "datasheet.json").is_file()
+
+
+def test_an_absolute_campaign_gets_an_absolute_out_to_give(campaign):
+    result = runner.invoke(app, ["fit", str(campaign), "--out", str(campaign.parent)])
+    assert result.exit_code == 2
+    assert " ".join(result.output.split()).endswith(
+        f"contains the campaign folder {campaign}; the output folder is replaced whole, so "
+        "choose one that does not hold the raw files, e.g. --out "
+        f"{campaign.parent / (campaign.name + '-fit')}"
+    )
+
+
 def test_a_folder_that_is_not_cylfric_output_is_not_replaced(campaign, tmp_path):
     out = tmp_path / "mine"
     out.mkdir()

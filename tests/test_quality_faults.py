@@ -307,6 +307,55 @@ def test_a_utf16_manifest_is_read(seed1, tmp_path):
     assert len(runs) == 28 and runs[8].pressure == 55e5 and runs[8].velocity == 2e-3
 
 
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_a_utf16_manifest_without_a_bom_is_read(seed1, tmp_path, encoding):
+    """Excel and LabVIEW write UTF-16 without a byte-order mark too; it was refused with an
+    escaped header ('f\\x00i\\x00l\\x00e\\x00'). Every other byte of the first line is NUL:
+    unambiguous, so it is read in that byte order, non-Latin-1 labels included."""
+    folder = copy_campaign(seed1, tmp_path)
+    manifest = folder / "manifest.csv"
+    lines = manifest.read_text().splitlines()
+    lines = [lines[0] + ",seal", *(line + ",Müller-\u0416" for line in lines[1:])]
+    manifest.write_bytes("\r\n".join(lines).encode(encoding) + "\r\n".encode(encoding))
+    from cylfric.io.campaign import discover_runs
+
+    runs = discover_runs(folder)
+    assert len(runs) == 28 and runs[8].pressure == 55e5 and runs[8].velocity == 2e-3
+    assert runs[8].extra["seal"] == "Müller-\u0416"
+
+
+def test_a_truncated_utf16_manifest_without_a_bom_names_the_byte_order(tmp_path):
+    from cylfric.io import BenchFileError
+    from cylfric.io.campaign import discover_runs
+
+    (tmp_path / "run.txt").write_text("x")
+    data = "file,pressure_bar,velocity_mm_s\nrun.txt,55,10\n".encode("utf-16-le")
+    (tmp_path / "manifest.csv").write_bytes(data[:-1])  # a byte cut off the end
+    with pytest.raises(
+        BenchFileError,
+        match=r"manifest.csv: is UTF-16 \(little endian\) without a byte-order mark but does "
+        r"not decode \(truncated data\); save it as UTF-8 or UTF-16 with a BOM",
+    ):
+        discover_runs(tmp_path)
+
+
+def test_a_manifest_with_nul_bytes_is_refused_naming_the_line(tmp_path):
+    """A UTF-16 header with a character beyond Latin-1 is not taken for UTF-16 without a BOM;
+    its NUL bytes are refused instead of reading as a garbled header."""
+    from cylfric.io import BenchFileError
+    from cylfric.io.campaign import discover_runs
+
+    (tmp_path / "run.txt").write_text("x")
+    data = "file,pressure_bar,velocity_mm_s,\u20ac\nrun.txt,55,10,1\n".encode("utf-16-le")
+    (tmp_path / "manifest.csv").write_bytes(data)
+    with pytest.raises(
+        BenchFileError,
+        match=r"manifest.csv, line 1: holds NUL bytes; expected a CSV file in UTF-8 .* save it "
+        r"as UTF-8 or UTF-16 with a BOM",
+    ):
+        discover_runs(tmp_path)
+
+
 def test_a_manifest_that_is_not_utf8_names_the_file_and_line(tmp_path):
     from cylfric.io import BenchFileError
     from cylfric.io.campaign import discover_runs

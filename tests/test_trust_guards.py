@@ -24,7 +24,7 @@ from cylfric.model import FrictionModel, ValidityWarning
 from cylfric.pipeline import STRICT_SHOWN, _strict_message
 from cylfric.simulate import Cylinder, SpringPull, simulate
 from cylfric.simulate.bench import BenchSettings, generate_campaign
-from cylfric.units import _MILLI_AT, UnitError, parse_quantity
+from cylfric.units import _MILLI_AT, UNITS, UnitError, parse_quantity
 
 runner = CliRunner()
 VALIDITY = {  # the thesis campaign's ranges
@@ -198,6 +198,100 @@ def test_no_mega_spelling_of_a_milli_unit_is_read(key, number):
 
 
 @pytest.mark.parametrize(
+    ("text", "dimension", "written"),
+    [
+        ("5 mM/s", "velocity", "mm/s"),  # was read as 5 mm/s (0.005 m/s)
+        ("5 mm/S", "velocity", "mm/s"),
+        ("5 mS", "time", "ms"),  # millisiemens
+        ("5 N*S/mm", "damping", "N*s/mm"),
+        ("5 mM²/s", "kinematic viscosity", "mm²/s"),
+    ],
+)
+def test_a_mixed_case_milli_unit_is_refused_naming_the_spelling_to_write(
+    text, dimension, written
+):
+    unit = text.split()[1]
+    with pytest.raises(
+        UnitError,
+        match=rf"^unit {re.escape(repr(unit))} is ambiguous: in a unit the case of m and s "
+        rf"carries the meaning .* write {re.escape(written)} \(or "
+        rf"{re.escape(written.upper())} in all capitals, as bench exports do\)$",
+    ):
+        parse_quantity(text, dimension)
+
+
+@pytest.mark.parametrize(
+    ("text", "dimension", "written"),
+    [
+        ("5 Mm/S", "velocity", "mm/s"),  # the milli spelling it names is one that is read
+        ("5 N*s/MM", "damping", "N*s/mm"),
+        ("5 Mm2/s", "kinematic viscosity", "mm2/s"),  # was read as mm2/s: a factor 1e18
+        ("5 MSec", "time", "mSec"),
+    ],
+)
+def test_a_mega_spelling_names_a_milli_spelling_that_is_read(text, dimension, written):
+    with pytest.raises(UnitError, match=rf"write {re.escape(written)} for the milli unit"):
+        parse_quantity(text, dimension)
+    assert parse_quantity(f"5 {written}", dimension) == pytest.approx(
+        5 * UNITS[written.lower()][1], rel=1e-12
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "dimension", "expected"),
+    [  # spellings of real exports and of the readers' tests (Sec mm kN, KN, MPA, MM_S, ...)
+        ("2 Sec", "time", 2.0),
+        ("2 SEC", "time", 2.0),
+        ("2 mSec", "time", 2e-3),  # sec is a word, not the symbol S
+        ("2 msec", "time", 2e-3),
+        ("5 kN", "force", 5e3),
+        ("5 kn", "force", 5e3),  # k/K: no milli or mega to swap
+        ("5 Bar", "pressure", 5e5),
+        ("5 mBar", "pressure", 500.0),  # b, a, r carry no prefix
+        ("5 barg", "pressure", 5e5),
+        ("5 psi", "pressure", 6894.757293168 * 5),
+        ("5 mm_s", "velocity", 5e-3),
+        ("5 MM_S", "velocity", 5e-3),
+        ("5 mm/Min", "velocity", 5e-3 / 60),
+        ("5 n/mm", "stiffness", 5e3),
+        ("5 N·s/mm", "damping", 5e3),
+        ("5 N*S/MM", "damping", 5e3),
+        ("5 cSt", "kinematic viscosity", 5e-6),
+        ("5 MM2/S", "kinematic viscosity", 5e-6),
+    ],
+)
+def test_spellings_in_use_are_still_read(text, dimension, expected):
+    assert parse_quantity(text, dimension) == pytest.approx(expected, rel=1e-12)
+
+
+@given(
+    key=st.sampled_from(sorted(k for k in UNITS if any(c.isalpha() for c in k))),
+    upper=st.lists(st.booleans(), min_size=8, max_size=8),
+    number=st.floats(min_value=1e-6, max_value=1e6, allow_nan=False),
+)
+def test_no_case_variant_swaps_milli_and_mega(key, upper, number):
+    """Every case variant of every unit is either read as that unit or refused: never as a
+    unit a factor of 10^3 to 10^18 away. Refused are exactly the variants of a milli unit
+    that are not all capitals and write M or S outside the words sec and min."""
+    variant = "".join(  # (an upper-case µ is Greek capital mu: no unit, not tried)
+        c.upper() if up and c.isascii() else c for c, up in zip(key, upper * 2, strict=False)
+    )
+    dimension, factor = UNITS[key]
+    mixed = (
+        key in _MILLI_AT
+        and not variant.isupper()
+        and re.search("[MS]", re.sub("sec|min", "", variant, flags=re.IGNORECASE))
+    )
+    if mixed:
+        with pytest.raises(UnitError, match=rf"^unit {re.escape(repr(variant))}[: ]"):
+            parse_quantity(f"{number!r} {variant}", dimension)
+    else:
+        assert parse_quantity(f"{number!r} {variant}", dimension) == pytest.approx(
+            number * factor, rel=1e-12
+        )
+
+
+@pytest.mark.parametrize(
     ("option", "expected"),
     [
         (
@@ -270,6 +364,32 @@ def test_a_model_read_from_a_file_names_it_when_its_extrapolated_law_fails(tmp_p
     ):
         model.friction(0.01, 300e5)
     assert FrictionModel.from_datasheet(sheet).source is None  # a dict has no file to name
+
+
+def test_a_replaced_model_still_names_its_file_and_what_was_replaced(tmp_path):
+    """replace() dropped ``source``: a model read from a file and changed (the simulate
+    command's --sigma-0, a scaled catalogue model) raised errors naming no file."""
+    sheet = _model().to_datasheet()
+    sheet["parameters"]["sigma_2"] = {"intercept": 500.0, "slope": -500.0 / 200e5}
+    path = tmp_path / "falling.json"
+    path.write_text(json.dumps(sheet))
+    model = FrictionModel.from_datasheet(path)
+    assert model.replaced == ()
+    stiffer = model.replace(sigma_0=2e6).replace(sigma_1=1e3, sigma_0=3e6)
+    assert stiffer.source == str(path) and stiffer.replaced == ("sigma_0", "sigma_1")
+    assert model.replace().replaced == ()  # an unchanged copy is the file's model
+    at_300_bar = dict(velocity=0.01, pressure=300e5, strict=False)
+    for changed, prefix in [
+        (stiffer, rf"{re.escape(str(path))}, with sigma_0, sigma_1 replaced: "),
+        (model.replace(source="rig.json", sigma_0=2e6), r"rig\.json: "),  # a new source
+        (model.replace(source=None), ""),  # source=None: named by nobody
+    ]:
+        with (
+            pytest.warns(ValidityWarning),
+            pytest.raises(ValueError, match=rf"^{prefix}parameter sigma_2 = -250\.0 is out of"),
+        ):
+            changed.friction(**at_300_bar)
+    assert FrictionModel().replace(sigma_0=2e6).source is None  # built in Python: no file
 
 
 @pytest.mark.parametrize(

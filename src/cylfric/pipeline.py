@@ -165,6 +165,14 @@ def fit_campaign(
             _write_marker(staging)
             _check_reusable(out)  # again: a file may have been added during the fit
             _swap_in(staging, out)
+        except ExportFailed as failure:  # name the campaign and the (untouched) output folder
+            shutil.rmtree(staging, ignore_errors=True)
+            kept = "keeps its earlier contents" if out.exists() else "was not created"
+            raise ExportFailed(
+                f"{folder}: {failure}. Nothing was written (--out {out} {kept}); fit without "
+                f"--export {failure.target} to get the datasheet and the other outputs",
+                failure.target,
+            ) from failure.__cause__
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
             raise
@@ -177,6 +185,21 @@ def fit_campaign(
         for target, exported in result.exports.items()
     }
     return result
+
+
+class ExportFailed(ValueError):
+    """An export of :func:`fit_campaign` failed, so nothing of the fit was written.
+
+    The message names the campaign, the target, the first line of the cause (chained as
+    ``__cause__``) and what became of the output folder; ``target`` is the export target.
+    """
+
+    def __init__(self, message, target):
+        super().__init__(message, target)
+        self.target = target
+
+    def __str__(self):
+        return self.args[0]
 
 
 MARKER = ".cylfric-output"
@@ -263,16 +286,26 @@ def _check_reusable(out: Path):
 def _check_out(folder: Path, out: Path):
     """Refuse an output folder that would read back as runs or whose files would be lost."""
     campaign, target = folder.resolve(), out.resolve()
-    if target == campaign or campaign in target.parents:
-        raise ValueError(
-            f"--out {out} is inside the campaign folder {folder}: its files would be read "
-            "back as runs; choose an output folder outside the campaign"
-        )
-    if target in campaign.parents:
-        raise ValueError(
-            f"--out {out} contains the campaign folder {folder}; the output folder is "
-            "replaced whole, so choose one that does not hold the raw files"
-        )
+    if target == campaign or campaign in target.parents or target in campaign.parents:
+        sibling = campaign.parent / f"{campaign.name or 'campaign'}-fit"
+        if not folder.is_absolute():  # as the user would type it: 'fit .' -> ../NAME-fit
+            with contextlib.suppress(ValueError):  # (another drive on Windows)
+                sibling = Path(os.path.relpath(sibling))
+        unnamed = folder.name in ("", ".", "..")  # 'fit .': which folder that is
+        where = f"{folder}" + (f" ({campaign})" if unnamed else "")
+        if target in campaign.parents:
+            problem = (
+                f"--out {out} contains the campaign folder {where}; the output folder is "
+                "replaced whole, so choose one that does not hold the raw files"
+            )
+        else:
+            problem = (
+                f"--out {out} is inside the campaign folder {where}: its files would be read "
+                "back as runs; choose an output folder outside the campaign"
+            )
+        import shlex
+
+        raise ValueError(f"{problem}, e.g. --out {shlex.quote(str(sibling))}")
     _check_reusable(out)
 
 
@@ -465,7 +498,11 @@ def _fit(
 
         t0 = time.perf_counter()
         for target in export:
-            exports[target] = export_to(sheet, target, out / "export" / target)
+            try:
+                exports[target] = export_to(sheet, target, out / "export" / target)
+            except (ValueError, RuntimeError, OSError) as exc:  # a compiler's output: 1st line
+                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
+                raise ExportFailed(f"--export {target} failed: {first}", target) from exc
         timings["export"] = time.perf_counter() - t0
     if report:
         from .report import write_report_folder

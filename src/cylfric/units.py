@@ -140,7 +140,17 @@ _MILLI_AT: dict[str, tuple[int, ...]] = {
     "ns/mm": (3,),
     "n*s/mm": (4,),
     "n.s/mm": (4,),
+    "mm2/s": (0,),
+    "mm^2/s": (0,),
+    "mm²/s": (0,),
 }
+
+# In a unit of _MILLI_AT the case of m and s carries the meaning (m milli or metre, M mega;
+# s second, S siemens): a spelling that is neither all capitals nor lower-case in them
+# ('mM/s', 'mm/S', 'mS') is refused, not guessed. The words sec and min are no symbols (Sec,
+# mSec, mm/Min are read), and N (newton) may be written n.
+_CASED_LETTERS = re.compile(r"[MS]")
+_WORDS = re.compile(r"sec|min", re.IGNORECASE)
 
 
 class UnitError(ValueError):
@@ -149,6 +159,11 @@ class UnitError(ValueError):
 
 def _key(unit: str) -> str:
     return unit.strip().replace(" ", "").replace("·", "*").lower()
+
+
+def _written(key: str) -> str:
+    """The spelling of a unit of _MILLI_AT to suggest: lower case, N for newton."""
+    return "N" + key[1:] if key.startswith("n") else key
 
 
 def _lookup(unit: str) -> tuple[str, float]:
@@ -162,10 +177,19 @@ def _lookup(unit: str) -> tuple[str, float]:
     # prefixed form is milli is read as that (MM is mm, MBAR mbar); mixed case is not guessed
     if mega and len(exact) == len(key) and not exact.isupper():
         milli = "".join("m" if i in mega else c for i, c in enumerate(exact))
+        if _CASED_LETTERS.search(_WORDS.sub("", milli)):  # 'Mm/S': an S left, write mm/s
+            milli = _written(key)
         raise UnitError(
             f"unit {unit!r}: M is the mega prefix (m is milli), and cylfric reads no mega "
             f"{UNITS[key][0]} unit; write {milli} for the milli unit. Unit prefixes are "
             "case-sensitive"
+        )
+    if key in _MILLI_AT and not exact.isupper() and _CASED_LETTERS.search(_WORDS.sub("", exact)):
+        written = _written(key)
+        raise UnitError(
+            f"unit {unit!r} is ambiguous: in a unit the case of m and s carries the meaning "
+            "(m milli or metre, M mega; s second, S siemens), and this spelling mixes them; "
+            f"write {written} (or {written.upper()} in all capitals, as bench exports do)"
         )
     if key in _AMBIGUOUS:
         milli, mega = _AMBIGUOUS[key]

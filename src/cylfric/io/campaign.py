@@ -466,8 +466,28 @@ _QUANTITY_COLUMN = re.compile(
 )
 
 
+def _utf16_byte_order(data: bytes) -> str | None:
+    """``"little"`` or ``"big"`` when ``data`` is UTF-16 text without a byte-order mark.
+
+    Excel and LabVIEW exports write it so: in the first line every other byte is NUL (the high
+    byte of a Latin character) and the bytes between are not. UTF-8 text has no NUL bytes, so
+    the test cannot take a UTF-8 manifest for UTF-16.
+    """
+    head = data[: 2 * 4096]
+    for order, text_at, nul_at in (("little", 0, 1), ("big", 1, 0)):
+        units = [(head[i + text_at], head[i + nul_at]) for i in range(0, len(head) - 1, 2)]
+        first_line = []
+        for unit in units:
+            if unit == (0x0A, 0):
+                break
+            first_line.append(unit)
+        if len(first_line) >= 2 and all(low and not high for low, high in first_line):
+            return order
+    return None
+
+
 def _manifest_text(path: Path) -> str:
-    """Text of manifest.csv: UTF-8 (with or without a BOM) or UTF-16 with a BOM."""
+    """Text of manifest.csv: UTF-8 (with or without a BOM) or UTF-16 (with or without one)."""
     data = path.read_bytes()
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
         try:
@@ -476,6 +496,24 @@ def _manifest_text(path: Path) -> str:
             raise BenchFileError(
                 path, f"starts like UTF-16 text but does not decode ({exc.reason})"
             ) from None
+    order = _utf16_byte_order(data)
+    if order is not None:
+        try:
+            return data.decode("utf-16-le" if order == "little" else "utf-16-be")
+        except UnicodeDecodeError as exc:
+            raise BenchFileError(
+                path,
+                f"is UTF-16 ({order} endian) without a byte-order mark but does not decode "
+                f"({exc.reason}); save it as UTF-8 or UTF-16 with a BOM",
+            ) from None
+    if b"\x00" in data:  # UTF-16 whose first line is not Latin text, or a binary file
+        raise BenchFileError(
+            path,
+            "holds NUL bytes; expected a CSV file in UTF-8 (a UTF-16 file without a byte-order "
+            "mark is read only when its first line is Latin text): save it as UTF-8 or UTF-16 "
+            "with a BOM",
+            line=data[: data.index(b"\x00")].count(b"\n") + 1,
+        )
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -483,7 +521,7 @@ def _manifest_text(path: Path) -> str:
         raise BenchFileError(
             path,
             f"byte 0x{data[exc.start]:02x} is not UTF-8 text; expected a CSV file in UTF-8 "
-            "(or UTF-16 with a byte-order mark, as Excel's 'Unicode text' writes)",
+            "(or UTF-16, as Excel's 'Unicode text' writes)",
             line=line,
         ) from None
 

@@ -235,8 +235,9 @@ def _stderr_items(spec, law):
 class FrictionModel:
     """Pressure-dependent friction of a cylinder: steady-state law, LuGre dynamics, uncertainty.
 
-    A model read with :meth:`from_datasheet` from a file keeps its path in ``source``, and
-    an evaluation error (a law extrapolated below its physical bound) names that file.
+    A model read with :meth:`from_datasheet` from a file keeps its path in ``source`` (also
+    through :meth:`replace`), and an evaluation error (a law extrapolated below its physical
+    bound) names that file.
 
     Parameters
     ----------
@@ -467,8 +468,14 @@ class FrictionModel:
     def replace(self, **changes) -> FrictionModel:
         """A copy with some constructor arguments changed (``model.replace(sigma_0=2e6)``).
 
-        Changing a coefficient drops the covariance unless a new one is given.
+        Changing a coefficient drops the covariance unless a new one is given. A model read
+        from a file keeps its :attr:`source`, and :attr:`replaced` lists the arguments changed
+        since, so that its errors still say where it came from (``rig.json, with sigma_0
+        replaced: ...``); ``source="other.json"`` (or None) sets it instead and clears
+        :attr:`replaced`.
         """
+        source = changes.pop("source", self.source)
+        replaced = () if source != self.source else tuple(sorted({*self.replaced, *changes}))
         kwargs = self._init_kwargs()
         if "coefficients" in changes and "covariance" not in changes:
             kwargs["covariance"] = None
@@ -480,7 +487,10 @@ class FrictionModel:
         kwargs.update(changes)
         if kwargs["covariance"] is None or ("covariance" in changes and "influence" not in changes):
             kwargs["influence"] = None  # the runs' influence belongs to its covariance
-        return FrictionModel(**kwargs)
+        model = FrictionModel(**kwargs)
+        if source is not None:
+            model.source, model.replaced = str(source), replaced
+        return model
 
     # ------------------------------------------------------------------ views
     def coefficients(self, *, include_dynamic=True) -> dict:
@@ -565,7 +575,12 @@ class FrictionModel:
         return self._friction(velocity, pressure, self.coefficients())
 
     source: str | None = None
-    """The datasheet file this model was read from (None when built otherwise)."""
+    """The datasheet file this model was read from (None when built otherwise); kept by
+    :meth:`replace`."""
+
+    replaced: tuple = ()
+    """Constructor arguments :meth:`replace` changed since the model was read from
+    :attr:`source` (sorted names; empty for the file's own model)."""
 
     def _friction(self, velocity, pressure, coefficients, *, checked=True):
         params = self._params(pressure, coefficients)
@@ -580,7 +595,8 @@ class FrictionModel:
         """``exc`` with the datasheet file in front of its message (when there is one)."""
         if self.source is None or str(exc).startswith(self.source):
             return exc
-        return type(exc)(f"{self.source}: {exc}")
+        changed = f", with {', '.join(self.replaced)} replaced" if self.replaced else ""
+        return type(exc)(f"{self.source}{changed}: {exc}")
 
     def dynamic_force(self, velocity, z, pressure):
         """LuGre friction force [N] (eq. 2.5) at velocity [m/s], bristle deflection z [m]."""
