@@ -9,6 +9,7 @@ timed assertion here.
 from __future__ import annotations
 
 import json
+import subprocess
 import sys
 import types
 import warnings
@@ -225,3 +226,92 @@ def test_fit_many_adds_each_datasheet_to_a_real_catalogue(eight, tmp_path):
     )
     assert list(again.summary["status"]) == ["ok", "ok"]  # the fits stand ...
     assert all(c.startswith("not added") for c in again.summary["catalog"])  # ... reported
+
+
+# The worker server (issue 15, the parallel start-up): cylfric._worker_server is what the
+# server preloads; inside the server it makes the server leave at once when the command
+# ends (os._exit after flushing), everywhere else it only imports.
+_SERVER_SCRIPT = """
+import atexit, os, sys
+atexit.register(print, "earlier exit handler ran")  # runs after a later one (LIFO)
+import cylfric._worker_server as w
+if sys.argv[1] == "install":
+    w._install_fast_exit()
+    pid = os.fork()
+    if pid == 0:  # a forked worker inherits the handler: there it does nothing
+        w._exit_now()
+        os._exit(5)
+    print("forked child status", os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]))
+print("installed in this process:", w._server_pid == os.getpid())
+sys.exit(3)
+"""
+
+
+@pytest.mark.parametrize("mode", ["import", "install"])
+def test_the_worker_server_leaves_at_once_and_only_the_server(mode):
+    done = subprocess.run(
+        [sys.executable, "-c", _SERVER_SCRIPT, mode], capture_output=True, text=True
+    )
+    if mode == "import":  # a plain import (not in the fork server): the exit is untouched
+        assert done.returncode == 3, done.stderr[-2000:]
+        assert "installed in this process: False" in done.stdout
+        assert "earlier exit handler ran" in done.stdout
+    else:  # installed: os._exit(0) before the earlier handlers and the teardown, output kept
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert "forked child status 5" in done.stdout  # _exit_now is a no-op in a child
+        assert "installed in this process: True" in done.stdout  # flushed before os._exit
+        assert "earlier exit handler ran" not in done.stdout
+
+
+def test_the_workers_fork_from_the_server_that_preloaded_the_pipeline():
+    from concurrent.futures import ProcessPoolExecutor
+
+    from cylfric.many import start_worker_server
+
+    context = start_worker_server(report=False)
+    assert context.get_start_method() == "forkserver"
+    assert start_worker_server(report=False) is context  # a second call: the same server
+    # evaluated in a fresh worker, before it runs any task that could import something
+    probe = (
+        "(__import__('sys').modules['cylfric._worker_server']._server_pid, "
+        "__import__('os').getppid(), "
+        "[m for m in ('cylfric._warm', 'cylfric.many', 'dask.multiprocessing', 'scipy.optimize')"
+        " if m in __import__('sys').modules])"
+    )
+    with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
+        server, parent, loaded = pool.submit(eval, probe).result()
+    assert server == parent  # the fast exit was installed in the server the worker forked from
+    assert loaded == ["cylfric._warm", "cylfric.many", "dask.multiprocessing", "scipy.optimize"]
+
+
+_COMMAND_SCRIPT = """
+import sys, warnings
+warnings.simplefilter("ignore")
+from cylfric.many import fit_many
+result = fit_many(sys.argv[1], sys.argv[2], workers=2, report=False)
+print("fitted", result.succeeded)
+print("loaded", [m for m in ("numba", "scipy", "cylfric.io", "cylfric.pipeline") if m in sys.modules])
+"""
+
+
+def test_the_calling_process_loads_no_reader_while_the_workers_fit(eight, tmp_path):
+    """The caller of fit_many with local workers imports pandas and Dask, not the readers
+    (numba, scipy: 0.3 s more at its start and again at its exit, measured for issue 15); its
+    fit_many.csv is still written atomically (cylfric._atomic, re-exported by io.writers)."""
+    from cylfric._atomic import atomic_write_text
+    from cylfric.io import writers
+
+    assert writers.atomic_write_text is atomic_write_text
+    root = tmp_path / "root"
+    root.mkdir()
+    for name in ("cyl00", "cyl01"):
+        (root / name).symlink_to(eight / name)
+    done = subprocess.run(
+        [sys.executable, "-c", _COMMAND_SCRIPT, str(root), str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "fitted 2" in done.stdout and "loaded []" in done.stdout, done.stdout
+    summary = pd.read_csv(tmp_path / "out" / "fit_many.csv")
+    assert list(summary["status"]) == ["ok", "ok"]

@@ -12,7 +12,8 @@ Schedulers (``scheduler=``):
   (``dask.compute(..., scheduler="processes")``); it starts in about 0.3 s where a
   ``distributed.LocalCluster`` of two processes takes 1.8-6.9 s on a 2-core machine
   (measured for issue 15). Its workers are forked from a server process that imported
-  the pipeline once (``forkserver`` with preload), so no worker pays the 2-3 s import.
+  the pipeline once (``forkserver`` with preload, :func:`start_worker_server`), so no
+  worker pays the 1.3-1.45 s import; the server leaves at once when the caller ends.
 - ``"local-cluster"``: a ``dask.distributed.LocalCluster(n_workers, threads_per_worker=1,
   processes=True)`` (its dashboard, its resilience to a dying worker).
 - ``"tcp://host:8786"`` (any scheduler address): a Dask distributed cluster; every worker
@@ -31,7 +32,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["find_campaigns", "fit_many", "ManyResult", "SUMMARY_COLUMNS"]
+__all__ = ["find_campaigns", "fit_many", "start_worker_server", "ManyResult", "SUMMARY_COLUMNS"]
 
 SUMMARY_COLUMNS = (
     "campaign",
@@ -248,17 +249,10 @@ def fit_many(
     workers = workers or os.cpu_count() or 1
     context = None
     if scheduler is None:  # the workers' server imports the pipeline while this process goes on
-        # everything a fit needs (cylfric._warm: the compiled reader, the identification and
-        # the datasheet, which the pipeline imports lazily) and the part of Dask that runs a
-        # task in a worker (0.15 s per worker otherwise), loaded once in the server the
-        # workers fork from
-        preload = ["cylfric.many", "cylfric._warm", "dask.multiprocessing"]
-        if fit_options.get("report", True):
-            preload.append("cylfric.report")
-        context = _worker_context(preload)
+        context = start_worker_server(report=fit_options.get("report", True))
     import pandas as pd
 
-    from .io.writers import atomic_write_text
+    from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     out.mkdir(parents=True, exist_ok=True)
     if scheduler != "serial" and (distributed or workers > 1):
@@ -325,24 +319,44 @@ def _add_to_catalog(db, out: Path, name: str) -> str:
     return "added"
 
 
-def _worker_context(preload):
-    """A multiprocessing context whose processes fork from a server that imported
-    ``preload`` once (started now, so that its imports overlap the caller's work)."""
+def start_worker_server(report=True):
+    """Start the server the local workers of :func:`fit_many` fork from, if not running.
+
+    The server (a ``multiprocessing`` fork server) imports :mod:`cylfric._worker_server`
+    once: everything a fit needs, its compiled code loaded, and the part of Dask that runs a
+    task in a worker; with ``report`` also :mod:`cylfric.report`. It starts at once and
+    imports while the caller goes on, so a caller that starts it first thing (as
+    ``cylfric fit-many`` does, before it imports pandas and Dask itself) overlaps its own
+    imports with the server's. :func:`fit_many` calls it too; a second call returns the
+    running server (whose preload the first call chose).
+
+    Parameters
+    ----------
+    report : bool
+        Also preload the report (figures and HTML) for fits with ``report=True``.
+
+    Returns
+    -------
+    multiprocessing.context.BaseContext
+        The context whose processes fork from the server (``spawn`` where there is no fork
+        server: Windows).
+    """
     import multiprocessing
 
     if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover
         return multiprocessing.get_context("spawn")  # Windows
     from multiprocessing import forkserver
 
+    preload = ["cylfric._worker_server"] + (["cylfric.report"] if report else [])
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(list(preload))
+    context.set_forkserver_preload(preload)
     forkserver.ensure_running()
     return context
 
 
 def _run_processes(jobs, workers, done, context):
     """Dask's multiprocessing scheduler on a pool of ``workers`` processes of ``context``
-    (:func:`_worker_context`: forked from a server that imported the pipeline once, so no
+    (:func:`start_worker_server`: forked from a server that imported the pipeline once, so no
     worker pays that import); ``done`` sees each row as its task finishes."""
     from concurrent.futures import ProcessPoolExecutor
 

@@ -61,6 +61,12 @@ def register(app: typer.Typer) -> None:
             raise BadInput(f"{root}: not a folder; expected a folder of campaign folders")
         if workers is not None and workers < 1:
             raise BadInput(f"--workers {workers}: expected at least 1")
+        if scheduler is None:
+            # first thing: the workers' server imports the pipeline while this process
+            # imports pandas and Dask and looks for the campaigns
+            from ..many import start_worker_server
+
+            start_worker_server(report=not no_report)
         options = {
             "fixed": fixed_parameters(list(fix)),
             "pressure_law": pressure_law,
