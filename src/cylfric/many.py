@@ -9,7 +9,7 @@ campaign that fails is reported there, not raised.
 Schedulers (``scheduler=``):
 
 - ``None`` (default): local worker processes through Dask's multiprocessing scheduler
-  (``dask.compute(..., scheduler="processes")``); it starts in about 0.3 s where a
+  (``dask.compute(..., scheduler=dask.multiprocessing.get)``); it starts in about 0.3 s where a
   ``distributed.LocalCluster`` of two processes takes 1.8-6.9 s on a 2-core machine
   (measured for issue 15). Its workers are forked from a server process that imported
   the pipeline once (``forkserver`` with preload, :func:`start_worker_server`), so no
@@ -26,10 +26,12 @@ With ``catalog=DB`` each fitted datasheet is added to the catalogue
 
 from __future__ import annotations
 
+import csv
 import io
 import os
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 __all__ = ["find_campaigns", "fit_many", "start_worker_server", "ManyResult", "SUMMARY_COLUMNS"]
@@ -93,8 +95,9 @@ class ManyResult:
 
     Attributes
     ----------
-    summary : pandas.DataFrame
-        One row per campaign (columns :data:`SUMMARY_COLUMNS`), in campaign order.
+    rows : list of dict
+        One summary row per campaign (keys :data:`SUMMARY_COLUMNS`; a key left out has no
+        value), in campaign order: what ``fit_many.csv`` holds.
     out : Path
         The output folder (``fit_many.csv`` and one folder per campaign).
     scheduler : str
@@ -103,20 +106,29 @@ class ManyResult:
         Wall time of the whole run [s].
     """
 
-    summary: object
+    rows: list
     out: Path
     scheduler: str
     seconds: float
 
+    @cached_property
+    def summary(self):
+        """The rows as a ``pandas.DataFrame`` (columns :data:`SUMMARY_COLUMNS`), built on
+        first use: :func:`fit_many` itself does not import pandas (0.3 s of processor time
+        in the process that waits for the workers)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows, columns=list(SUMMARY_COLUMNS))
+
     @property
     def succeeded(self) -> int:
         """Number of campaigns fitted."""
-        return int((self.summary["status"] == "ok").sum())
+        return sum(row.get("status") == "ok" for row in self.rows)
 
     @property
     def failed(self) -> int:
         """Number of campaigns that failed."""
-        return int((self.summary["status"] != "ok").sum())
+        return len(self.rows) - self.succeeded
 
 
 def _name(folder: Path, root: Path) -> str:
@@ -250,8 +262,6 @@ def fit_many(
     context = None
     if scheduler is None:  # the workers' server imports the pipeline while this process goes on
         context = start_worker_server(report=fit_options.get("report", True))
-    import pandas as pd
-
     from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     out.mkdir(parents=True, exist_ok=True)
@@ -293,11 +303,22 @@ def fit_many(
                 "catalog": "",
             },
         )
-    summary = pd.DataFrame([rows[job[2]] for job in jobs], columns=list(SUMMARY_COLUMNS))
+    ordered = [rows[job[2]] for job in jobs]
+    atomic_write_text(out / "fit_many.csv", _summary_csv(ordered))
+    return ManyResult(ordered, out, used, time.perf_counter() - t0)
+
+
+def _summary_csv(rows) -> str:
+    """``fit_many.csv``: a header of :data:`SUMMARY_COLUMNS`, one line per row; a missing
+    value or None is an empty field (what pandas reads as missing)."""
     buffer = io.StringIO()
-    summary.to_csv(buffer, index=False)
-    atomic_write_text(out / "fit_many.csv", buffer.getvalue())
-    return ManyResult(summary, out, used, time.perf_counter() - t0)
+    writer = csv.DictWriter(
+        buffer, fieldnames=SUMMARY_COLUMNS, restval="", extrasaction="ignore", lineterminator="\n"
+    )
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({key: "" if value is None else value for key, value in row.items()})
+    return buffer.getvalue()
 
 
 def _size(folder: Path) -> int:
@@ -326,7 +347,7 @@ def start_worker_server(report=True):
     once: everything a fit needs, its compiled code loaded, and the part of Dask that runs a
     task in a worker; with ``report`` also :mod:`cylfric.report`. It starts at once and
     imports while the caller goes on, so a caller that starts it first thing (as
-    ``cylfric fit-many`` does, before it imports pandas and Dask itself) overlaps its own
+    ``cylfric fit-many`` does, before it imports Dask itself) overlaps its own
     imports with the server's. :func:`fit_many` calls it too; a second call returns the
     running server (whose preload the first call chose).
 
@@ -361,6 +382,7 @@ def _run_processes(jobs, workers, done, context):
     from concurrent.futures import ProcessPoolExecutor
 
     import dask
+    import dask.multiprocessing
     from dask.callbacks import Callback
 
     class _Finished(Callback):
@@ -381,7 +403,10 @@ def _run_processes(jobs, workers, done, context):
                 # sent 6 of 8 campaigns to one worker as a batch while the other sat idle
                 dask.compute(
                     *tasks,
-                    scheduler="processes",
+                    # the function, not the name "processes": for a name Dask first imports
+                    # dask.distributed (to look for a default client: 0.3 s of processor
+                    # time here and 0.1 s more at exit, measured for issue 15)
+                    scheduler=dask.multiprocessing.get,
                     pool=pool,
                     num_workers=workers,
                     chunksize=1,
