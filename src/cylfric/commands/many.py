@@ -61,12 +61,6 @@ def register(app: typer.Typer) -> None:
             raise BadInput(f"{root}: not a folder; expected a folder of campaign folders")
         if workers is not None and workers < 1:
             raise BadInput(f"--workers {workers}: expected at least 1")
-        if scheduler is None:
-            # first thing: the workers' server imports the pipeline while this process
-            # imports Dask and looks for the campaigns
-            from ..many import start_worker_server
-
-            start_worker_server(report=not no_report)
         options = {
             "fixed": fixed_parameters(list(fix)),
             "pressure_law": pressure_law,
@@ -77,12 +71,16 @@ def register(app: typer.Typer) -> None:
             "strict": strict,
             "viscosity_correction": viscosity_correction,
         }
+        from ..many import find_campaigns, fit_many, start_worker_server
+
+        total = len(find_campaigns(root, exclude=[out]))  # a few ms
+        if scheduler is None and total:
+            # before anything heavy: the workers' server imports the pipeline while this
+            # process imports Dask (a bad argument or no campaign starts no server)
+            start_worker_server(report=not no_report)
         from rich.table import Table
         from rich.text import Text
 
-        from ..many import find_campaigns, fit_many
-
-        total = len(find_campaigns(root, exclude=[out]))
         with progress_bar() as progress:
             task = progress.add_task("fitting campaigns", total=total)
             result = fit_many(
