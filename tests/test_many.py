@@ -9,10 +9,12 @@ timed assertion here.
 from __future__ import annotations
 
 import json
+import subprocess
 import sys
 import types
 import warnings
 from dataclasses import replace
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -225,3 +227,131 @@ def test_fit_many_adds_each_datasheet_to_a_real_catalogue(eight, tmp_path):
     )
     assert list(again.summary["status"]) == ["ok", "ok"]  # the fits stand ...
     assert all(c.startswith("not added") for c in again.summary["catalog"])  # ... reported
+
+
+# The worker server (issue 15, the parallel start-up): cylfric._worker_server is what the
+# server preloads; inside the server it makes the server leave at once when the command
+# ends (os._exit after flushing), everywhere else it only imports.
+_SERVER_SCRIPT = """
+import atexit, os, sys
+atexit.register(print, "earlier exit handler ran")  # runs after a later one (LIFO)
+import cylfric._worker_server as w
+if sys.argv[1] == "install":
+    w._install_fast_exit()
+    pid = os.fork()
+    if pid == 0:  # a forked worker inherits the handler: there it does nothing
+        w._exit_now()
+        os._exit(5)
+    print("forked child status", os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]))
+print("installed in this process:", w._server_pid == os.getpid())
+sys.exit(3)
+"""
+
+
+@pytest.mark.parametrize("mode", ["import", "install"])
+def test_the_worker_server_leaves_at_once_and_only_the_server(mode):
+    done = subprocess.run(
+        [sys.executable, "-c", _SERVER_SCRIPT, mode], capture_output=True, text=True
+    )
+    if mode == "import":  # a plain import (not in the fork server): the exit is untouched
+        assert done.returncode == 3, done.stderr[-2000:]
+        assert "installed in this process: False" in done.stdout
+        assert "earlier exit handler ran" in done.stdout
+    else:  # installed: os._exit(0) before the earlier handlers and the teardown, output kept
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert "forked child status 5" in done.stdout  # _exit_now is a no-op in a child
+        assert "installed in this process: True" in done.stdout  # flushed before os._exit
+        assert "earlier exit handler ran" not in done.stdout
+
+
+def test_the_workers_fork_from_the_server_that_preloaded_the_pipeline():
+    from concurrent.futures import ProcessPoolExecutor
+
+    from cylfric.many import start_worker_server
+
+    context = start_worker_server(report=False)
+    assert context.get_start_method() == "forkserver"
+    assert start_worker_server(report=False) is context  # a second call: the same server
+    # evaluated in a fresh worker, before it runs any task that could import something
+    probe = (
+        "(__import__('sys').modules['cylfric._worker_server']._server_pid, "
+        "__import__('os').getppid(), "
+        "[m for m in ('cylfric._warm', 'cylfric.many', 'dask.multiprocessing', 'scipy.optimize')"
+        " if m in __import__('sys').modules])"
+    )
+    with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
+        server, parent, loaded = pool.submit(eval, probe).result()
+    assert server == parent  # the fast exit was installed in the server the worker forked from
+    assert loaded == ["cylfric._warm", "cylfric.many", "dask.multiprocessing", "scipy.optimize"]
+
+
+_COMMAND_SCRIPT = """
+import sys, warnings
+warnings.simplefilter("ignore")
+from cylfric.many import fit_many
+result = fit_many(sys.argv[1], sys.argv[2], workers=2, report=False)
+print("fitted", result.succeeded)
+loaded = ("numba", "scipy", "pandas", "distributed", "cylfric.io")
+print("loaded", [m for m in loaded if m in sys.modules])
+"""
+
+
+def test_the_calling_process_loads_no_reader_while_the_workers_fit(eight, tmp_path):
+    """The caller of fit_many with local workers imports Dask's local scheduler, neither
+    pandas, dask.distributed nor the readers (numba, scipy): 0.3 s of processor time each at
+    its start, and more at its exit (measured for issue 15); its fit_many.csv is still
+    written atomically (cylfric._atomic, re-exported by io.writers)."""
+    from cylfric._atomic import atomic_write_text
+    from cylfric.io import writers
+
+    assert writers.atomic_write_text is atomic_write_text
+    root = tmp_path / "root"
+    root.mkdir()
+    for name in ("cyl00", "cyl01"):
+        (root / name).symlink_to(eight / name)
+    done = subprocess.run(
+        [sys.executable, "-c", _COMMAND_SCRIPT, str(root), str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "fitted 2" in done.stdout and "loaded []" in done.stdout, done.stdout
+    summary = pd.read_csv(tmp_path / "out" / "fit_many.csv")
+    assert list(summary["status"]) == ["ok", "ok"]
+
+
+def test_the_summary_csv_reads_as_the_summary_frame():
+    """fit_many.csv is written without pandas; read back it is the frame pandas writes."""
+    import io
+
+    from cylfric.many import ManyResult, _summary_csv
+
+    ok = {
+        "campaign": "a/cyl00",
+        "status": "ok",
+        "reason": "",
+        "out": "o/a/cyl00",
+        "runs [-]": 21,
+        "excluded [-]": 0,
+        "seconds [s]": 0.412,
+        "cpu [s]": 0.398,
+        "catalog": "added",
+        "start [s]": 0.002,
+        "worker": 4242,
+    }
+    failed = dict(
+        ok,
+        campaign="broken",
+        status="failed",
+        reason='run_001.txt, line 2: expected numbers, found "1;2;3"',
+        **{"runs [-]": None, "excluded [-]": None, "catalog": ""},
+    )
+    lost = {"campaign": "c", "status": "failed", "reason": "lost", "out": "o/c", "catalog": ""}
+    rows = [ok, failed, lost]
+    result = ManyResult(rows, Path("o"), "serial", 1.0)
+    assert (result.succeeded, result.failed) == (1, 2)
+    back = pd.read_csv(io.StringIO(_summary_csv(rows)))
+    expected = pd.read_csv(io.StringIO(result.summary.to_csv(index=False)))
+    assert list(back.columns) == list(SUMMARY_COLUMNS)
+    pd.testing.assert_frame_equal(back, expected)
+    assert back.loc[1, "reason"] == failed["reason"]

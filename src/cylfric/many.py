@@ -9,10 +9,11 @@ campaign that fails is reported there, not raised.
 Schedulers (``scheduler=``):
 
 - ``None`` (default): local worker processes through Dask's multiprocessing scheduler
-  (``dask.compute(..., scheduler="processes")``); it starts in about 0.3 s where a
+  (``dask.compute(..., scheduler=dask.multiprocessing.get)``); it starts in about 0.3 s where a
   ``distributed.LocalCluster`` of two processes takes 1.8-6.9 s on a 2-core machine
   (measured for issue 15). Its workers are forked from a server process that imported
-  the pipeline once (``forkserver`` with preload), so no worker pays the 2-3 s import.
+  the pipeline once (``forkserver`` with preload, :func:`start_worker_server`), so no
+  worker pays the 1.3-1.45 s import; the server leaves at once when the caller ends.
 - ``"local-cluster"``: a ``dask.distributed.LocalCluster(n_workers, threads_per_worker=1,
   processes=True)`` (its dashboard, its resilience to a dying worker).
 - ``"tcp://host:8786"`` (any scheduler address): a Dask distributed cluster; every worker
@@ -25,13 +26,15 @@ With ``catalog=DB`` each fitted datasheet is added to the catalogue
 
 from __future__ import annotations
 
+import csv
 import io
 import os
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
-__all__ = ["find_campaigns", "fit_many", "ManyResult", "SUMMARY_COLUMNS"]
+__all__ = ["find_campaigns", "fit_many", "start_worker_server", "ManyResult", "SUMMARY_COLUMNS"]
 
 SUMMARY_COLUMNS = (
     "campaign",
@@ -92,8 +95,9 @@ class ManyResult:
 
     Attributes
     ----------
-    summary : pandas.DataFrame
-        One row per campaign (columns :data:`SUMMARY_COLUMNS`), in campaign order.
+    rows : list of dict
+        One summary row per campaign (keys :data:`SUMMARY_COLUMNS`; a key left out has no
+        value), in campaign order: what ``fit_many.csv`` holds.
     out : Path
         The output folder (``fit_many.csv`` and one folder per campaign).
     scheduler : str
@@ -102,20 +106,29 @@ class ManyResult:
         Wall time of the whole run [s].
     """
 
-    summary: object
+    rows: list
     out: Path
     scheduler: str
     seconds: float
 
+    @cached_property
+    def summary(self):
+        """The rows as a ``pandas.DataFrame`` (columns :data:`SUMMARY_COLUMNS`), built on
+        first use: :func:`fit_many` itself does not import pandas (0.3 s of processor time
+        in the process that waits for the workers)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows, columns=list(SUMMARY_COLUMNS))
+
     @property
     def succeeded(self) -> int:
         """Number of campaigns fitted."""
-        return int((self.summary["status"] == "ok").sum())
+        return sum(row.get("status") == "ok" for row in self.rows)
 
     @property
     def failed(self) -> int:
         """Number of campaigns that failed."""
-        return int((self.summary["status"] != "ok").sum())
+        return len(self.rows) - self.succeeded
 
 
 def _name(folder: Path, root: Path) -> str:
@@ -248,17 +261,8 @@ def fit_many(
     workers = workers or os.cpu_count() or 1
     context = None
     if scheduler is None:  # the workers' server imports the pipeline while this process goes on
-        # everything a fit needs (cylfric._warm: the compiled reader, the identification and
-        # the datasheet, which the pipeline imports lazily) and the part of Dask that runs a
-        # task in a worker (0.15 s per worker otherwise), loaded once in the server the
-        # workers fork from
-        preload = ["cylfric.many", "cylfric._warm", "dask.multiprocessing"]
-        if fit_options.get("report", True):
-            preload.append("cylfric.report")
-        context = _worker_context(preload)
-    import pandas as pd
-
-    from .io.writers import atomic_write_text
+        context = start_worker_server(report=fit_options.get("report", True))
+    from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     out.mkdir(parents=True, exist_ok=True)
     if scheduler != "serial" and (distributed or workers > 1):
@@ -299,11 +303,22 @@ def fit_many(
                 "catalog": "",
             },
         )
-    summary = pd.DataFrame([rows[job[2]] for job in jobs], columns=list(SUMMARY_COLUMNS))
+    ordered = [rows[job[2]] for job in jobs]
+    atomic_write_text(out / "fit_many.csv", _summary_csv(ordered))
+    return ManyResult(ordered, out, used, time.perf_counter() - t0)
+
+
+def _summary_csv(rows) -> str:
+    """``fit_many.csv``: a header of :data:`SUMMARY_COLUMNS`, one line per row; a missing
+    value or None is an empty field (what pandas reads as missing)."""
     buffer = io.StringIO()
-    summary.to_csv(buffer, index=False)
-    atomic_write_text(out / "fit_many.csv", buffer.getvalue())
-    return ManyResult(summary, out, used, time.perf_counter() - t0)
+    writer = csv.DictWriter(
+        buffer, fieldnames=SUMMARY_COLUMNS, restval="", extrasaction="ignore", lineterminator="\n"
+    )
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({key: "" if value is None else value for key, value in row.items()})
+    return buffer.getvalue()
 
 
 def _size(folder: Path) -> int:
@@ -325,28 +340,49 @@ def _add_to_catalog(db, out: Path, name: str) -> str:
     return "added"
 
 
-def _worker_context(preload):
-    """A multiprocessing context whose processes fork from a server that imported
-    ``preload`` once (started now, so that its imports overlap the caller's work)."""
+def start_worker_server(report=True):
+    """Start the server the local workers of :func:`fit_many` fork from, if not running.
+
+    The server (a ``multiprocessing`` fork server) imports :mod:`cylfric._worker_server`
+    once: everything a fit needs, its compiled code loaded, and the part of Dask that runs a
+    task in a worker; with ``report`` also :mod:`cylfric.report`. It starts at once and
+    imports while the caller goes on, so a caller that starts it first thing (as
+    ``cylfric fit-many`` does, before it imports Dask itself) overlaps its own
+    imports with the server's. :func:`fit_many` calls it too; a second call returns the
+    running server (whose preload the first call chose).
+
+    Parameters
+    ----------
+    report : bool
+        Also preload the report (figures and HTML) for fits with ``report=True``.
+
+    Returns
+    -------
+    multiprocessing.context.BaseContext
+        The context whose processes fork from the server (``spawn`` where there is no fork
+        server: Windows).
+    """
     import multiprocessing
 
     if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover
         return multiprocessing.get_context("spawn")  # Windows
     from multiprocessing import forkserver
 
+    preload = ["cylfric._worker_server"] + (["cylfric.report"] if report else [])
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(list(preload))
+    context.set_forkserver_preload(preload)
     forkserver.ensure_running()
     return context
 
 
 def _run_processes(jobs, workers, done, context):
     """Dask's multiprocessing scheduler on a pool of ``workers`` processes of ``context``
-    (:func:`_worker_context`: forked from a server that imported the pipeline once, so no
+    (:func:`start_worker_server`: forked from a server that imported the pipeline once, so no
     worker pays that import); ``done`` sees each row as its task finishes."""
     from concurrent.futures import ProcessPoolExecutor
 
     import dask
+    import dask.multiprocessing
     from dask.callbacks import Callback
 
     class _Finished(Callback):
@@ -367,7 +403,10 @@ def _run_processes(jobs, workers, done, context):
                 # sent 6 of 8 campaigns to one worker as a batch while the other sat idle
                 dask.compute(
                     *tasks,
-                    scheduler="processes",
+                    # the function, not the name "processes": for a name Dask first imports
+                    # dask.distributed (to look for a default client: 0.3 s of processor
+                    # time here and 0.1 s more at exit, measured for issue 15)
+                    scheduler=dask.multiprocessing.get,
                     pool=pool,
                     num_workers=workers,
                     chunksize=1,

@@ -71,12 +71,16 @@ def register(app: typer.Typer) -> None:
             "strict": strict,
             "viscosity_correction": viscosity_correction,
         }
+        from ..many import find_campaigns, fit_many, start_worker_server
+
+        total = len(find_campaigns(root, exclude=[out]))  # a few ms
+        if scheduler is None and total:
+            # before anything heavy: the workers' server imports the pipeline while this
+            # process imports Dask (a bad argument or no campaign starts no server)
+            start_worker_server(report=not no_report)
         from rich.table import Table
         from rich.text import Text
 
-        from ..many import find_campaigns, fit_many
-
-        total = len(find_campaigns(root, exclude=[out]))
         with progress_bar() as progress:
             task = progress.add_task("fitting campaigns", total=total)
             result = fit_many(
@@ -88,18 +92,21 @@ def register(app: typer.Typer) -> None:
                 progress=lambda _: progress.advance(task),
                 **options,
             )
-        table = Table(title=f"fit-many: {result.succeeded} of {len(result.summary)} fitted")
+        table = Table(title=f"fit-many: {result.succeeded} of {len(result.rows)} fitted")
         for column in ("campaign", "status", "runs", "excluded", "seconds", "reason"):
             table.add_column(column)
-        for row in result.summary.itertuples(index=False):
-            runs, excluded = row[4], row[5]
+        for row in result.rows:  # plain dicts: this process needs no pandas
+            runs, excluded, seconds = (
+                row.get(k) for k in ("runs [-]", "excluded [-]", "seconds [s]")
+            )
+            reason, catalogued = row.get("reason") or "", row.get("catalog") or ""
             table.add_row(
-                row.campaign,
-                "[green]ok[/green]" if row.status == "ok" else "[red]failed[/red]",
-                "" if runs != runs or runs is None else str(int(runs)),
-                "" if excluded != excluded or excluded is None else str(int(excluded)),
-                f"{row[6]:.1f}" if row[6] == row[6] and row[6] is not None else "",
-                Text((row.reason or "") + (f" (catalogue: {row.catalog})" if row.catalog else "")),
+                row["campaign"],
+                "[green]ok[/green]" if row["status"] == "ok" else "[red]failed[/red]",
+                "" if runs is None else str(int(runs)),
+                "" if excluded is None else str(int(excluded)),
+                "" if seconds is None else f"{seconds:.1f}",
+                Text(reason + (f" (catalogue: {catalogued})" if catalogued else "")),
             )
         console.print(table)
         console.print(
