@@ -313,17 +313,20 @@ def test_the_caller_leaves_the_files_to_the_child_when_joining_costs_more(
 
 
 @pytest.mark.parametrize(
-    ("queued", "elapsed", "loaded", "joins"),
+    ("queued", "elapsed", "child_start", "loaded", "joins"),
     [
-        (0, 1.0, False, False),  # nothing left
-        (10, 0.1, True, True),  # compiled code already here: joining is free
-        (20, 0.5, False, True),  # the child has taken none yet
-        (10, 0.5, False, True),  # 10 left at 10 files/0.5 s: 0.5 s > 0.35 s
-        (2, 0.5, False, False),  # 2 left at 18 files/0.5 s: 0.06 s < 0.35 s
+        (0, 1.0, 0.0, False, False),  # nothing left
+        (10, 0.1, 0.0, True, True),  # compiled code already here: joining is free
+        (20, 0.5, 0.0, False, True),  # the child has taken none yet
+        (10, 0.5, 0.0, False, True),  # 10 left at 10 files/0.5 s: 0.5 s > 0.45 s
+        (2, 0.5, 0.0, False, False),  # 2 left at 18 files/0.5 s: 0.06 s < 0.45 s
+        # the child's own start (its load, 0.45 s) is not reading time: 10 files in 0.15 s
+        (10, 0.6, 0.45, False, False),  # 10 left: 0.15 s < 0.45 s
+        (10, 0.6, 0.0, False, True),  # the same counts without a start: 0.6 s > 0.45 s
     ],
 )
 def test_the_caller_joins_when_the_childs_remaining_time_exceeds_the_load(
-    monkeypatch, queued, elapsed, loaded, joins
+    monkeypatch, queued, elapsed, child_start, loaded, joins
 ):
     import os
     import struct
@@ -334,7 +337,8 @@ def test_the_caller_joins_when_the_childs_remaining_time_exceeds_the_load(
     read_end, write_end = os.pipe()
     try:
         os.write(write_end, struct.pack(f"<{queued}i", *range(queued)))
-        assert ss._worth_joining(read_end, 20, elapsed) is joins
+        monkeypatch.setattr(ss, "COMPILED_LOAD_SECONDS", 0.45)
+        assert ss._worth_joining(read_end, 20, elapsed, child_start) is joins
     finally:
         os.close(read_end)
         os.close(write_end)

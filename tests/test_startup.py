@@ -87,3 +87,16 @@ def test_the_version_is_the_installed_one():
     import cylfric
 
     assert cylfric.__version__ == version("cylfric")
+
+
+def test_the_command_line_freezes_its_objects_before_exit():
+    """cylfric.cli.main moves every object to the permanent generation on its way out, so
+    the interpreter's last collections skip them; exit handlers still run after it."""
+    script = (
+        "import atexit, gc, sys\nfrom cylfric.cli import main\n"
+        "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 1000))\n"
+        "sys.argv = ['cylfric', '--version']\nmain()"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == "frozen True"

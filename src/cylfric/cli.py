@@ -630,6 +630,18 @@ def main() -> None:
         err_console.print(f"error: unexpected {type(exc).__name__}: {exc}", markup=False)
         err_console.print("rerun with --debug for the traceback")
         sys.exit(UNEXPECTED_EXIT)
+    finally:
+        _freeze_for_exit()
+
+
+def _freeze_for_exit():
+    """Spare the interpreter's last garbage collections over everything numba, scipy and
+    pandas loaded (0.2 s of a `cylfric fit` on 144 files, measured): the command's work is
+    done and written, so its objects move to the permanent generation, which the collector
+    skips; exit handlers still run."""
+    import gc
+
+    gc.freeze()
 
 
 __all__ = ["app", "main", "run_fit"]

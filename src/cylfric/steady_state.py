@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._filters import convolve_nearest, rolling_mean, rolling_median
 from .io.campaign import CampaignConfig, discover_runs, load_config, read_run, unlisted_files
 from .io.text import BenchFileError
 
@@ -107,6 +106,8 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     # scipy.signal.savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest") computes
     # (scipy.signal is not imported: it loads scipy.stats)
     k = np.arange(n // 2, -(n // 2) - 1, -1, dtype=float)  # reversed: convolution
+    from ._filters import convolve_nearest  # with numba, on first use (see io.text)
+
     return sign * convolve_nearest(position, k / (dt * float(k @ k)))
 
 
@@ -238,6 +239,8 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     """Trim ends where the rolling median of the force leaves the centre level."""
     n = len(force)
     w = min(median_window, max(1, n // 3) | 1)
+    from ._filters import rolling_mean, rolling_median
+
     rolling = rolling_median(force, w)
     centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
     level = np.median(centre)
@@ -533,25 +536,42 @@ def _file_queue(n):
     return None
 
 
-COMPILED_LOAD_SECONDS = 0.35
-"""A process's first call of the reader's compiled code loads numba's CPU target: about
-0.3-0.4 s of processor time (measured on the 2-core CI machine)."""
+RESULTS_PIPE_BYTES = 1 << 20
+"""Buffer of the child's results pipe [bytes]: each file's points and summary pickle to about
+1.1 kB, so a default 64 KiB pipe blocked the child after about 60 files while this process
+was still importing the next stages (``meanwhile``); 1 MiB holds about 900 files."""
+
+
+def _widen(fd):
+    """Ask Linux for a ``RESULTS_PIPE_BYTES`` pipe buffer (F_SETPIPE_SZ); keep the default
+    where the system refuses (a user over its pipe quota)."""
+    import fcntl
+
+    with contextlib.suppress(OSError, AttributeError):
+        fcntl.fcntl(fd, getattr(fcntl, "F_SETPIPE_SZ", 1031), RESULTS_PIPE_BYTES)
+
+
+COMPILED_LOAD_SECONDS = 0.45
+"""What a process's first read costs before its first file: importing numba (0.15-0.2 s)
+and loading numba's CPU target with the reader's compiled code (0.25-0.3 s of processor
+time; measured on the 2-core CI machine)."""
 
 
 def _compiled_loaded() -> bool:
     """Whether this process has already loaded the reader's compiled code."""
-    from .io._scan import scan_lines
+    scan = sys.modules.get("cylfric.io._scan")  # not imported here: that would load numba
+    return scan is not None and bool(scan.scan_lines.signatures)
 
-    return bool(scan_lines.signatures)
 
-
-def _worth_joining(queue_read, n, elapsed) -> bool:
+def _worth_joining(queue_read, n, elapsed, child_start=0.0) -> bool:
     """Whether this process should take files too, ``elapsed`` [s] after the fork.
 
     The child alone would need ``remaining / rate`` more seconds; joining first costs this
     process the load of the compiled code (``COMPILED_LOAD_SECONDS``, unless loaded), after
     which both take files: joining pays exactly when the child's remaining time is longer
-    than that cost. The child's rate counts its own start, so it errs towards joining.
+    than that cost. The child's rate is the files it took over the time since its own start
+    (``child_start`` [s] after the fork: the same load, when the compiled code was not
+    loaded before the fork).
     """
     import fcntl
     import termios
@@ -565,7 +585,8 @@ def _worth_joining(queue_read, n, elapsed) -> bool:
         return False
     if taken == 0 or _compiled_loaded():
         return True
-    return remaining * elapsed / taken > COMPILED_LOAD_SECONDS
+    reading = max(elapsed - child_start, 0.05)  # [s] since the child's first file began
+    return remaining * reading / taken > COMPILED_LOAD_SECONDS
 
 
 def _extract_all(one, n, workers, report, meanwhile=None):
@@ -587,6 +608,8 @@ def _extract_all(one, n, workers, report, meanwhile=None):
             report(index)
         return results
     read_end, write_end = os.pipe()
+    _widen(write_end)
+    child_start = 0.0 if _compiled_loaded() else COMPILED_LOAD_SECONDS
     started = time.perf_counter()
     pid = os.fork()
     if pid == 0:  # the child: take files from the queue, send each result, leave quietly
@@ -620,7 +643,7 @@ def _extract_all(one, n, workers, report, meanwhile=None):
             if meanwhile is not None:
                 meanwhile()
             alive = True
-            join = _worth_joining(queue_read, n, time.perf_counter() - started)
+            join = _worth_joining(queue_read, n, time.perf_counter() - started, child_start)
             while join and len(token := os.read(queue_read, 4)) == 4:
                 index = struct.unpack("<i", token)[0]
                 results[index] = one(index)

@@ -23,7 +23,6 @@ from pathlib import Path
 import numpy as np
 
 from ..units import UnitError, to_si, unit_dimension
-from ._scan import NUMERIC, TEXT, parse_block, scan_lines
 
 __all__ = [
     "BenchFileError",
@@ -287,6 +286,10 @@ def read_bench_arrays(
             + ("" if nul < 65536 else " (a corrupt stretch in an otherwise text file?)"),
             line=line if line > 1 else None,
         )
+    # the compiled scanner (numba) loads with the first file read, in the process that reads
+    # it: cylfric fit forks its extraction child before numba is imported
+    from ._scan import NUMERIC, TEXT, parse_block, scan_lines
+
     buf = np.frombuffer(raw, dtype=np.uint8)
     starts, ends, kinds = scan_lines(buf)
     text_idx = np.flatnonzero(kinds == TEXT)
