@@ -228,9 +228,13 @@ FIT_VS_SCRIPT_CAMPAIGNS = {
     ),
 }
 FIT_VS_SCRIPT_GOALS = {"144_files": 1.0, "480_files": 0.5}
-FIT_STARTUP = "import cylfric.cli, cylfric.pipeline, cylfric._warm"
-"""What ``cylfric fit`` loads before it reads its first file (``cylfric._warm`` loads the
-compiled reader: numba's first call in a process)."""
+FIT_STARTUP = "import cylfric.cli, cylfric.pipeline"
+"""What ``cylfric fit`` loads before it forks its extraction child (numpy and the command
+line; the child then loads numba and the compiled reader, the caller pandas, scipy.optimize
+and jsonschema)."""
+FIT_EVERYTHING = "import cylfric.cli, cylfric.pipeline, cylfric._warm"
+"""Everything a fit loads, in one process (``cylfric._warm`` also loads the compiled reader:
+numba's first call in a process); ``cylfric fit`` splits it between two processes."""
 LIBRARY_STARTUP = "import numpy, pandas, scipy.optimize, jsonschema"
 """The libraries the process that identifies and writes the datasheet needs, whatever the
 design (the reading, with numba, could run in a second process meanwhile)."""
@@ -255,9 +259,9 @@ def bench_fit_vs_script():
 
     cylfric = str(Path(sys.executable).with_name("cylfric"))
     script = str(HERE / "plain_fit.py")
-    t_import = _process_seconds([sys.executable, "-c", "import cylfric.cli, cylfric.pipeline"])
     # the start-up before cylfric's first file, and that of the libraries any design needs
     t_startup = _process_seconds([sys.executable, "-c", FIT_STARTUP])
+    t_everything = _process_seconds([sys.executable, "-c", FIT_EVERYTHING])
     t_libraries = _process_seconds([sys.executable, "-c", LIBRARY_STARTUP])
     t_script_startup = _process_seconds([sys.executable, "-c", SCRIPT_STARTUP])
     cases = {}
@@ -287,8 +291,8 @@ def bench_fit_vs_script():
                 "goal_ratio": goal,
                 "met": ratio <= goal,
                 "cylfric_stage_seconds_in_process": stages,
-                "cylfric_import_seconds": t_import,
-                "startup_before_first_file_seconds": t_startup,
+                "startup_before_fork_seconds": t_startup,
+                "everything_loaded_in_one_process_seconds": t_everything,
                 "floor": {
                     "what": "a lower bound for any design on these libraries: loading "
                     "numpy, pandas, scipy.optimize and jsonschema (as a process) plus "
