@@ -100,3 +100,41 @@ def test_the_command_line_freezes_its_objects_before_exit():
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines()[-1] == "frozen True"
+
+
+def _run(script):
+    return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+
+
+def test_the_console_script_exits_quickly_with_the_commands_code_and_handlers_run():
+    """console_main (the `cylfric` script) skips the interpreter's teardown but keeps the
+    exit code, the output and the exit handlers."""
+    head = "import atexit, sys\nfrom cylfric.cli import console_main\n"
+    handler = "atexit.register(lambda: print('handler ran'))\n"
+    done = _run(head + handler + "sys.argv = ['cylfric', '--version']\nconsole_main()")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [f"cylfric {cylfric_version()}", "handler ran"]
+    done = _run(head + handler + "sys.argv = ['cylfric', 'show', 'no_such.json']\nconsole_main()")
+    assert done.returncode == 2
+    assert "no_such.json" in done.stderr and done.stdout.strip() == "handler ran"
+
+
+def test_the_quick_exit_keeps_systemexit_semantics_and_waits_for_running_threads():
+    head = "from cylfric.cli import _exit_now\n"
+    done = _run(head + "_exit_now('boom')")
+    assert (done.returncode, done.stderr.strip()) == (1, "boom")
+    done = _run(head + "_exit_now(None)")
+    assert done.returncode == 0
+    thread = (
+        "import threading, time\n"
+        "def late():\n    time.sleep(0.2)\n    print('thread finished', flush=True)\n"
+        "threading.Thread(target=late).start()\n"
+    )
+    done = _run(head + thread + "_exit_now(3)")
+    assert done.returncode == 3 and done.stdout.strip() == "thread finished"
+
+
+def cylfric_version():
+    import cylfric
+
+    return cylfric.__version__
