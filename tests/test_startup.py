@@ -89,17 +89,23 @@ def test_the_version_is_the_installed_one():
     assert cylfric.__version__ == version("cylfric")
 
 
-def test_the_command_line_freezes_its_objects_before_exit():
-    """cylfric.cli.main moves every object to the permanent generation on its way out, so
-    the interpreter's last collections skip them; exit handlers still run after it."""
+def test_the_command_line_freezes_its_objects_before_exit_but_main_in_process_does_not():
+    """console_main (the `cylfric` script) moves every object to the permanent generation on
+    its way out, so the last collections skip them; exit handlers still run after it.
+    main(), called in a notebook or script, leaves the caller's collector alone."""
     script = (
-        "import atexit, gc, sys\nfrom cylfric.cli import main\n"
+        "import atexit, gc, sys\nfrom cylfric.cli import console_main, main\n"
+        "sys.argv = ['cylfric', '--version']\n"
+        "try:\n    main()\nexcept SystemExit:\n    pass\n"
+        "print('after main', gc.get_freeze_count())\n"
         "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 1000))\n"
-        "sys.argv = ['cylfric', '--version']\nmain()"
+        "console_main()"
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines()[-1] == "frozen True"
+    lines = done.stdout.splitlines()
+    assert lines == ["cylfric " + cylfric_version(), "after main 0"] + lines[2:]
+    assert lines[-1] == "frozen True"
 
 
 def _run(script):

@@ -630,23 +630,23 @@ def main() -> None:
         err_console.print(f"error: unexpected {type(exc).__name__}: {exc}", markup=False)
         err_console.print("rerun with --debug for the traceback")
         sys.exit(UNEXPECTED_EXIT)
-    finally:
-        _freeze_for_exit()
 
 
 def console_main() -> None:
     """The ``cylfric`` command (console script): :func:`main`, then a quick exit.
 
-    Once the command is done (its outputs written and closed), the exit handlers run and the
-    process ends with the command's exit code without tearing down the interpreter's modules
-    (numba, scipy, pandas: about 0.1 s of a ``cylfric fit``). With threads of its own still
-    running it exits the usual way. :func:`main` itself, for use in-process, never does this.
+    Once the command is done (its outputs written and closed), its objects are frozen (the
+    final collections skip them), the exit handlers run and the process ends with the
+    command's exit code without tearing down the interpreter's modules (numba, scipy, pandas:
+    about 0.3 s of a ``cylfric fit`` together). With threads of its own still running it
+    exits the usual way, still frozen. :func:`main` itself, for use in-process, does neither.
     """
     try:
         main()
         code = 0
     except SystemExit as exc:
         code = exc.code
+    _freeze_for_exit()
     _exit_now(code)
 
 
