@@ -295,12 +295,17 @@ def test_a_deliberate_0_bar_level_is_kept(tmp_path):
 # ---- F10: manifest.csv problems ------------------------------------------------------------
 
 
-def test_a_utf16_manifest_is_read(seed1, tmp_path):
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-32", "utf-32-be"])
+def test_a_utf16_manifest_is_read(seed1, tmp_path, encoding):
     """Excel's 'Unicode text' (UTF-16 with a BOM) gave "'utf-8' codec can't decode" with no
-    file named."""
+    file named; UTF-32 with a BOM (FF FE 00 00, which begins like UTF-16's FF FE) was then
+    read as UTF-16 and refused with an escaped header (hostile check)."""
+    import codecs
+
     folder = copy_campaign(seed1, tmp_path)
     manifest = folder / "manifest.csv"
-    manifest.write_bytes(manifest.read_text().encode("utf-16"))
+    bom = {"utf-32-be": codecs.BOM_UTF32_BE}.get(encoding, b"")
+    manifest.write_bytes(bom + manifest.read_text().encode(encoding))
     from cylfric.io.campaign import discover_runs
 
     runs = discover_runs(folder)

@@ -487,8 +487,16 @@ def _utf16_byte_order(data: bytes) -> str | None:
 
 
 def _manifest_text(path: Path) -> str:
-    """Text of manifest.csv: UTF-8 (with or without a BOM) or UTF-16 (with or without one)."""
+    """Text of manifest.csv: UTF-8 (with or without a BOM), UTF-16 (with or without one) or
+    UTF-32 with a BOM."""
     data = path.read_bytes()
+    if data[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff"):  # before UTF-16: FF FE...
+        try:
+            return data.decode("utf-32")
+        except UnicodeDecodeError as exc:
+            raise BenchFileError(
+                path, f"starts like UTF-32 text but does not decode ({exc.reason})"
+            ) from None
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
         try:
             return data.decode("utf-16")
