@@ -41,11 +41,12 @@ def test_mts_export_with_units_row_and_preamble(tmp_path):
 
 
 def test_a_mixed_case_unit_in_a_units_row_is_refused_naming_the_column(tmp_path):
-    """'mS' (millisiemens, or ms?) in an export's units row: refused, never read as ms."""
+    """'mS' (millisiemens, or ms?) in an export's units row: refused, never read as ms; the
+    line named is the units row's (line 2; the names row's had been named)."""
     path = _write(tmp_path, "Time\tAxial Displacement\tAxial Force\nmS\tmm\tkN\n" + _rows("\t"))
     with pytest.raises(
         BenchFileError,
-        match=r"run.txt, line 1: column 'Time': unit 'mS' is ambiguous: .* write ms \(or MS in "
+        match=r"run.txt, line 2: column 'Time': unit 'mS' is ambiguous: .* write ms \(or MS in "
         r"all capitals, as bench exports do\)",
     ):
         read_bench_text(path)

@@ -545,6 +545,7 @@ def _assemble(frames, path, roles):
         lines.append(hdr.line or first)
         cols = {}
         quantities = _column_roles(hdr.names, roles, path, hdr.line or None)
+        unit_line = (hdr.rows[-1] if hdr.rows else hdr.line) or None  # a units row, if any
         for j, (name, unit) in enumerate(zip(hdr.names, hdr.units, strict=True)):
             quantity = quantities[j]
             if quantity in QUANTITY_DIMENSIONS:
@@ -561,13 +562,13 @@ def _assemble(frames, path, roles):
                     udim = unit_dimension(unit)
                 except UnitError as exc:
                     raise BenchFileError(
-                        path, f"column {name!r}: {exc}", line=hdr.line or None
+                        path, f"column {name!r}: {exc}", line=unit_line
                     ) from None
                 if udim != dim:
                     raise BenchFileError(
                         path,
                         f"column {name!r} has unit {unit!r} ({udim}); expected a {dim} unit",
-                        line=hdr.line or None,
+                        line=unit_line,
                     )
                 key = f"{quantity} [{SI_UNITS[dim]}]"
                 if key in cols:
