@@ -385,3 +385,41 @@ def test_files_of_a_dead_child_are_read_here_when_the_caller_did_not_join(
     pd.testing.assert_frame_equal(
         parallel.points, extract_campaign(campaign_of_20, workers=1).points
     )
+
+
+def test_a_campaign_of_mat_runs_is_read_with_its_column_units(campaign_of_20, tmp_path):
+    """.mat runs (no units in the format) are read with [columns] names and units, converted
+    as a text file's columns are: the points equal the text campaign's. Without them the
+    error says what to write and lists the variables (hostile check: the old message asked
+    for a time column that [columns] could not provide)."""
+    import pandas as pd
+    from scipy.io import savemat
+
+    folder = tmp_path / "mat"
+    folder.mkdir()
+    rows = ["file,pressure_bar,velocity_mm_s"]
+    for line in (campaign_of_20 / "manifest.csv").read_text().splitlines()[1:]:
+        name, rest = line.split(",", 1)
+        data, _ = read_bench_text(campaign_of_20 / name)
+        stem = Path(name).stem
+        savemat(
+            folder / f"{stem}.mat",
+            {
+                "t": data["time [s]"].to_numpy(),
+                "x": data["position [m]"].to_numpy() * 1e3,  # mm
+                "F": data["force [N]"].to_numpy() / 1e3,  # kN
+            },
+        )
+        rows.append(f"{stem}.mat,{rest}")
+    (folder / "manifest.csv").write_text("\n".join(rows) + "\n")
+    (folder / "campaign.toml").write_text('[files]\nglob = "*.mat"\n')
+    with pytest.raises(BenchFileError, match=r"\.mat run carries no units; expected \[columns\]"):
+        extract_campaign(folder, workers=1)
+    (folder / "campaign.toml").write_text(
+        '[files]\nglob = "*.mat"\n[columns]\nnames = ["t", "x", "F"]\nunits = ["s", "mm", "kN"]\n'
+    )
+    mat = extract_campaign(folder, workers=1).points
+    text = extract_campaign(campaign_of_20, workers=1).points
+    assert len(mat) == len(text) == 40
+    pd.testing.assert_series_equal(mat["friction [N]"], text["friction [N]"], rtol=1e-12)
+    pd.testing.assert_series_equal(mat["velocity [m/s]"], text["velocity [m/s]"], rtol=1e-12)

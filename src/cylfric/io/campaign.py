@@ -21,7 +21,7 @@ from pathlib import Path
 
 from ..units import UnitError, parse_quantity, parse_temperature
 from .matfile import read_mat
-from .text import BenchFileError, read_bench_arrays
+from .text import BenchFileError, read_bench_arrays, si_columns
 
 __all__ = [
     "CampaignConfig",
@@ -750,6 +750,32 @@ def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
     )
 
 
+def _read_mat_run(path: Path, config: CampaignConfig):
+    """A ``.mat`` run: the variables ``[columns] names`` in the units ``[columns] units``
+    (a .mat file has no units), converted to SI as a text file's columns are."""
+    import hashlib
+
+    if config.columns is None:
+        _, found = read_mat(path)
+        raise BenchFileError(
+            path,
+            "a .mat run carries no units; expected [columns] names = [...] and units = [...] "
+            f"in campaign.toml, e.g. names = {found['variables'][:3]} with their units "
+            "(found the vectors " + ", ".join(found["variables"]) + ")",
+        )
+    frame, metadata = read_mat(path, variables=list(config.columns))
+    data, col_units = si_columns(
+        path, config.columns, config.units, frame.to_numpy(), roles=config.roles
+    )
+    metadata.update(
+        header={},
+        rows=len(frame),
+        units=col_units,
+        sha256=hashlib.sha256(path.read_bytes()).hexdigest(),
+    )
+    return data, metadata
+
+
 def read_run(info: RunInfo, config: CampaignConfig):
     """Read one run and complete its nominal metadata from header lines and the file name.
 
@@ -766,10 +792,7 @@ def read_run(info: RunInfo, config: CampaignConfig):
             line=info.manifest_line,
         )
     if info.path.suffix.lower() == ".mat":
-        frame, metadata = read_mat(info.path)
-        data = {name: frame[name].to_numpy() for name in frame.columns}
-        metadata["header"] = {}
-        metadata["rows"] = len(frame)
+        data, metadata = _read_mat_run(info.path, config)
     else:
         data, metadata = read_bench_arrays(
             info.path,

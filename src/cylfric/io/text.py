@@ -536,6 +536,18 @@ def _column_labels(names):
     return labels
 
 
+def si_columns(path, names, units, values, roles=None):
+    """Named columns with their units as the readers' SI dict (``"time [s]"``, ...).
+
+    ``values`` is an (n, len(names)) array; quantities are recognised by name (or chosen by
+    ``roles``, as ``[columns] force = "F"``) and converted to SI; the result has the
+    columns of :func:`read_bench_arrays` and ``units`` (the original unit per quantity).
+    Used for records whose format carries no header, such as ``.mat`` runs.
+    """
+    hdr = _Header(list(names), list(units), 0)
+    return _assemble([(0, hdr, np.asarray(values, dtype=float), 1)], Path(path), roles or {})
+
+
 def _assemble(frames, path, roles):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
     parts = []
