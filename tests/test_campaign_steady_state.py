@@ -238,7 +238,9 @@ def test_two_core_extraction_equals_the_serial_one(campaign_of_20, monkeypatch):
     assert parallel.runs == serial.runs and parallel.bytes_read == serial.bytes_read
 
 
-def test_files_of_a_dead_child_are_extracted_here(campaign_of_20, monkeypatch):
+@pytest.mark.parametrize("joins", [True, False], ids=["caller joins", "caller only collects"])
+def test_files_of_a_dead_child_are_extracted_here(campaign_of_20, monkeypatch, joins):
+    """Also when the caller chose not to join (_worth_joining) and only collected."""
     import os
 
     import pandas as pd
@@ -252,7 +254,9 @@ def test_files_of_a_dead_child_are_extracted_here(campaign_of_20, monkeypatch):
         return original(*args, **kwargs)
 
     monkeypatch.setattr(ss, "_point_rows", dies_in_the_child)
+    monkeypatch.setattr(ss, "_worth_joining", lambda *args: joins)
     parallel = extract_campaign(campaign_of_20)
+    monkeypatch.undo()
     pd.testing.assert_frame_equal(
         parallel.points, extract_campaign(campaign_of_20, workers=1).points
     )
@@ -361,30 +365,6 @@ def test_the_datasheet_hashes_the_bytes_each_file_had_when_read(campaign_of_20):
     sheet = build_datasheet(identify(extraction.usable), extraction=extraction)
     listed = {f["name"]: f["sha256"] for f in sheet["fit"]["source"]["files"]}
     assert listed == expected and len(listed) == 20
-
-
-def test_files_of_a_dead_child_are_read_here_when_the_caller_did_not_join(
-    campaign_of_20, monkeypatch
-):
-    import os
-
-    import pandas as pd
-
-    ss = _forks(monkeypatch)
-    parent, original = os.getpid(), ss._point_rows
-
-    def dies_in_the_child(*args, **kwargs):
-        if os.getpid() != parent:
-            os._exit(3)
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(ss, "_point_rows", dies_in_the_child)
-    monkeypatch.setattr(ss, "_worth_joining", lambda *args: False)
-    parallel = extract_campaign(campaign_of_20)
-    monkeypatch.undo()
-    pd.testing.assert_frame_equal(
-        parallel.points, extract_campaign(campaign_of_20, workers=1).points
-    )
 
 
 def test_a_campaign_of_mat_runs_is_read_with_its_column_units(campaign_of_20, tmp_path):

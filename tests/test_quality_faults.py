@@ -329,35 +329,33 @@ def test_a_utf16_manifest_without_a_bom_is_read(seed1, tmp_path, encoding):
     assert runs[8].extra["seal"] == "Müller-\u0416"
 
 
-def test_a_truncated_utf16_manifest_without_a_bom_names_the_byte_order(tmp_path):
+_HEADER = "file,pressure_bar,velocity_mm_s"
+
+
+@pytest.mark.parametrize(
+    ("data", "match"),
+    [
+        pytest.param(  # a byte cut off the end
+            f"{_HEADER}\nrun.txt,55,10\n".encode("utf-16-le")[:-1],
+            r"manifest.csv: is UTF-16 \(little endian\) without a byte-order mark but does "
+            r"not decode \(truncated data\); save it as UTF-8 or UTF-16 with a BOM",
+            id="truncated UTF-16 without a BOM: the byte order named",
+        ),
+        pytest.param(  # a header character beyond Latin-1: not taken for UTF-16 without a BOM
+            f"{_HEADER},\u20ac\nrun.txt,55,10,1\n".encode("utf-16-le"),
+            r"manifest.csv, line 1: holds NUL bytes; expected a CSV file in UTF-8 .* save it "
+            r"as UTF-8 or UTF-16 with a BOM",
+            id="NUL bytes: refused naming the line, not read as a garbled header",
+        ),
+    ],
+)
+def test_a_manifest_that_cannot_be_decoded_says_why(tmp_path, data, match):
     from cylfric.io import BenchFileError
     from cylfric.io.campaign import discover_runs
 
     (tmp_path / "run.txt").write_text("x")
-    data = "file,pressure_bar,velocity_mm_s\nrun.txt,55,10\n".encode("utf-16-le")
-    (tmp_path / "manifest.csv").write_bytes(data[:-1])  # a byte cut off the end
-    with pytest.raises(
-        BenchFileError,
-        match=r"manifest.csv: is UTF-16 \(little endian\) without a byte-order mark but does "
-        r"not decode \(truncated data\); save it as UTF-8 or UTF-16 with a BOM",
-    ):
-        discover_runs(tmp_path)
-
-
-def test_a_manifest_with_nul_bytes_is_refused_naming_the_line(tmp_path):
-    """A UTF-16 header with a character beyond Latin-1 is not taken for UTF-16 without a BOM;
-    its NUL bytes are refused instead of reading as a garbled header."""
-    from cylfric.io import BenchFileError
-    from cylfric.io.campaign import discover_runs
-
-    (tmp_path / "run.txt").write_text("x")
-    data = "file,pressure_bar,velocity_mm_s,\u20ac\nrun.txt,55,10,1\n".encode("utf-16-le")
     (tmp_path / "manifest.csv").write_bytes(data)
-    with pytest.raises(
-        BenchFileError,
-        match=r"manifest.csv, line 1: holds NUL bytes; expected a CSV file in UTF-8 .* save it "
-        r"as UTF-8 or UTF-16 with a BOM",
-    ):
+    with pytest.raises(BenchFileError, match=match):
         discover_runs(tmp_path)
 
 

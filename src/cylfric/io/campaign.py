@@ -11,6 +11,7 @@ file, and file-name tokens (``55bar``, ``p55bar``, ``55.5bar``, ``10mms``, ``v10
 
 from __future__ import annotations
 
+import codecs
 import csv
 import fnmatch
 import math
@@ -486,24 +487,25 @@ def _utf16_byte_order(data: bytes) -> str | None:
     return None
 
 
+_BOMS = (
+    ("utf-32", (codecs.BOM_UTF32_LE, codecs.BOM_UTF32_BE)),
+    ("utf-16", (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)),
+)
+"""Byte-order marks of manifest.csv read as such, in the order they are tried."""
+
+
 def _manifest_text(path: Path) -> str:
     """Text of manifest.csv: UTF-8 (with or without a BOM), UTF-16 (with or without one) or
     UTF-32 with a BOM."""
     data = path.read_bytes()
-    if data[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff"):  # before UTF-16: FF FE...
-        try:
-            return data.decode("utf-32")
-        except UnicodeDecodeError as exc:
-            raise BenchFileError(
-                path, f"starts like UTF-32 text but does not decode ({exc.reason})"
-            ) from None
-    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        try:
-            return data.decode("utf-16")
-        except UnicodeDecodeError as exc:
-            raise BenchFileError(
-                path, f"starts like UTF-16 text but does not decode ({exc.reason})"
-            ) from None
+    for codec, boms in _BOMS:  # UTF-32 first: its little-endian mark begins like UTF-16's
+        if data.startswith(boms):
+            try:
+                return data.decode(codec)
+            except UnicodeDecodeError as exc:
+                raise BenchFileError(
+                    path, f"starts like {codec.upper()} text but does not decode ({exc.reason})"
+                ) from None
     order = _utf16_byte_order(data)
     if order is not None:
         try:
