@@ -594,7 +594,8 @@ def _extract_all(one, n, workers, report, meanwhile=None):
 
     The two processes take files from a shared queue (a pipe of file indices: a read of 4
     bytes is atomic), so this process may first run ``meanwhile`` (e.g. imports for the
-    next stage) while the child already extracts.
+    next stage) while the child already extracts, and then takes files too only when that
+    pays (:func:`_worth_joining`).
     """
     workers = (2 if sys.platform.startswith("linux") else 1) if workers is None else workers
     results = [None] * n
@@ -686,10 +687,12 @@ def extract_campaign(
     this process take files from a shared queue (the per-file work is small numpy calls
     that hold the GIL, so threads would not help); the result is the same either way, and
     files of a child that died are extracted here. ``meanwhile`` (a callable) runs in this
-    process once the child has started, before it takes files (the pipeline imports the
-    identification there). ``exclude`` names files of the campaign that are not
-    constant-velocity runs (the presliding and breakaway tests, identified by
-    :mod:`cylfric.identify.dynamic`); they are not read here. Input files are never modified.
+    process once the child has started, before it takes files (the pipeline imports pandas
+    and the identification there); after it, this process reads files too only when the
+    child's remaining work is longer than loading the compiled reader here. ``exclude``
+    names files of the campaign that are not constant-velocity runs (the presliding and
+    breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they are not read here.
+    Input files are never modified.
     """
     config = config or load_config(folder)
     options = extraction_options(config, options)
