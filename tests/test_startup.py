@@ -6,6 +6,12 @@ from __future__ import annotations
 import subprocess
 import sys
 
+
+def _run(script):
+    """``python -c script`` in a fresh process (imports measured from nothing)."""
+    return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+
+
 SCRIPT = """
 import sys, warnings
 warnings.simplefilter("ignore")
@@ -33,7 +39,7 @@ def test_version_imports_no_numerical_library():
         "import sys\nfrom cylfric.cli import app\n"
         "print([m for m in ('numpy', 'scipy', 'pandas', 'matplotlib') if m in sys.modules])"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    done = _run(script)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
 
@@ -63,7 +69,7 @@ def test_the_pipeline_imports_the_identification_only_while_extracting():
         "print([m for m in ('scipy.optimize', 'scipy.ndimage', 'jsonschema', 'cylfric.identify',"
         " 'pandas', 'cylfric.quality') if m in sys.modules])"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    done = _run(script)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
 
@@ -74,7 +80,7 @@ def test_the_pipelines_meanwhile_loads_the_identification():
         "print([m for m in ('scipy.optimize', 'jsonschema', 'cylfric.identify.steady', 'pandas',"
         " 'cylfric.quality') if m not in sys.modules])"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    done = _run(script)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
 
@@ -101,15 +107,11 @@ def test_the_command_line_freezes_its_objects_before_exit_but_main_in_process_do
         "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 1000))\n"
         "console_main()"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    done = _run(script)
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines == ["cylfric " + cylfric_version(), "after main 0"] + lines[2:]
     assert lines[-1] == "frozen True"
-
-
-def _run(script):
-    return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
 
 
 def test_the_console_script_exits_quickly_with_the_commands_code_and_handlers_run():
