@@ -47,7 +47,9 @@ import warnings
 import zipfile
 from importlib import resources
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
+
+from ..escape import c_comment
+from ..escape import xml_attr as quoteattr
 
 __all__ = ["export_fmu", "ELEMENTS", "FMU_INPUTS", "FMU_OUTPUTS", "compiler", "fmi_platform"]
 
@@ -213,7 +215,7 @@ def _coefficients(model):
             if expression == "F_c":
                 expression = "prm[P_F_C]"
             reason = model.not_identified.get(parameter, "not identified")
-            lines.append(f"    prm[{index}] = {expression}; /* {parameter}: {reason} */")
+            lines.append(f"    prm[{index}] = {expression}; /* {parameter}: {c_comment(reason)} */")
             continue
         status = model.dynamic_status.get(parameter)
         note = f" ({status[0]}: {status[1]})" if status else ""

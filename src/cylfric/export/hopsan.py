@@ -31,6 +31,7 @@ from string import Template
 
 import numpy as np
 
+from ..escape import hcom_comment, markdown_text
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import loss_grid, loss_report
@@ -235,10 +236,11 @@ def export_hopsan(
         (Path(__file__).parent / "templates" / "hopsan_readme.md.tmpl").read_text(encoding="utf-8")
     )
     values = {k: _num(v) for k, v in params.items()}
+    label = model.record.get("name", "cylfric model")
     text = {
         "stem": stem,
-        "name": model.record.get("name", "cylfric model"),
-        "loss": report.summary(),
+        "name": hcom_comment(label),
+        "loss": hcom_comment(report.summary(), limit=None),
         "rms": f"{report.rms:.3f}",
         "max": f"{report.max_abs:.3f}",
         "signal_rms": f"{signal_report.rms:.3f}",
@@ -252,7 +254,9 @@ def export_hopsan(
     files = [
         atomic_write_text(out / f"{stem}_hopsan.hcom", template.substitute(text)),
         atomic_write_text(out / f"{stem}_hopsan_parameters.csv", rows.getvalue()),
-        atomic_write_text(out / "README_hopsan.md", note.substitute(text)),
+        atomic_write_text(
+            out / "README_hopsan.md", note.substitute({**text, "name": markdown_text(label)})
+        ),
     ]
     files += report.write(out)
     files += signal_report.write(out)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..escape import matlab_comment, matlab_string
 from .fmu import FRICTION_PARAMETERS, REFERENCE_TEXT, _as_model, _check_name
 
 __all__ = ["export_matlab", "MATLAB_FUNCTIONS"]
@@ -72,26 +73,32 @@ def _params_file(model, name) -> str:
     ]
     method = model.provenance.get("method")
     if method:
-        lines.append(f"%   Identified by: {method}.")
+        lines.append(f"%   Identified by: {matlab_comment(method)}.")
     lines += [
         "",
-        f"P.reference = '{model.reference}';  % operating-pressure rule: a, b, sum, mean, max",
-        f"P.friction_law = '{model.friction_law}';",
+        f"P.reference = {matlab_string(model.reference)};  % operating-pressure rule: a, b, sum, "
+        "mean, max",
+        f"P.friction_law = {matlab_string(model.friction_law)};",
     ]
     for parameter in FRICTION_PARAMETERS:
         law = model.laws[parameter]
         meaning = _MEANING[parameter]
         if law is None:
             reason = model.not_identified.get(parameter, "not identified")
-            lines.append(f"P.{parameter} = [];  % {meaning}: not identified ({reason})")
+            lines.append(
+                f"P.{parameter} = [];  % {meaning}: not identified ({matlab_comment(reason)})"
+            )
             continue
         status = model.dynamic_status.get(parameter)
-        note = f", {status[0]}: {status[1]}" if status else ""
-        lines.append(f"P.{parameter}.law = '{law}';  % {meaning}{note}")
+        note = f", {matlab_comment(status[0])}: {matlab_comment(status[1])}" if status else ""
+        lines.append(f"P.{parameter}.law = {matlab_string(law)};  % {meaning}{note}")
         for coefficient in PRESSURE_LAW_COEFFICIENTS[law]:
             key = parameter if law == "constant" else f"{parameter}.{coefficient}"
             p = model.parameters[key]
-            lines.append(f"P.{parameter}.{coefficient} = {_number(p.value)};  % [{p.unit}]")
+            lines.append(
+                f"P.{parameter}.{coefficient} = {_number(p.value)};  "
+                f"% [{matlab_comment(p.unit)}]"
+            )
     if model.validity is not None:
         lines.append("% range the data covered (outside it the model is extrapolated)")
         units = {"pressure_min": "Pa", "pressure_max": "Pa"}

@@ -20,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 from string import Template
 
+from ..escape import html_text, modelica_string
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..io.writers import atomic_write_text
 from ..model.core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
@@ -148,8 +149,8 @@ def modelica_package(model, *, name=None) -> tuple[str, str]:
     )
     text = template.substitute(
         package=package,
-        name_string=label.replace('"', "'").replace("\\", "/"),
-        name_html=label.replace('"', "'").replace("<", "").replace(">", "").replace("\\", "/"),
+        name_string=modelica_string(label, quotes=False),
+        name_html=modelica_string(html_text(label), quotes=False),
         reference=model.reference,
         operating=OPERATING_PRESSURE[model.reference],
         parameters="\n".join(parameters),

@@ -44,6 +44,7 @@ from string import Template
 
 import numpy as np
 
+from ..escape import identifier, matlab_comment
 from ..friction import simscape_cylinder_friction, stribeck
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
@@ -537,10 +538,7 @@ def _per_level(velocity, pressure, chamber, per_level):
 
 def _identifier(name: str) -> str:
     """A MATLAB/Modelica identifier made of ``name`` (letters, digits, underscores)."""
-    text = "".join(c if (c.isascii() and c.isalnum()) else "_" for c in str(name)).strip("_")
-    if not text or not text[0].isalpha():
-        text = f"cylfric_{text}" if text else "cylfric"
-    return text[:48]
+    return identifier(name, default="cylfric", max_length=48)
 
 
 def _script(stem, model, il, legacy, operating, per_level, reports) -> str:
@@ -554,9 +552,9 @@ def _script(stem, model, il, legacy, operating, per_level, reports) -> str:
     source = model.provenance.get("source") or {}
     return template.substitute(
         stem=stem,
-        name=model.record.get("name", "cylfric model"),
-        reference=model.reference,
-        losses="\n".join(f"%   {r.summary()}" for r in reports),
+        name=matlab_comment(model.record.get("name", "cylfric model")),
+        reference=matlab_comment(model.reference),
+        losses="\n".join(f"%   {matlab_comment(r.summary(), limit=None)}" for r in reports),
         il_struct=_matlab_struct("P.cylinder_friction_il", il, _IL_UNITS),
         legacy_struct=_matlab_struct("P.cylinder_friction", legacy, _LEGACY_UNITS),
         tf_struct="\n".join(levels),
@@ -573,5 +571,5 @@ def _script(stem, model, il, legacy, operating, per_level, reports) -> str:
             _TF_PROMPTS,
             _TF_UNITS,
         ),
-        campaign=str(source.get("campaign", "")) if isinstance(source, dict) else "",
+        campaign=matlab_comment(source.get("campaign", "")) if isinstance(source, dict) else "",
     )

@@ -1,0 +1,193 @@
+"""User text as data: one escaping function per target language.
+
+Datasheets, campaign folders, manifest rows and catalogue entries come from other people, and
+their text fields (name, notes, method, reasons, folder and file names) end up in files that
+other tools read as code: C sources compiled into an FMU, MATLAB and Simscape scripts, Modelica
+packages, Hopsan HCOM scripts, XML model descriptions, Markdown and HTML pages, and the
+terminal. Every place that puts such text into generated code goes through one of the
+functions below, which keep the text inside a literal or a comment of that language, on one
+line (see docs/security.md for the threat model).
+
+The common step is :func:`printable`: control characters, line and paragraph separators,
+format characters (bidirectional overrides included) and lone surrogates become visible
+escapes (``\\x0a``, ``\\u202e``), so the text is one line of printable characters.
+Identifiers derived from names are mangled by :func:`identifier` to
+``[A-Za-z_][A-Za-z0-9_]*``; the original is kept as a string by the caller.
+
+Examples
+--------
+>>> c_comment("evil */ system(1); /*")
+'evil * / system(1); / *'
+>>> matlab_string("it's\\nnew")
+"'it''s\\\\x0anew'"
+>>> identifier("3 bar seal / PK", default="cylfric")
+'cylfric_3_bar_seal___PK'
+"""
+
+from __future__ import annotations
+
+import html
+import unicodedata
+from xml.sax.saxutils import quoteattr
+
+__all__ = [
+    "printable",
+    "c_comment",
+    "c_string",
+    "matlab_comment",
+    "matlab_string",
+    "modelica_string",
+    "hcom_comment",
+    "markdown_text",
+    "html_text",
+    "xml_attr",
+    "terminal",
+    "identifier",
+    "COMMENT_LIMIT",
+]
+
+COMMENT_LIMIT = 240
+"""Longest user text [characters] a generated comment carries; longer text ends in ``[...]``."""
+
+_SAFE_CATEGORIES_EXCLUDED = ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
+
+
+def _escape_char(c: str) -> str:
+    code = ord(c)
+    if code < 0x100:
+        return f"\\x{code:02x}"
+    if code < 0x10000:
+        return f"\\u{code:04x}"
+    return f"\\U{code:08x}"
+
+
+def printable(text, *, limit: int | None = None, ascii_only: bool = False) -> str:
+    """``text`` as one line of printable characters.
+
+    Parameters
+    ----------
+    text : object
+        Any value; ``str(text)`` is escaped.
+    limit : int, optional
+        Longest result [characters]; longer text is cut and ends in ``" [...]"``.
+    ascii_only : bool
+        Escape every non-ASCII character too (for C sources).
+
+    Returns
+    -------
+    str
+        The text with control, format and separator characters (category Cc, Cf, Cs, Co,
+        Cn, Zl, Zp: newlines, NUL, ESC, bidirectional overrides, lone surrogates) written as
+        ``\\xNN``, ``\\uNNNN`` or ``\\UNNNNNNNN``; a space is kept, a tab becomes ``\\x09``.
+    """
+    out = []
+    for c in str(text):
+        if (ascii_only and ord(c) > 0x7E) or unicodedata.category(c) in _SAFE_CATEGORIES_EXCLUDED:
+            out.append(_escape_char(c))
+        else:
+            out.append(c)
+    result = "".join(out)
+    if limit is not None and len(result) > limit:
+        result = result[: max(limit - 6, 0)] + " [...]"
+    return result
+
+
+def _break(text: str, *pairs: tuple[str, str]) -> str:
+    """Replace each opener/closer until none is left (a replacement cannot form a new one)."""
+    changed = True
+    while changed:
+        changed = False
+        for old, new in pairs:
+            if old in text:
+                text = text.replace(old, new)
+                changed = True
+    return text
+
+
+def c_comment(text, *, limit: int = COMMENT_LIMIT) -> str:
+    """Text to place between ``/* `` and `` */`` in C: ASCII, one line, no ``*/`` or ``/*``."""
+    return _break(printable(text, limit=limit, ascii_only=True), ("*/", "* /"), ("/*", "/ *"))
+
+
+def c_string(text) -> str:
+    """A C string literal (with its quotes) holding ``text``'s UTF-8 bytes.
+
+    Printable ASCII stays as it is except ``\\``, ``"`` and ``?`` (trigraphs), which are
+    escaped; every other byte is written as a three-digit octal escape.
+    """
+    out = ['"']
+    for byte in str(text).encode("utf-8", "surrogatepass"):
+        c = chr(byte)
+        if c in '\\"?':
+            out.append("\\" + c)
+        elif 0x20 <= byte <= 0x7E:
+            out.append(c)
+        else:
+            out.append(f"\\{byte:03o}")
+    out.append('"')
+    return "".join(out)
+
+
+def matlab_comment(text, *, limit: int = COMMENT_LIMIT) -> str:
+    """Text to place after ``%`` on one MATLAB/Octave line (no line break can end it)."""
+    return printable(text, limit=limit)
+
+
+def matlab_string(text) -> str:
+    """A MATLAB/Octave character-vector literal ``'...'`` (quotes doubled, one line)."""
+    return "'" + printable(text).replace("'", "''") + "'"
+
+
+def modelica_string(text, *, quotes: bool = True) -> str:
+    """A Modelica string literal ``"..."`` (backslash and quote escaped, one line).
+
+    ``quotes=False`` gives the inside only, to place within a literal of the template.
+    """
+    inner = printable(text).replace("\\", "\\\\").replace('"', '\\"')
+    return f'"{inner}"' if quotes else inner
+
+
+def hcom_comment(text, *, limit: int = COMMENT_LIMIT) -> str:
+    """Text to place after ``#`` on one line of a Hopsan HCOM script."""
+    return printable(text, limit=limit)
+
+
+def html_text(text) -> str:
+    """HTML text or attribute value (``& < > " '`` as entities, one line)."""
+    return html.escape(printable(text), quote=True)
+
+
+_MARKDOWN_SPECIAL = "\\`*_{}[]()<>#+-.!|~"
+
+
+def markdown_text(text, *, limit: int = COMMENT_LIMIT) -> str:
+    """Text for Markdown: one line, every Markdown punctuation escaped with a backslash."""
+    line = printable(text, limit=limit)
+    line = "".join("\\" + c if c in _MARKDOWN_SPECIAL else c for c in line)
+    return html.escape(line, quote=False)
+
+
+def xml_attr(text) -> str:
+    """An XML attribute value with its quotes (only characters XML 1.0 allows, one line)."""
+    return quoteattr(printable(text))
+
+
+def terminal(text) -> str:
+    """Text for a rich console: markup (``[bold]``) and control codes (ANSI ESC) escaped."""
+    from rich.markup import escape
+
+    return escape(printable(text))
+
+
+def identifier(name, *, default: str = "cylfric", max_length: int = 48) -> str:
+    """An identifier ``[A-Za-z_][A-Za-z0-9_]*`` made of ``name`` (C, MATLAB, Modelica).
+
+    Every character that is not an ASCII letter or digit becomes ``_`` and leading and
+    trailing ``_`` are stripped; a name that does not start with a letter gets
+    ``default + "_"`` in front (``default`` alone when nothing is left); at most
+    ``max_length`` characters.
+    """
+    text = "".join(c if (c.isascii() and c.isalnum()) else "_" for c in str(name)).strip("_")
+    if not text or not text[0].isalpha():
+        text = f"{default}_{text}" if text else default
+    return text[:max_length]
