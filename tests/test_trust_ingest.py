@@ -80,7 +80,10 @@ def test_manifest_errors_name_the_line(tmp_path, body, message):
         ('[cylinder]\nbor = "25 mm"\n', r"line 2: unknown key 'bor' in \[cylinder\]"),
         ("[files]\nglob = 5\n", r"line 2: files.glob: 5 is not of type 'string'"),
         ('[extraction]\nmin_samples = "ten"\n', r"line 2: extraction.min_samples: 'ten'"),
-        ('[files]\nname_pattern = "(?P<x"\n', r"line 2: files.name_pattern is not a valid"),
+        (
+            '[files]\nname_pattern = "(?P<x"\n',
+            r"line 2: files.name_pattern is not a regular expression RE2 accepts",
+        ),
         ('[cylinder]\nbore = "25 mm"\nrod = "30 mm"\n', r"line 3: cylinder.rod \(30 mm\)"),
         ('[cylinder]\nkind = "single-acting"\n', r"cylinder.bore is missing or 0"),
     ],
@@ -234,3 +237,48 @@ def test_every_file_bad_with_skip_bad_says_why(tmp_path):
         BenchFileError, match=r"none of the 3 run file\(s\) could be read; the first"
     ):
         extract_campaign(folder, skip_bad=True)
+
+
+# ------------------------------------------------------------------ name_pattern (issue 23)
+@pytest.mark.parametrize(
+    ("pattern", "message"),
+    [
+        (
+            r"(?P<p>\d+)\1",
+            r"line 2: files.name_pattern is not a regular expression RE2.*back-references",
+        ),
+        (r"(?=p)p(?P<pressure_bar>\d+)", r"line 2: .*look-around"),
+    ],
+)
+def test_name_pattern_that_re2_cannot_match_is_refused_with_its_line(tmp_path, pattern, message):
+    (tmp_path / "campaign.toml").write_text(f"[files]\nname_pattern = '{pattern}'\n")
+    with pytest.raises(BenchFileError, match=message):
+        load_config(tmp_path)
+
+
+def test_catastrophic_name_pattern_cannot_hang_a_fit(tmp_path):
+    """``^(a+)+$`` against a 40-character name backtracks 2**40 times in Python's re; a
+    whole `cylfric fit` of such a campaign ends (here: refuses its unmatched files) in
+    seconds, in a subprocess with a hard time limit."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    folder = tmp_path / "campaign"
+    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 20.0), speeds_mm_s=(5, 50)))
+    (folder / "manifest.csv").unlink(missing_ok=True)
+    for k, path in enumerate(sorted(folder.glob("*.txt"))):
+        path.rename(folder / ("a" * 40 + f"!_p{10 * (1 + k // 2)}bar_v{(5, 50)[k % 2]}mms.txt"))
+    (folder / "campaign.toml").write_text("[files]\nname_pattern = '^(a+)+$'\n")
+    script = Path(sys.executable).with_name("cylfric")
+    done = subprocess.run(
+        [str(script), "fit", str(folder), "--out", str(tmp_path / "o"), "--no-report"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode in (0, 2), done.stderr
+    assert "Traceback" not in done.stderr

@@ -429,14 +429,47 @@ def _validate_config(doc, path):
         )
     pattern = doc.get("files", {}).get("name_pattern")
     if pattern is not None:
-        try:
-            re.compile(pattern)
-        except re.error as exc:
-            raise BenchFileError(
-                path,
-                f"files.name_pattern is not a valid regular expression ({exc})",
-                line=_line_of(path, "name_pattern"),
-            ) from None
+        compile_name_pattern(pattern, path)
+
+
+def compile_name_pattern(pattern: str, path=None):
+    """``[files] name_pattern`` compiled by RE2, whose matching time is linear in the name.
+
+    A user's pattern is matched with google-re2 rather than Python's backtracking ``re``, so
+    that no pattern (``^(a+)+$`` against a long file name) can hang a fit. RE2 has no
+    back-references and no look-around; such a pattern is refused naming campaign.toml, its
+    line and what RE2 said.
+
+    Parameters
+    ----------
+    pattern : str
+        The regular expression (Python/RE2 syntax; named groups ``(?P<pressure>...)``).
+    path : path-like, optional
+        The campaign.toml it came from (for the error).
+
+    Returns
+    -------
+    re2._Regexp
+        A compiled pattern with ``search`` and ``groupdict`` as :mod:`re` has them.
+    """
+    import re2
+
+    options = re2.Options()
+    options.log_errors = False  # the error is raised below, not printed by RE2 on stderr
+    try:
+        return re2.compile(pattern, options=options)
+    except re2.error as exc:
+        reason = exc.args[0] if exc.args else exc
+        if isinstance(reason, bytes):
+            reason = reason.decode("utf-8", "replace")
+        raise BenchFileError(
+            path if path is not None else "campaign.toml",
+            f"files.name_pattern is not a regular expression RE2 accepts ({reason}); "
+            "cylfric matches file names in linear time with RE2, which has no "
+            "back-references (\\1) and no look-around ((?=...), (?<=...)): write the "
+            "pattern without them",
+            line=_line_of(path, "name_pattern") if path is not None else None,
+        ) from None
 
 
 def name_tokens(name: str) -> dict:
@@ -678,7 +711,11 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
         raise BenchFileError(folder, "not a folder; expected a campaign folder of run files")
     config = config or load_config(folder)
     manifest = _read_manifest(folder)
-    pattern = re.compile(config.name_pattern) if config.name_pattern else None
+    pattern = (
+        compile_name_pattern(config.name_pattern, folder / CONFIG_NAME)
+        if config.name_pattern
+        else None
+    )
     runs = []
     candidates = sorted(
         p
