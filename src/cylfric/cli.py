@@ -19,11 +19,11 @@ from pathlib import Path
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from . import __version__
+from .escape import terminal
 from .units import UnitError, parse_quantity
 
 app = typer.Typer(
@@ -32,8 +32,8 @@ app = typer.Typer(
     rich_markup_mode=None,
     help="cylfric: pressure-dependent friction of hydraulic cylinders.",
 )
-console = Console()
-err_console = Console(stderr=True)
+console = Console(emoji=False)  # ":smile:" in a user's name stays text
+err_console = Console(stderr=True, emoji=False)
 STATE = {"debug": False}
 
 BAD_INPUT_EXIT = 2
@@ -72,18 +72,27 @@ def guarded(command):
         except ValueError as exc:  # BenchFileError, DatasheetError, UnitError, BadInput, ...
             if STATE["debug"]:
                 traceback.print_exc()
-            err_console.print(f"error: {exc}", markup=False, highlight=False, soft_wrap=True)
+            err_console.print(
+                terminal(f"error: {exc}", markup=False, multiline=True),
+                markup=False,
+                highlight=False,
+                soft_wrap=True,
+            )
             raise typer.Exit(BAD_INPUT_EXIT) from None
         except OSError as exc:
             err_console.print(
-                f"error: {exc.filename or ''}: {exc.strerror}", markup=False, soft_wrap=True
+                terminal(f"error: {exc.filename or ''}: {exc.strerror}", markup=False),
+                markup=False,
+                soft_wrap=True,
             )
             raise typer.Exit(BAD_INPUT_EXIT) from None
         except Exception as exc:  # noqa: BLE001 - the contract: never a bare traceback
             if STATE["debug"]:
                 traceback.print_exc()
             err_console.print(
-                f"error: unexpected {type(exc).__name__}: {exc}", markup=False, soft_wrap=True
+                terminal(f"error: unexpected {type(exc).__name__}: {exc}", markup=False),
+                markup=False,
+                soft_wrap=True,
             )
             err_console.print("rerun with --debug for the traceback")
             raise typer.Exit(UNEXPECTED_EXIT) from None
@@ -194,7 +203,7 @@ def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
         name, sep, rest = line.partition(" = ")
         if not sep:
             name, _, rest = line.partition(": ")
-        table.add_row(escape(name), escape(rest))
+        table.add_row(terminal(name), terminal(rest))
     fit = sheet["fit"]
     if fit.get("rmse") is not None:
         table.add_row("RMSE", f"{fit['rmse']:.3f} N over {fit.get('n_points', '?')} points")
@@ -219,8 +228,8 @@ def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
             )
         )
         text = f"{value:.4g} {unit}" if value is not None else "pressure dependent"
-        table.add_row(name, f"{text} ({status}: {reason})")
-    table.add_row("method", fit["method"])
+        table.add_row(name, terminal(f"{text} ({status}: {reason})"))
+    table.add_row("method", terminal(fit["method"]))
     return table
 
 
@@ -252,7 +261,7 @@ def run_fit(
         for info in discover_runs(campaign, config)
     )
     progress = _progress()
-    task = progress.add_task(f"reading {campaign.name}", total=n_files)
+    task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
     # warnings reach the user once, as the notes printed below (not as Python's own lines)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -281,17 +290,24 @@ def run_fit(
         if skipped:
             console.print(f"[yellow]{len(skipped)} file(s) skipped[/yellow] (see skipped.csv):")
             for item in skipped[:10]:
-                console.print(f"  {item['reason']}", markup=False)
+                console.print(terminal(f"  {item['reason']}", markup=False), markup=False)
         excluded = result.excluded
         if excluded is not None and len(excluded):
             console.print(f"[yellow]{len(excluded)} run(s) excluded[/yellow] (see excluded.csv):")
             for _, item in excluded.head(10).iterrows():
-                console.print(f"  {item['file']}: {item['reason']}", markup=False)
+                console.print(
+                    terminal(f"  {item['file']}: {item['reason']}", markup=False), markup=False
+                )
         for note in result.identification.notes:
-            console.print(f"[yellow]note:[/yellow] {escape(note)}")
+            console.print(f"[yellow]note:[/yellow] {terminal(note)}")
         for exported in result.exports.values():
-            console.print(exported.summary(), markup=False, highlight=False)
-        console.print(f"outputs in {out}" + (f"; open {out / 'report.html'}" if report else ""))
+            console.print(
+                terminal(exported.summary(), markup=False, multiline=True),
+                markup=False,
+                highlight=False,
+            )
+        opened = f"; open {out / 'report.html'}" if report else ""
+        console.print(terminal(f"outputs in {out}{opened}", markup=False), markup=False)
     return result
 
 
@@ -386,7 +402,7 @@ def demo(
     with _progress() as progress:
         task = progress.add_task("virtual bench", total=n)
         generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
-    console.print(f"virtual campaign: {n} files in {campaign}")
+    console.print(terminal(f"virtual campaign: {n} files in {campaign}"))
     result = run_fit(campaign, out / "fit", quiet=True)
     sheet = result.datasheet
     console.print(_summary_table(sheet, "Recovered from the virtual campaign"))
@@ -406,7 +422,7 @@ def demo(
     table.add_row("v_r", "10 mm/s", f"{params['v_r'] * 1e3:.2f} mm/s")
     table.add_row("offset", f"{35.67 / 2:.2f} N (35.67 N up-down)", f"{sheet['offset']:.2f} N")
     console.print(table)
-    console.print(f"report: {out / 'fit' / 'report.html'}")
+    console.print(terminal(f"report: {out / 'fit' / 'report.html'}"))
 
 
 @app.command()
@@ -417,9 +433,10 @@ def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
     from .model import FrictionModel
 
     sheet = read_datasheet(datasheet)
-    console.print(_summary_table(sheet, f"Friction datasheet {sheet.get('name', '')}"))
+    title = terminal(f"Friction datasheet {sheet.get('name', '')}")
+    console.print(_summary_table(sheet, title))
     report = FrictionModel.from_datasheet(sheet).fit_report(min_correlation=0.3)
-    console.print(report, markup=False, highlight=False)
+    console.print(terminal(report, markup=False, multiline=True), markup=False, highlight=False)
     rows = sheet.get("per_pressure", [])
     if rows:
         table = Table(title="Per pressure (thesis Table 4.1 layout)")
@@ -432,7 +449,7 @@ def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
             "RMSE [N]",
             "n",
         ):
-            table.add_column(escape(col), justify="right")  # "[bar]" is not rich markup
+            table.add_column(terminal(col), justify="right")  # "[bar]" is not rich markup
         for r in rows:
             vs = r.get("stribeck_velocity")
             table.add_row(
@@ -506,8 +523,10 @@ def generate(
             out_dir, settings, progress=lambda _: progress.advance(task), tests=chosen
         )
     console.print(
-        f"wrote {len(info['files'])} files and manifest.csv to {out_dir} "
-        f"({info['steps']:.3g} simulated steps)"
+        terminal(
+            f"wrote {len(info['files'])} files and manifest.csv to {out_dir} "
+            f"({info['steps']:.3g} simulated steps)"
+        )
     )
 
 
@@ -588,7 +607,7 @@ def simulate(
             named = str(exc).startswith(model) or not Path(model).is_file()
             raise BadInput(str(exc) if named else f"{model}: {exc}") from None
     for note in dict.fromkeys(str(w.message) for w in caught):
-        console.print(f"[yellow]note:[/yellow] {note}")
+        console.print(f"[yellow]note:[/yellow] {terminal(note)}")
     frame = result.to_pandas()
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))
@@ -600,8 +619,10 @@ def simulate(
     save_figure(fig, out, "simulation")
     f = result.outputs["friction_force"]
     console.print(
-        f"{drive}: {len(frame)} samples over {t_end:g} s; friction {f.min():.1f} to "
-        f"{f.max():.1f} N; wrote {out / 'simulation.csv'} and simulation.png/svg"
+        terminal(
+            f"{drive}: {len(frame)} samples over {t_end:g} s; friction {f.min():.1f} to "
+            f"{f.max():.1f} N; wrote {out / 'simulation.csv'} and simulation.png/svg"
+        )
     )
 
 
@@ -627,7 +648,10 @@ def main() -> None:
     except SystemExit:
         raise
     except Exception as exc:  # pragma: no cover - typer's own failures
-        err_console.print(f"error: unexpected {type(exc).__name__}: {exc}", markup=False)
+        err_console.print(
+            terminal(f"error: unexpected {type(exc).__name__}: {exc}", markup=False),
+            markup=False,
+        )
         err_console.print("rerun with --debug for the traceback")
         sys.exit(UNEXPECTED_EXIT)
 

@@ -41,6 +41,7 @@ __all__ = [
     "markdown_text",
     "html_text",
     "xml_attr",
+    "plot_text",
     "terminal",
     "identifier",
     "COMMENT_LIMIT",
@@ -167,16 +168,39 @@ def markdown_text(text, *, limit: int = COMMENT_LIMIT) -> str:
     return html.escape(line, quote=False)
 
 
+def plot_text(text, *, limit: int = 80) -> str:
+    """Text for a matplotlib label or title: one line, ``$`` escaped (no mathtext parsing)."""
+    return printable(text, limit=limit).replace("$", r"\$")
+
+
 def xml_attr(text) -> str:
     """An XML attribute value with its quotes (only characters XML 1.0 allows, one line)."""
     return quoteattr(printable(text))
 
 
-def terminal(text) -> str:
-    """Text for a rich console: markup (``[bold]``) and control codes (ANSI ESC) escaped."""
+def terminal(text, *, markup: bool = True, multiline: bool = False) -> str:
+    """Text for a rich console: control codes (ANSI ESC) and, by default, markup escaped.
+
+    Parameters
+    ----------
+    text : object
+        User text (a name, a file name, a reason), or a message holding some.
+    markup : bool
+        Escape rich markup (``[bold]``, ``[/]``): for text printed with markup on, or put in
+        a table cell. ``False`` for text printed with ``markup=False``.
+    multiline : bool
+        Keep line breaks (``\\n``) of a message of several lines; every other control
+        character is still escaped.
+    """
+    if multiline:
+        lines = str(text).split("\n")
+        return "\n".join(terminal(line, markup=markup) for line in lines)
+    line = printable(text)
+    if not markup:
+        return line
     from rich.markup import escape
 
-    return escape(printable(text))
+    return escape(line)
 
 
 def identifier(name, *, default: str = "cylfric", max_length: int = 48) -> str:

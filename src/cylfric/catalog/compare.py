@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..escape import plot_text
+
 __all__ = ["friction_with_band", "compare", "comparison_table"]
 
 
@@ -113,7 +115,13 @@ def _figure(models: dict, pressures, velocities, level):
         for j, p in enumerate(pressures):
             f, lo, hi, inside = friction_with_band(model, v_grid, p, level)
             f = np.where(inside, f, np.nan)
-            ax_v.plot(v_grid * 1e3, f, styles[j % 4], color=color, label=f"{name}, {p / 1e5:g} bar")
+            ax_v.plot(
+                v_grid * 1e3,
+                f,
+                styles[j % 4],
+                color=color,
+                label=f"{plot_text(name)}, {p / 1e5:g} bar",
+            )
             ax_v.fill_between(
                 v_grid * 1e3, np.where(inside, lo, np.nan), hi, color=color, alpha=0.15, lw=0
             )
@@ -121,7 +129,11 @@ def _figure(models: dict, pressures, velocities, level):
             f, lo, hi, inside = friction_with_band(model, abs(v), p_grid, level)
             f = np.where(inside, f, np.nan)
             ax_p.plot(
-                p_grid / 1e5, f, styles[j % 4], color=color, label=f"{name}, {abs(v) * 1e3:g} mm/s"
+                p_grid / 1e5,
+                f,
+                styles[j % 4],
+                color=color,
+                label=f"{plot_text(name)}, {abs(v) * 1e3:g} mm/s",
             )
             ax_p.fill_between(
                 p_grid / 1e5, np.where(inside, lo, np.nan), hi, color=color, alpha=0.15, lw=0

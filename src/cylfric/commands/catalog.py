@@ -13,6 +13,7 @@ from pathlib import Path
 import typer
 
 from ..cli import BadInput, console, guarded, numbers
+from ..escape import terminal
 
 catalog_app = typer.Typer(
     add_completion=False,
@@ -56,7 +57,7 @@ def _temperature(text):
 
 def _text(value):
     """Text of a metadata cell: "-" for None or NaN."""
-    return value if isinstance(value, str) and value else "-"
+    return terminal(value) if isinstance(value, str) and value else "-"
 
 
 def _fmt(value, scale=1.0, digits=4):
@@ -94,7 +95,9 @@ def add(
         temperature=_temperature(temperature),
         replace=replace,
     )
-    console.print(f"added {name!r} to {catalog.path} ({len(catalog)} entries)", highlight=False)
+    console.print(
+        terminal(f"added {name!r} to {catalog.path} ({len(catalog)} entries)"), highlight=False
+    )
 
 
 @catalog_app.command("list")
@@ -107,7 +110,7 @@ def list_entries(db: Path = typer.Option(None, "--db", help=DB_HELP)):
     catalog = _db(db)
     frame = catalog.list()
     cells = {
-        "name": lambda r: r["name"],
+        "name": lambda r: terminal(r["name"]),
         "seal": lambda r: _text(r["seal"]),
         "manufacturer": lambda r: _text(r["manufacturer"]),
         "bore [mm]": lambda r: _fmt(r["bore [m]"], 1e3),
@@ -116,7 +119,7 @@ def list_entries(db: Path = typer.Option(None, "--db", help=DB_HELP)):
         "T [degC]": lambda r: _fmt(
             None if r["temperature [K]"] is None else r["temperature [K]"] - 273.15
         ),
-        "law": lambda r: r["friction law"],
+        "law": lambda r: terminal(r["friction law"]),
         "p [bar]": lambda r: (
             f"{_fmt(r['pressure min [Pa]'], 1e-5, 3)}-{_fmt(r['pressure max [Pa]'], 1e-5, 3)}"
         ),
@@ -127,7 +130,7 @@ def list_entries(db: Path = typer.Option(None, "--db", help=DB_HELP)):
     }
     rows = [{k: f(r) for k, f in cells.items()} for r in frame.to_dict("records")]
     shown = [k for k in cells if k in ("name", "law") or any(r[k] != "-" for r in rows)]
-    table = Table(title=f"Catalogue {catalog.path} ({len(frame)} entries)")
+    table = Table(title=terminal(f"Catalogue {catalog.path} ({len(frame)} entries)"))
     for column in shown:
         table.add_column(escape(column), overflow="fold")
     for row in rows:
@@ -147,7 +150,7 @@ def show(
     catalog = _db(db)
     meta = catalog.metadata(name)
     model = catalog.model(name)
-    table = Table(title=f"{name}", show_header=False)
+    table = Table(title=terminal(name), show_header=False)
     table.add_column("", style="bold")
     table.add_column("")
     for key in ("seal", "manufacturer", "fluid"):
@@ -160,7 +163,7 @@ def show(
         key, sep, rest = line.partition(" = ")
         if not sep:
             key, _, rest = line.partition(": ")
-        table.add_row(key, rest)
+        table.add_row(terminal(key), terminal(rest))
     if model.validity is not None:
         val = model.validity
         table.add_row(
@@ -168,8 +171,8 @@ def show(
             f"{val['pressure_min'] / 1e5:.3g}-{val['pressure_max'] / 1e5:.3g} bar, "
             f"{val['velocity_min'] * 1e3:.3g}-{val['velocity_max'] * 1e3:.3g} mm/s",
         )
-    table.add_row("method", model.provenance.get("method", "-"))
-    table.add_row("added", meta["added"])
+    table.add_row("method", terminal(model.provenance.get("method", "-")))
+    table.add_row("added", terminal(meta["added"]))
     console.print(table)
 
 
@@ -217,7 +220,7 @@ def compare(
         table.add_column(escape(column), justify="right")
     for row in result["table"].to_dict("records"):
         table.add_row(
-            row["name"],
+            terminal(row["name"]),
             f"{row['pressure [Pa]'] / 1e5:.3g}",
             f"{row['velocity [m/s]'] * 1e3:.3g}",
             f"{row['friction [N]']:.2f}",
@@ -225,7 +228,9 @@ def compare(
             "yes" if row["inside validity"] else "extrapolated",
         )
     console.print(table)
-    console.print(f"outputs in {out}: compare.csv, compare.png, compare.svg", highlight=False)
+    console.print(
+        terminal(f"outputs in {out}: compare.csv, compare.png, compare.svg"), highlight=False
+    )
 
 
 @catalog_app.command("select")
@@ -256,12 +261,12 @@ def select(
     for row in ranked.to_dict("records"):
         table.add_row(
             str(row["rank"]),
-            row["name"],
+            terminal(row["name"]),
             _text(row["seal"]),
             f"{row['friction [N]']:.2f}",
             f"{_fmt(row['lower [N]'], 1, 4)}-{_fmt(row['upper [N]'], 1, 4)}",
             "yes" if row["inside validity"] else "extrapolated",
-            row["friction law"],
+            terminal(row["friction law"]),
         )
     console.print(table)
     if ranked.empty:
@@ -304,14 +309,14 @@ def predict(
     )
     atomic_write_text(out, json.dumps(sheet, indent=1) + "\n")
     prediction = sheet["prediction"]
-    console.print(f"rule: {prediction['rule']}", highlight=False)
+    console.print(terminal(f"rule: {prediction['rule']}"), highlight=False)
     console.print(
         f"added uncertainty: {rule_stderr:.0%} relative standard error of the rule "
         "(an assumption), in the covariance and the bands",
         highlight=False,
     )
     for line in FrictionModel.from_datasheet(sheet).law_lines():
-        console.print(line, highlight=False, markup=False)
+        console.print(terminal(line, markup=False), highlight=False, markup=False)
     if add_as:
         catalog.add(
             sheet,
@@ -323,8 +328,8 @@ def predict(
                 for k in ("seal", "manufacturer", "fluid", "temperature")
             },
         )
-        console.print(f"added {add_as!r} to {catalog.path}", highlight=False)
-    console.print(f"predicted datasheet in {out}", highlight=False)
+        console.print(terminal(f"added {add_as!r} to {catalog.path}"), highlight=False)
+    console.print(terminal(f"predicted datasheet in {out}"), highlight=False)
 
 
 @catalog_app.command("remove")
@@ -336,7 +341,7 @@ def remove(
     """Remove an entry."""
     catalog = _db(db)
     catalog.remove(name)
-    console.print(f"removed {name!r} from {catalog.path}", highlight=False)
+    console.print(terminal(f"removed {name!r} from {catalog.path}"), highlight=False)
 
 
 @catalog_app.command("export")
@@ -348,7 +353,7 @@ def export(
     """Export the whole catalogue as one JSON file."""
     catalog = _db(db)
     catalog.export_json(path)
-    console.print(f"exported {len(catalog)} entries to {path}", highlight=False)
+    console.print(terminal(f"exported {len(catalog)} entries to {path}"), highlight=False)
 
 
 @catalog_app.command("import")
@@ -361,7 +366,7 @@ def import_(
     """Import a catalogue export (all entries or none)."""
     catalog = _db(db)
     count = catalog.import_json(path, replace=replace)
-    console.print(f"imported {count} entries into {catalog.path}", highlight=False)
+    console.print(terminal(f"imported {count} entries into {catalog.path}"), highlight=False)
 
 
 def register(app) -> None:

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from ..cli import BadInput, console, guarded
+from ..escape import plot_text, terminal
 
 
 def _trend(source, label, out, order, campaign):
@@ -16,14 +17,16 @@ def _trend(source, label, out, order, campaign):
     if points is None:
         return None
     trend = run_order_trend(points, model, order=order, campaign=campaign)
-    console.print(f"[bold]{label}[/bold]: friction against run order ({len(trend.runs)} runs)")
-    console.print(trend.summary(), highlight=False, markup=False)
+    console.print(
+        f"[bold]{terminal(label)}[/bold]: friction against run order ({len(trend.runs)} runs)"
+    )
+    console.print(terminal(trend.summary(), markup=False, multiline=True), markup=False)
     if out is not None:
         import io
 
         from ..io.writers import atomic_write_bytes, atomic_write_text
 
-        fig = figure_run_order(trend, title=f"{label}: friction against run order")
+        fig = figure_run_order(trend, title=f"{plot_text(label)}: friction against run order")
         for fmt in ("png", "svg"):
             buffer = io.BytesIO()
             fig.savefig(buffer, format=fmt, dpi=110)
@@ -75,7 +78,7 @@ def register(app) -> None:
         from ..model.core import engineering_unit
 
         params = table[table["kind"] == "parameter"]
-        view = Table(title=f"Change of the coefficients, {b.name} - {a.name}")
+        view = Table(title=terminal(f"Change of the coefficients, {b.name} - {a.name}"))
         for column in ("coefficient", "unit", "a", "b", "change", "z", "sig."):
             view.add_column(escape(column), justify="right", no_wrap=True)
         for row in params.to_dict("records"):
@@ -116,4 +119,4 @@ def register(app) -> None:
         for source in (a, b):
             _trend(source, source.stem if source.is_file() else source.name, out, "run", None)
         if out is not None:
-            console.print(f"outputs in {out}", highlight=False)
+            console.print(terminal(f"outputs in {out}"), highlight=False)

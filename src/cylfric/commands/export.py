@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from ..cli import BadInput, console, guarded
+from ..escape import terminal
 
 TARGET_NAMES = ("fmu", "modelica", "simscape", "hopsan", "matlab")
 
@@ -55,8 +56,8 @@ def register(app) -> None:
             warnings.simplefilter("always")
             result = export(datasheet, target, out, **options)
         for message in dict.fromkeys(str(w.message) for w in caught):  # each once, as a note
-            console.print(f"[yellow]note:[/yellow] {message}", highlight=False)
+            console.print(f"[yellow]note:[/yellow] {terminal(message)}", highlight=False)
         for line in result.summary().splitlines():
-            console.print(line, markup=False, highlight=False)
+            console.print(terminal(line, markup=False), markup=False, highlight=False)
         for path in result.files:
-            console.print(f"  wrote {path}", markup=False, highlight=False)
+            console.print(terminal(f"  wrote {path}", markup=False), markup=False, highlight=False)

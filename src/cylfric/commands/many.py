@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from ..cli import BadInput, console, fixed_parameters, guarded, progress_bar
+from ..escape import terminal
 
 
 def register(app: typer.Typer) -> None:
@@ -101,16 +102,22 @@ def register(app: typer.Typer) -> None:
             )
             reason, catalogued = row.get("reason") or "", row.get("catalog") or ""
             table.add_row(
-                row["campaign"],
+                terminal(row["campaign"]),
                 "[green]ok[/green]" if row["status"] == "ok" else "[red]failed[/red]",
                 "" if runs is None else str(int(runs)),
                 "" if excluded is None else str(int(excluded)),
                 "" if seconds is None else f"{seconds:.1f}",
-                Text(reason + (f" (catalogue: {catalogued})" if catalogued else "")),
+                Text(
+                    terminal(
+                        reason + (f" (catalogue: {catalogued})" if catalogued else ""), markup=False
+                    )
+                ),
             )
         console.print(table)
         console.print(
-            f"{result.scheduler}: {result.seconds:.1f} s; summary in {out / 'fit_many.csv'}"
+            terminal(
+                f"{result.scheduler}: {result.seconds:.1f} s; summary in {out / 'fit_many.csv'}"
+            )
         )
         if result.succeeded == 0:
             raise typer.Exit(2)

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from ..cli import BadInput, console, guarded
+from ..escape import terminal
 
 SIGNALS_CSV = "motion_signals.csv"
 FIT_JSON = "motion_fit.json"
@@ -353,14 +354,16 @@ def _print_summary(fit, replay, out) -> None:
         if ref.model is not None:
             console.print("pressure-dependent refinement (datasheet.json):")
             for line in ref.model.law_lines():
-                console.print(f"  {line}", markup=False)
+                console.print(terminal(f"  {line}", markup=False), markup=False)
             console.print(f"  relative force error {100 * ref.relative_error:.2f} %")
         for note in ref.notes:
-            console.print(f"  note: {note}", markup=False)
+            console.print(terminal(f"  note: {note}", markup=False), markup=False)
     if replay is not None:
         e = replay.errors
         console.print(
             f"closed-loop validation: relative errors position {100 * e['position']:.3g} %, "
             f"velocity {100 * e['velocity']:.3g} %, force {100 * e['force']:.3g} %"
         )
-    console.print(f"wrote {out / FIT_JSON}, {SIGNALS_CSV}, {FIGURE}", markup=False)
+    console.print(
+        terminal(f"wrote {out / FIT_JSON}, {SIGNALS_CSV}, {FIGURE}", markup=False), markup=False
+    )

@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from ..cli import BadInput, console, guarded, progress_bar
+from ..escape import terminal
 
 
 def _range(text: str, dimension: str, unit: str, option: str) -> tuple[float, float]:
@@ -153,15 +154,15 @@ def register(app: typer.Typer) -> None:
             title = f"Predicted standard errors: thesis grid (270 runs) and a {runs}-run plan"
         shown = Table(title=title)
         for column in table.columns:
-            shown.add_column(str(column), justify="right")
+            shown.add_column(terminal(column), justify="right")
         for row in table.itertuples(index=False):
-            shown.add_row(*(f"{x:.3g}" if isinstance(x, float) else str(x) for x in row))
+            shown.add_row(*(f"{x:.3g}" if isinstance(x, float) else terminal(x) for x in row))
         console.print(shown)
         levels = result.runs["pressure [Pa]"].nunique()
         console.print(
             f"{runs} runs at {levels} pressure level(s) and "
-            f"{result.runs['velocity [m/s]'].nunique()} speed(s); noise: {noise.source}"
+            f"{result.runs['velocity [m/s]'].nunique()} speed(s); noise: {terminal(noise.source)}"
         )
         for note in result.notes[2:]:
-            console.print(f"[yellow]note:[/yellow] {note}")
-        console.print(f"test sheet: {files['csv']} and {files['html']}")
+            console.print(f"[yellow]note:[/yellow] {terminal(note)}")
+        console.print(terminal(f"test sheet: {files['csv']} and {files['html']}"))
