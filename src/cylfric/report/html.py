@@ -8,6 +8,7 @@ import math
 
 import pandas as pd
 
+from ..escape import html_text
 from ..io.writers import atomic_write_text
 from .figures import render_all, save_rendered
 
@@ -31,7 +32,7 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
     def fmt(x):
         if isinstance(x, float):
             return "" if math.isnan(x) else f"{x:.{digits}g}"
-        return html.escape(str(x))
+        return html_text(x)
 
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in frame.columns)
     rows = "".join(
@@ -58,10 +59,10 @@ def render_report(
         f"<meta name='viewport' content='width=device-width,initial-scale=1'>"
         f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>"
     ]
-    parts.append(f"<h1>{html.escape(title)}: {html.escape(sheet.get('name', ''))}</h1>")
+    parts.append(f"<h1>{html.escape(title)}: {html_text(sheet.get('name', ''))}</h1>")
     parts.append(
-        f"<p class='muted'>cylfric {html.escape(sheet.get('cylfric_version', ''))}, "
-        f"{html.escape(sheet.get('created', ''))}; model: steady-state LuGre/Stribeck "
+        f"<p class='muted'>cylfric {html_text(sheet.get('cylfric_version', ''))}, "
+        f"{html_text(sheet.get('created', ''))}; model: steady-state LuGre/Stribeck "
         "law (thesis eq. 2.7) with pressure laws; units N, bar, mm/s.</p>"
     )
     model = ident.model
@@ -90,14 +91,14 @@ def render_report(
     parts.append(offset_by_pressure(extraction))
     for name, reason in model.not_identified.items():
         parts.append(
-            f"<p class='note'>{html.escape(name)} not identified: {html.escape(reason)}</p>"
+            f"<p class='note'>{html_text(name)} not identified: {html_text(reason)}</p>"
         )
     dyn = ", ".join(
         f"{name} {status} ({reason})" for name, (status, reason) in model.dynamic_status.items()
     )
-    parts.append(f"<p class='muted'>Dynamic (LuGre) parameters: {html.escape(dyn)}.</p>")
+    parts.append(f"<p class='muted'>Dynamic (LuGre) parameters: {html_text(dyn)}.</p>")
     for note in sheet.get("notes", []):
-        parts.append(f"<p class='note'>{html.escape(note)}</p>")
+        parts.append(f"<p class='note'>{html_text(note)}</p>")
     parts.append("<h2>Figures</h2>")
     for stem, caption, png in figures:
         data = base64.b64encode(png).decode("ascii")
