@@ -27,7 +27,7 @@ from .escape import terminal
 from .units import UnitError, parse_quantity
 
 app = typer.Typer(
-    add_completion=False,
+    add_completion=True,
     no_args_is_help=True,
     rich_markup_mode=None,
     help="cylfric: pressure-dependent friction of hydraulic cylinders.",

@@ -175,6 +175,30 @@ class Identification:
             )
         return pd.DataFrame(rows)
 
+    def to_pandas(self) -> pd.DataFrame:
+        """The model's coefficients with units and standard errors (SI and engineering);
+        :meth:`FrictionModel.to_pandas`. The data are in :attr:`points`, the
+        per-pressure fits in :attr:`per_pressure`."""
+        return self.model.to_pandas()
+
+    def _repr_html_(self) -> str:
+        from ..model.text import html_summary
+
+        rmse = self.model.statistics.get("rmse")
+        fit = (
+            f"<div>{len(self.points)} points at {len(self.levels)} pressure level(s)"
+            + ("" if rmse is None else f", RMSE {rmse:.3g} N")
+            + f"; {self.pressure_law} pressure laws</div>"
+        )
+        return html_summary(self.model, title="Identification") + fit
+
+    def plot(self):
+        """Thesis Fig. 4.1: the points per pressure, the model and its 95 % band of the mean
+        (:func:`cylfric.report.figures.figure_fit`). Returns the matplotlib Figure."""
+        from ..report.figures import figure_fit  # the plotting module; it imports no identify
+
+        return figure_fit(self)
+
 
 _TABLE_UNITS = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
 

@@ -838,6 +838,43 @@ class FrictionModel:
 
         return law_lines(self)
 
+    def to_pandas(self):
+        """The coefficients as a DataFrame: SI and engineering values, units, standard errors,
+        pressure law, held or fitted (:func:`cylfric.model.text.parameter_table`)."""
+        from .text import parameter_table
+
+        return parameter_table(self)
+
+    def _repr_html_(self) -> str:
+        """The parameter table with units and standard errors, for Jupyter."""
+        from .text import html_summary
+
+        return html_summary(self)
+
+    def plot(self, pressures=None, *, velocities=None, level=0.95, ax=None):
+        """Friction against speed at a few pressures with the band of the mean (if any).
+
+        Delegates to :func:`cylfric.report.figures.figure_model` (the report's style).
+
+        Parameters
+        ----------
+        pressures : sequence of float, optional
+            Operating pressures [Pa]; default three over the validity range (else 0-100 bar).
+        velocities : sequence of float, optional
+            Speeds [m/s] of the curve; default 120 on a log grid over the validity range.
+        level : float
+            Confidence level of the band of the mean [-].
+        ax : matplotlib Axes, optional
+            Draw into these axes instead of a new figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from ..report.figures import figure_model  # the plotting module; it imports no model
+
+        return figure_model(self, pressures, velocities=velocities, level=level, ax=ax)
+
     # ------------------------------------------------------------------ datasheet
     def to_datasheet(self) -> dict:
         """The datasheet dict (SI, JSON-ready) of this model and its :attr:`record`."""

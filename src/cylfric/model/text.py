@@ -10,7 +10,7 @@ import math
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from .core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 
-__all__ = ["law_lines", "fit_report", "format_value"]
+__all__ = ["law_lines", "fit_report", "format_value", "parameter_table", "html_summary"]
 
 
 def format_value(value, stderr=None, digits=4) -> str:
@@ -150,3 +150,98 @@ def fit_report(model, *, min_correlation=0.1) -> str:
             f"{val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
         )
     return "\n".join(lines)
+
+
+PARAMETER_COLUMNS = (
+    "law",
+    "value",
+    "stderr",
+    "unit",
+    "value (engineering)",
+    "stderr (engineering)",
+    "unit (engineering)",
+    "vary",
+    "status",
+)
+"""Columns of :func:`parameter_table`."""
+
+
+def parameter_table(model):
+    """The model's coefficients as a DataFrame, one row each (index: ``"F_c.slope"``, ...).
+
+    Columns: ``law`` (the parameter's pressure law), ``value`` and ``stderr`` in SI with
+    ``unit``, the same in engineering units (N, bar, mm/s, N*s/mm), ``vary`` (False: held
+    fixed) and ``status`` (``identified``, ``fixed``, ``assumed`` or ``not identified: ...``).
+    """
+    import pandas as pd
+
+    rows = {}
+    for p in model.parameters.values():
+        value, stderr, unit = p.engineering()
+        dynamic = model.dynamic_status.get(p.parameter)
+        if p.value is None:
+            status = f"not identified: {model.not_identified.get(p.parameter, '')}".rstrip(": ")
+        elif dynamic is not None:
+            status = dynamic[0]
+        else:
+            status = "identified" if p.vary else "fixed"
+        rows[p.name] = (
+            model.laws.get(p.parameter),
+            p.value,
+            p.stderr,
+            p.unit,
+            value,
+            stderr,
+            unit,
+            p.vary,
+            status,
+        )
+    frame = pd.DataFrame.from_dict(rows, orient="index", columns=list(PARAMETER_COLUMNS))
+    frame.index.name = "parameter"
+    return frame
+
+
+def html_summary(model, title="FrictionModel") -> str:
+    """HTML for a notebook: the laws, a table of coefficients with units and standard
+    errors in engineering units, the operating-pressure rule and the validity ranges."""
+    import html
+
+    from ..escape import html_text
+
+    head = (
+        f"<b>{html.escape(title)}</b>: {html_text(model.friction_law)} friction law, "
+        f"operating pressure: {html_text(model.reference)} of the chamber pressures"
+    )
+    name = model.record.get("name")
+    if name:
+        head += f" &middot; datasheet <code>{html_text(name)}</code>"
+    laws = "".join(f"<div><code>{html_text(line)}</code></div>" for line in law_lines(model))
+    cells = []
+    for p in model.parameters.values():
+        value, stderr, unit = p.engineering()
+        if p.value is None:
+            reason = model.not_identified.get(p.parameter, "")
+            shown, error = "not identified", html_text(reason)
+        else:
+            shown = f"{value:.6g}"
+            error = "fixed" if not p.vary else ("" if stderr is None else f"{stderr:.3g}")
+        dynamic = model.dynamic_status.get(p.parameter)
+        if dynamic is not None and p.value is not None:
+            error = (error + " " if error else "") + f"({html_text(dynamic[0])})"
+        cells.append(
+            f"<tr><td style='text-align:left'><code>{html_text(p.name)}</code></td>"
+            f"<td>{shown}</td><td>{error}</td><td style='text-align:left'>"
+            f"{html_text(unit)}</td></tr>"
+        )
+    table = (
+        "<table><thead><tr><th>parameter</th><th>value</th><th>std. error</th>"
+        "<th>unit</th></tr></thead><tbody>" + "".join(cells) + "</tbody></table>"
+    )
+    validity = ""
+    if model.validity is not None:
+        val = model.validity
+        validity = (
+            f"<div>valid for {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} "
+            f"bar, {val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s</div>"
+        )
+    return f"<div>{head}</div>{laws}{table}{validity}"

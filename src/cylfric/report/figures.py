@@ -207,6 +207,74 @@ def figure_fit(ident):
 
 
 @_styled
+def figure_model(model, pressures=None, *, velocities=None, level=0.95, ax=None):
+    """A model alone: friction against speed (log axis) per pressure, with its band of the mean.
+
+    What :meth:`cylfric.model.FrictionModel.plot` draws. Takes any object with the
+    FrictionModel interface (``friction``, ``band``, ``validity``, ``covariance``); imports none.
+
+    Parameters
+    ----------
+    model : FrictionModel
+    pressures : sequence of float, optional
+        Operating pressures [Pa]; default three over the validity range (else 0, 50, 100 bar).
+    velocities : sequence of float, optional
+        Speeds [m/s]; default 120 on a log grid over the validity range (else 1-100 mm/s).
+    level : float
+        Confidence level of the band of the mean [-] (drawn when the model has a covariance).
+    ax : matplotlib Axes, optional
+        Axes to draw into; default a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import warnings
+
+    val = model.validity
+    if pressures is None:
+        low, high = (0.0, 100e5) if val is None else (val["pressure_min"], val["pressure_max"])
+        pressures = np.linspace(low, high, 3)
+    if velocities is None:
+        low, high = (1e-3, 0.1) if val is None else (val["velocity_min"], val["velocity_max"])
+        velocities = np.geomspace(max(low, 1e-5), max(high, 2 * max(low, 1e-5)), 120)
+    speeds = np.abs(np.asarray(velocities, dtype=float))
+    if ax is None:
+        fig = Figure(figsize=(7.5, 4.6))
+        ax = fig.subplots()
+        fig.subplots_adjust(left=0.1, right=0.98, bottom=0.11, top=0.9)
+    else:
+        fig = ax.figure
+    _log_speed_axis(ax)
+    banded = model.covariance is not None
+    colors = matplotlib.colormaps["viridis"](np.linspace(0.1, 0.85, max(len(pressures), 1)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # extrapolation warnings: the caller chose the grid
+        for p, color in zip(pressures, colors, strict=False):
+            pressure = np.full_like(speeds, float(p))
+            ax.plot(
+                speeds * 1e3,
+                model.friction(speeds, pressure),
+                "-",
+                color=color,
+                lw=1.4,
+                label=f"{float(p) / 1e5:.3g} bar",
+            )
+            if banded:
+                lower, upper = model.band(speeds, pressure, level)
+                ax.fill_between(speeds * 1e3, lower, upper, color=color, alpha=0.25, lw=0)
+    if banded:
+        ax.fill_between(
+            [], [], [], color="0.3", alpha=0.25, lw=0, label=f"{level:.0%} band of the mean"
+        )
+    ax.set_xlabel("speed |v| [mm/s]")
+    ax.set_ylabel("friction force F_f [N]")
+    ax.set_title(f"Steady-state friction ({model.friction_law} law, {model.reference} pressure)")
+    ax.legend(title="operating pressure", fontsize=7, loc="best")
+    return fig
+
+
+@_styled
 def figure_parameters(ident):
     """Fig. 4.2: per-pressure parameters with the fitted pressure laws and 95 % intervals."""
     table = ident.per_pressure
