@@ -429,6 +429,20 @@ def read_bench_arrays(
     return data, metadata
 
 
+def data_row_line(path, row: int) -> int | None:
+    """1-based line of the file holding data row ``row`` (0-based, over all segments).
+
+    The rows of :func:`read_bench_arrays` are the file's numeric lines in order; this maps a
+    sample index back to its line for an error message (None when out of range).
+    """
+    from ._scan import NUMERIC, scan_lines
+
+    raw = Path(path).read_bytes()
+    _, _, kinds = scan_lines(np.frombuffer(raw, dtype=np.uint8))
+    numeric = np.flatnonzero(kinds == NUMERIC)
+    return int(numeric[row]) + 1 if 0 <= row < numeric.size else None
+
+
 def _split_header(line: str, delim, ncols: int) -> list[str]:
     """Cells of a header row; whitespace rows may hold names with spaces or ``[unit]``."""
     cells = _split(line, delim)
