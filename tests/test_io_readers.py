@@ -279,3 +279,22 @@ def test_nul_bytes_past_64_kib_name_the_line(tmp_path):
     path.write_bytes(data[:70000] + b"\x00\x00" + data[70000:])
     with pytest.raises(BenchFileError, match=r"run.txt, line 7100: binary content \(NUL bytes\)"):
         read_bench_text(path)
+
+
+def test_reader_converts_its_own_columns_in_place_and_leaves_callers_values_alone(tmp_path):
+    """Issue 23 (memory): the SI columns of a one-segment file are views of the one parsed
+    block (no copy per column), and si_columns, given the caller's array, copies."""
+    import numpy as np
+
+    from cylfric.io.text import read_bench_arrays, si_columns
+
+    path = tmp_path / "run.txt"
+    path.write_text("Time\tPosition\tForce\ns\tmm\tkN\n0\t1.5\t0.25\n0.01\t2.5\t0.5\n")
+    data, _ = read_bench_arrays(path)
+    assert data["position [m]"].tolist() == [1.5e-3, 2.5e-3]
+    assert data["force [N]"].tolist() == [250.0, 500.0]
+    assert data["time [s]"].flags.c_contiguous and data["force [N]"].flags.c_contiguous
+    assert data["time [s]"].base is data["force [N]"].base is not None
+    values = np.array([[0.0, 1.5], [0.01, 2.5]])
+    si_columns(path, ["Time", "Position"], ["s", "mm"], values)
+    assert values.tolist() == [[0.0, 1.5], [0.01, 2.5]]

@@ -551,8 +551,19 @@ def simulate(
         "--sigma-0",
         help="Bristle stiffness (N/m); default: the model's (sigma_1 = sqrt(sigma_0 m) then).",
     ),
+    max_output_gib: float = typer.Option(
+        1.0,
+        "--max-output-gib",
+        help="Refuse (exit 2) before allocating when the outputs would exceed this many GiB "
+        "(samples every 1 ms x 8 signals x 8 bytes: 1 GiB is about 4.6 h simulated).",
+    ),
 ):
-    """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure."""
+    """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure.
+
+    Outputs every 1 ms; their size is estimated before the run and a simulation above
+    --max-output-gib (default 1 GiB) is refused with exit 2: shorten --duration or raise
+    the limit.
+    """
     import numpy as np
 
     from .friction.literature import LITERATURE
@@ -602,7 +613,14 @@ def simulate(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            result = run_simulation(Cylinder(m), friction, drives[drive](), t_end, pressure_a=p)
+            result = run_simulation(
+                Cylinder(m),
+                friction,
+                drives[drive](),
+                t_end,
+                pressure_a=p,
+                max_output_bytes=max_output_gib * 2**30,
+            )
         except ValueError as exc:  # e.g. a law extrapolated below 0 outside its validity
             named = str(exc).startswith(model) or not Path(model).is_file()
             raise BadInput(str(exc) if named else f"{model}: {exc}") from None

@@ -36,6 +36,13 @@ def register(app) -> None:
             "--validate",
             help="A second record: replay the identified model in the [validation] servo loop.",
         ),
+        accept_implausible: bool = typer.Option(
+            False,
+            "--accept-implausible",
+            help="Write a fit the plausibility gates flag (a unit off by 1000, a negative "
+            "mass, friction above the recorded forces) instead of stopping with exit 2; the "
+            "flags go into motion_fit.json.",
+        ),
     ):
         """Identify mass, viscous and Coulomb friction and offset from a motion record.
 
@@ -43,15 +50,22 @@ def register(app) -> None:
         differences, decimated regression, least squares; then, when pressures are recorded,
         a refinement to the pressure-dependent Stribeck model. Writes motion_fit.json,
         motion_signals.csv and motion_fit.png (datasheet.json for a refined model).
+
+        Refused with exit 2, nothing written: a used signal holding NaN or inf (the message
+        names the channel, the sample and, in a text record, the line), and a fit the
+        plausibility gates flag (stroke over 20 m or speed over 20 m/s: a position in mm read
+        as m; a negative mass or one the record's forces and accelerations cannot support;
+        friction above the largest recorded force). Fix the units (motion.toml [units], the
+        record's header) or give --accept-implausible to write it with its flags.
         """
         drawer = _Drawer()  # first: a forked child imports matplotlib meanwhile
         try:
-            _run(record, config, out, per_direction, validate, drawer)
+            _run(record, config, out, per_direction, validate, drawer, accept_implausible)
         finally:
             drawer.close()
 
 
-def _run(record, config, out, per_direction, validate, drawer):
+def _run(record, config, out, per_direction, validate, drawer, accept_implausible=False):
     import hashlib
     import json
 
@@ -74,6 +88,13 @@ def _run(record, config, out, per_direction, validate, drawer):
     settings = load_motion_config(config)
     data = read_motion_record(record, settings)
     fit = fit_motion(data, settings, per_direction=per_direction)
+    if fit.flags and not accept_implausible:
+        listed = "; ".join(flag.summary() for flag in fit.flags)
+        hints = " ".join(dict.fromkeys(flag.hint for flag in fit.flags))
+        raise BadInput(
+            f"{record}: implausible fit, nothing written: {listed}. {hints} To write it "
+            "anyway, with these flags in motion_fit.json, give --accept-implausible."
+        )
     replay = None
     if validate is not None:
         from ..identify.motion_validation import validate_on_record
@@ -335,6 +356,7 @@ def _draw_validation(d) -> bytes:
 
 
 def _print_summary(fit, replay, out) -> None:
+    from rich.markup import escape
     from rich.table import Table
 
     from ..identify.motion import PARAMETER_UNITS
@@ -345,6 +367,8 @@ def _print_summary(fit, replay, out) -> None:
     for name, value in fit.parameters.items():
         table.add_row(name, f"{value:.5g}", f"{fit.stderr[name]:.2g}", PARAMETER_UNITS[name])
     console.print(table)
+    for flag in fit.flags:  # only with --accept-implausible
+        console.print(f"[yellow]implausible:[/yellow] {escape(str(flag))}")
     console.print(
         f"relative force error {100 * fit.relative_error:.2f} % "
         f"(RMS {fit.rmse:.3g} N over {fit.settings['regression_samples']} decimated samples)"

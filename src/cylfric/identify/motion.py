@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..model import PARAMETER_BOUNDS, FrictionModel
+from .motion_plausibility import check_plausibility
 
 __all__ = [
     "MotionFit",
@@ -188,6 +189,11 @@ class MotionFit:
     joint : dict or None
         Per direction: the joint fit's ``{name: (value, stderr)}`` (``mass``, ``F_v``,
         ``F_c``, ``offset``).
+    flags : tuple of PlausibilityFlag
+        Implausible magnitudes (:mod:`cylfric.identify.motion_plausibility`): a unit off by
+        1000, a negative or unsupported mass, friction above the forces recorded. Empty for
+        a plausible fit; ``cylfric fit-motion`` refuses a flagged fit unless told
+        ``--accept-implausible``.
     """
 
     parameters: dict
@@ -201,6 +207,7 @@ class MotionFit:
     refinement: PressureRefinement | None = None
     notes: tuple = field(default=())
     joint: dict | None = None
+    flags: tuple = field(default=())
 
     def predict(self, velocity, acceleration):
         """Force [N] of the identified IDIM at velocity [m/s] and acceleration [m/s^2]."""
@@ -238,6 +245,7 @@ class MotionFit:
             "rmse [N]": self.rmse,
             "settings": dict(self.settings),
             "notes": list(self.notes),
+            "plausibility": [flag.to_dict() for flag in self.flags],
             "refinement": None,
         }
         if self.joint is not None:
@@ -287,7 +295,7 @@ def _names(per_direction):
     return ("mass", "F_v", "F_c", "offset")
 
 
-def fit_motion(record, config=None, *, per_direction=False):
+def fit_motion(record, config=None, *, per_direction=False, plausibility=None):
     """Identify mass, viscous and Coulomb friction and offset from a logged motion (IDIM-LS).
 
     Parameters
@@ -300,18 +308,25 @@ def fit_motion(record, config=None, *, per_direction=False):
         Butterworth, decimation 10, 50 border samples).
     per_direction : bool
         Split F_v and F_c by the sign of the velocity.
+    plausibility : dict, optional
+        Overrides of the limits of the plausibility gates
+        (:data:`cylfric.identify.motion_plausibility.LIMITS`, e.g. ``{"max_stroke": 50.0}``
+        [m]).
 
     Returns
     -------
     MotionFit
-        Parameters with standard errors, relative force error, regression signals and, when
-        the record has pressures, the refined pressure-dependent model.
+        Parameters with standard errors, relative force error, regression signals, the
+        plausibility ``flags`` and, when the record has pressures, the refined
+        pressure-dependent model.
 
     Raises
     ------
     ValueError
-        Too short a record for the decimation, a cut-off above the Nyquist frequency, no
-        motion (or none in one direction with ``per_direction``), a singular regression.
+        A signal holding NaN or inf (naming it and the first sample index), too short a
+        record for the decimation, a cut-off above the Nyquist frequency, no motion (or none
+        in one direction with ``per_direction``), a singular regression, an unknown
+        plausibility limit.
     """
     from scipy import signal
 
@@ -326,6 +341,7 @@ def fit_motion(record, config=None, *, per_direction=False):
         record = read_motion_record(record, config)
     if config is None:
         config = MotionConfig(signals={})
+    _check_finite(record)
     time, force = record.time, record.force
     step = float(np.median(np.diff(time)))
     r, border = config.decimation, config.border
@@ -416,6 +432,7 @@ def fit_motion(record, config=None, *, per_direction=False):
             "force_scale": record.force_scale,
         },
     )
+    fit = replace(fit, flags=check_plausibility(fit, record.position, **(plausibility or {})))
     if record.pressure_a is None and record.pressure_b is None:
         return fit
     refinement = refine_pressure_model(
@@ -426,6 +443,21 @@ def fit_motion(record, config=None, *, per_direction=False):
         pressure_b=record.pressure_b,
     )
     return replace(fit, refinement=refinement)
+
+
+def _check_finite(record):
+    """Refuse a record (also one built in Python) holding NaN or inf in a signal it uses."""
+    for name in ("time", "position", "force", "pressure_a", "pressure_b"):
+        values = getattr(record, name)
+        if values is None:
+            continue
+        bad = np.flatnonzero(~np.isfinite(np.asarray(values, dtype=float)))
+        if bad.size:
+            raise ValueError(
+                f"{record.file}: the {name} signal holds {values[bad[0]]} at sample "
+                f"{int(bad[0])} ({bad.size} non-finite samples); expected finite numbers: "
+                "remove or interpolate the gap (or cut the record) before the identification"
+            )
 
 
 def _least_squares(W, F, file, names):

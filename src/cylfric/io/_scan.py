@@ -133,13 +133,16 @@ def _parse_number(buf, i, end, decimal):
 def parse_block(buf, starts, ends, lines, ncols, sep, decimal):
     """Parse ``lines`` (indices of numeric lines) into an (n, ncols) float array.
 
+    The array is column-major (the transpose of an (ncols, n) block): each column is one
+    contiguous vector, so the reader converts and hands out columns without copies.
     ``sep`` is the separator byte, 0 for runs of whitespace. Returns
     ``(values, bad_line, code, field)``: ``bad_line`` is -1 when all lines parsed, else the
     index of the first bad line with ``code`` 1 (wrong field count; ``field`` = fields found)
     or 2 (not a number; ``field`` = 0-based field).
     """
     n = lines.shape[0]
-    out = np.empty((n, ncols))
+    block = np.empty((ncols, n))
+    out = block.T
     for r in range(n):
         line = lines[r]
         i = starts[line]
@@ -163,7 +166,7 @@ def parse_block(buf, starts, ends, lines, ncols, sep, decimal):
             value, j, ok = _parse_number(buf, i, end, decimal)
             if not ok:
                 return out[:0], line, 2, col
-            out[r, col] = value
+            block[col, r] = value
             col += 1
             i = j
             while i < end and _is_space(buf[i]) and buf[i] != sep:

@@ -374,6 +374,23 @@ class MotionRecord:
     file: str
 
 
+def _non_finite(path, name, role, values, bad, is_mat) -> BenchFileError:
+    """The error for non-finite samples: file, channel, first sample index (and its line in
+    a text record), how many there are, and what to do."""
+    from .text import data_row_line
+
+    first = int(bad[0])
+    where = f"sample {first}" + ("" if is_mat else f" (data row {first + 1})")
+    return BenchFileError(
+        path,
+        f"{name} ({role}) holds {values[first]} at {where}"
+        + (f" and {bad.size - 1} more non-finite samples" if bad.size > 1 else "")
+        + "; expected finite numbers in every sample: remove or interpolate the gap (or "
+        "cut the record) before the identification",
+        line=None if is_mat else data_row_line(path, first),
+    )
+
+
 def _strip_unit(name: str) -> str:
     return name.rsplit(" [", 1)[0] if name.endswith("]") and " [" in name else name
 
@@ -397,7 +414,8 @@ def read_motion_record(path, config: MotionConfig) -> MotionRecord:
     BenchFileError
         A named variable missing from the record (naming the key and its line in
         motion.toml and listing the variables found), signals of different lengths, non-finite
-        values, time not increasing or not uniformly sampled.
+        samples (NaN, inf: naming the channel, the first sample index and, in a text record,
+        its line), time not increasing or not uniformly sampled.
     """
     from .matfile import read_mat
     from .text import read_bench_text
@@ -430,8 +448,9 @@ def read_motion_record(path, config: MotionConfig) -> MotionRecord:
                 f"{table}.{role} = {name!r} is not a variable of {path.name}; found {found}{extra}",
             )
         values = variables[name]
-        if not np.all(np.isfinite(values)):
-            raise BenchFileError(path, f"{name} ({role}) has NaN or infinite values")
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise _non_finite(path, name, role, values, bad, is_mat)
         return values
 
     def scale(role, value, table):

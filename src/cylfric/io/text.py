@@ -290,10 +290,14 @@ def read_bench_arrays(
     # it: cylfric fit forks its extraction child before numba is imported
     from ._scan import NUMERIC, TEXT, parse_block, scan_lines
 
+    sha256 = hashlib.sha256(raw).hexdigest()
     buf = np.frombuffer(raw, dtype=np.uint8)
     starts, ends, kinds = scan_lines(buf)
     text_idx = np.flatnonzero(kinds == TEXT)
     data_idx = np.flatnonzero(kinds == NUMERIC)
+    del kinds
+    if buf.size < 2**31:  # line offsets and indices in 32 bits: half the index of a big file
+        starts, ends, data_idx = (a.astype(np.int32) for a in (starts, ends, data_idx))
     if text_idx.size > _MAX_TEXT_LINES and text_idx.size > data_idx.size:
         raise BenchFileError(
             path,
@@ -413,20 +417,38 @@ def read_bench_arrays(
             raise BenchFileError(path, message, line=int(bad) + 1)
         frames.append((seg, hdr, values, int(run[0]) + 1))
 
-    data, col_units = _assemble(frames, path, roles or {})
+    names = blocks[0][2].names
+    # the bytes and the line index are done with: let them go before the columns are
+    # assembled (peak memory about the file plus its numbers, not twice that)
+    raw = buf = starts = ends = data_idx = text_idx = runs = run = blocks = None
+    data, col_units = _assemble(frames, path, roles or {}, own=True)
     metadata = {
         "file": str(path),
         "header": header_meta,
-        "columns": blocks[0][2].names,
+        "columns": names,
         "units": col_units,
         "delimiter": {None: "whitespace"}.get(delim, delim),
         "decimal": decimal,
         "events": events,
         "rows": int(len(data["segment [-]"])),
         "segments": len(frames),
-        "sha256": hashlib.sha256(raw).hexdigest(),
+        "sha256": sha256,
     }
     return data, metadata
+
+
+def data_row_line(path, row: int) -> int | None:
+    """1-based line of the file holding data row ``row`` (0-based, over all segments).
+
+    The rows of :func:`read_bench_arrays` are the file's numeric lines in order; this maps a
+    sample index back to its line for an error message (None when out of range).
+    """
+    from ._scan import NUMERIC, scan_lines
+
+    raw = Path(path).read_bytes()
+    _, _, kinds = scan_lines(np.frombuffer(raw, dtype=np.uint8))
+    numeric = np.flatnonzero(kinds == NUMERIC)
+    return int(numeric[row]) + 1 if 0 <= row < numeric.size else None
 
 
 def _split_header(line: str, delim, ncols: int) -> list[str]:
@@ -548,8 +570,12 @@ def si_columns(path, names, units, values, roles=None):
     return _assemble([(0, hdr, np.asarray(values, dtype=float), 1)], Path(path), roles or {})
 
 
-def _assemble(frames, path, roles):
-    """Convert blocks to SI, name columns canonically, concatenate with a segment column."""
+def _assemble(frames, path, roles, own=False):
+    """Convert blocks to SI, name columns canonically, concatenate with a segment column.
+
+    ``own``: the blocks are the reader's own arrays, converted in place (no copy); else the
+    caller's values are left alone.
+    """
     parts = []
     col_units = {}
     lines = []
@@ -585,7 +611,12 @@ def _assemble(frames, path, roles):
                 key = f"{quantity} [{SI_UNITS[dim]}]"
                 if key in cols:
                     key = f"{name} [{SI_UNITS[dim]}]"
-                cols[key] = to_si(values[:, j], unit, dim)
+                if own:
+                    column = values[:, j]
+                    column *= to_si(1.0, unit, dim)  # a unit is a factor (units.to_si)
+                    cols[key] = column
+                else:
+                    cols[key] = to_si(values[:, j], unit, dim)
                 col_units[quantity] = unit
             else:
                 cols[f"{name} [{unit or '-'}]"] = values[:, j]

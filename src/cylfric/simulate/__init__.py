@@ -2,6 +2,7 @@
 
 from .plant import (
     DEFAULT_FIXED_STEP,
+    MAX_OUTPUT_BYTES,
     THESIS_CYLINDER,
     AppliedForce,
     BatchResult,
@@ -28,4 +29,5 @@ __all__ = [
     "BatchResult",
     "THESIS_CYLINDER",
     "DEFAULT_FIXED_STEP",
+    "MAX_OUTPUT_BYTES",
 ]

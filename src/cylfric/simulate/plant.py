@@ -40,7 +40,17 @@ __all__ = [
     "simulate",
     "THESIS_CYLINDER",
     "DEFAULT_FIXED_STEP",
+    "MAX_OUTPUT_BYTES",
+    "output_bytes",
 ]
+
+MAX_OUTPUT_BYTES = 2**30
+"""Default limit [bytes] (1 GiB) of the arrays a simulation allocates for its outputs (and
+for a batch also its full-rate input rows); raise it with ``max_output_bytes=``."""
+
+OUTPUT_ARRAYS = 8
+"""Arrays of a :class:`SimulationResult` on the output grid: time, position, velocity, z,
+friction_force, drive_force, pressure_a, pressure_b."""
 
 DEFAULT_FIXED_STEP = 1e-4
 """Default internal step of the ``"fixed"`` integrator [s]: reaches RMS(F - F_ref)/F_c <= 1e-4
@@ -249,6 +259,7 @@ def simulate(
     v0: float = 0.0,
     z0: float = 0.0,
     strict: bool = False,
+    max_output_bytes: float = MAX_OUTPUT_BYTES,
 ) -> SimulationResult:
     """Simulate the cylinder over ``duration`` [s], with outputs every ``dt`` [s].
 
@@ -284,11 +295,29 @@ def simulate(
         leave the model's validity range or look like bar given as Pa (before the run), or
         when the simulated speed leaves its validity speeds (after the run; the result is
         then not returned).
+    max_output_bytes : float
+        Limit of the outputs' size [bytes] (default :data:`MAX_OUTPUT_BYTES`, 1 GiB), checked
+        before anything is allocated: (duration / dt + 1) samples x 8 arrays x 8 bytes. The
+        integrators' working arrays add up to about as much again.
 
     Returns
     -------
     SimulationResult
+
+    Raises
+    ------
+    ValueError
+        Bad arguments; outputs larger than ``max_output_bytes`` (the message gives the
+        estimated size, the limit and the ways out: a coarser ``dt``, a shorter
+        ``duration`` or a higher limit).
     """
+    n = _output_samples(duration, dt)
+    if n is not None:
+        _check_output_size(
+            output_bytes(n), max_output_bytes, f"{n:.4g} samples (duration {duration:g} s "
+            f"every dt = {dt:g} s) x {OUTPUT_ARRAYS} arrays x 8 bytes", "a coarser output grid "
+            "(a larger dt) or a shorter duration",
+        )  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = _simulate(
@@ -358,6 +387,36 @@ def _batch_validity(models, what: str, values, strict: bool):
     if strict:
         raise ValueError(message)
     warnings.warn(message, ValidityWarning, stacklevel=3)
+
+
+def output_bytes(samples: int, arrays: int = OUTPUT_ARRAYS) -> int:
+    """Size [bytes] of ``arrays`` float64 arrays of ``samples`` samples."""
+    return int(samples) * int(arrays) * 8
+
+
+def _output_samples(duration, dt):
+    """Samples of the output grid, or None when the arguments are invalid (the body of the
+    simulation refuses them with its own message)."""
+    try:
+        if 0 < dt <= duration < math.inf:
+            return int(round(duration / dt)) + 1
+    except TypeError:
+        pass
+    return None
+
+
+def _check_output_size(size, limit, how, ways_out):
+    """Refuse, before allocating, outputs above ``limit`` bytes; ``how`` says how the
+    estimate came about, ``ways_out`` how to make it smaller."""
+    if not limit > 0:
+        raise ValueError(f"max_output_bytes = {limit}; expected a size > 0 bytes")
+    if size <= limit:
+        return
+    raise ValueError(
+        f"the simulation would allocate about {size / 2**30:.3g} GiB of outputs ({how}), above "
+        f"the limit of {limit / 2**30:.3g} GiB; use {ways_out}, or raise the limit "
+        "(max_output_bytes= in Python, --max-output-gib on the command line)"
+    )
 
 
 def _simulate(
@@ -746,6 +805,7 @@ def simulate_batch(
     x0: float = 0.0,
     v0: float = 0.0,
     strict: bool = False,
+    max_output_bytes: float = MAX_OUTPUT_BYTES,
 ) -> BatchResult:
     """Simulate many heterogeneous sets at once on all cores (sweeps, Monte Carlo).
 
@@ -778,12 +838,23 @@ def simulate_batch(
         Raise instead of warning (:class:`cylfric.model.ValidityWarning`, one warning for
         all sets) when a set's pressure leaves its model's validity pressures (before the
         run) or its recorded speed leaves the validity speeds (after it).
+    max_output_bytes : float
+        Limit [bytes] (default :data:`MAX_OUTPUT_BYTES`, 1 GiB), checked before anything is
+        allocated, of the recorded outputs (sets x 5 signals x records x 8 bytes) plus the
+        full-rate input rows (3 per distinct non-spring drive, and one shared, x samples x
+        8 bytes).
 
     Returns
     -------
     BatchResult
         ``batch[i]`` is set i as the :class:`SimulationResult` of :func:`simulate` (on the
         record grid).
+
+    Raises
+    ------
+    ValueError
+        Bad arguments; outputs and inputs larger than ``max_output_bytes`` (the message
+        gives the estimated size, the limit and the ways out).
     """
     rtol = ROSENBROCK_RTOL if rtol is None else rtol
     if not (0 < rtol < 1):
@@ -824,6 +895,16 @@ def simulate_batch(
             f"duration = {duration} s, record_every = {record_every}"
         )
     n = int(round(duration / dt)) + 1
+    records = -(-n // int(record_every))
+    input_rows = 1 + len({id(d) for d in drives if not isinstance(d, SpringPull)})
+    _check_output_size(
+        output_bytes(records, 5 * n_sets) + output_bytes(n, 3 * input_rows + 1),
+        max_output_bytes,
+        f"{n_sets} sets x 5 signals x {records:.4g} records, plus {3 * input_rows + 1} "
+        f"input rows x {n:.4g} samples (duration {duration:g} s every dt = {dt:g} s), "
+        "x 8 bytes",
+        "a larger dt or record_every, a shorter duration or fewer sets",
+    )
     time = np.arange(n) * dt
     # input signals: springs pulled at constant speed share one zero row (their ramp is a
     # per-set number); other drives get one row per distinct drive object
