@@ -74,10 +74,12 @@ def guarded(command):
                 traceback.print_exc()
             err_console.print(f"error: {exc}", markup=False, highlight=False, soft_wrap=True)
             raise typer.Exit(BAD_INPUT_EXIT) from None
-        except OSError as exc:
-            err_console.print(
-                f"error: {exc.filename or ''}: {exc.strerror}", markup=False, soft_wrap=True
-            )
+        except OSError as exc:  # the file, the action when known, the system's reason
+            from ._paths import os_error_message
+
+            if STATE["debug"]:
+                traceback.print_exc()
+            err_console.print(f"error: {os_error_message(exc)}", markup=False, soft_wrap=True)
             raise typer.Exit(BAD_INPUT_EXIT) from None
         except Exception as exc:  # noqa: BLE001 - the contract: never a bare traceback
             if STATE["debug"]:
@@ -378,8 +380,10 @@ def demo(
 
     Writes the raw files to OUT/campaign (regenerated on every run) and the fit to OUT/fit.
     """
+    from ._paths import refuse_link
     from .simulate.bench import BenchSettings, generate_campaign
 
+    refuse_link(out)  # a symbolic link is refused (exit 2), not written through
     settings = BenchSettings(seed=seed)
     campaign = out / "campaign"
     n = len(settings.pressures_bar) * len(settings.speeds_mm_s)
@@ -473,6 +477,9 @@ def generate(
     ),
 ):
     """Virtual test bench: write a campaign of raw files and manifest.csv."""
+    from ._paths import refuse_link
+
+    refuse_link(out_dir, "OUT_DIR")  # a symbolic link is refused, not written through
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())) and not force:
         raise BadInput(
             f"{out_dir} is not empty; generate writes raw files and manifest.csv that would "
@@ -570,6 +577,9 @@ def simulate(
         friction = friction.replace(sigma_0=s0, sigma_1=math.sqrt(s0 * m))
     if not (m > 0 and k > 0 and t_end > 0):
         raise BadInput("--mass, --stiffness and --duration must be > 0")
+    from ._paths import make_folder, refuse_link
+
+    refuse_link(out)  # before the simulation: a symbolic link is refused, not written through
     params = friction.params_at(friction.operating_pressure(p))
     drives = {
         "spring": lambda: SpringPull(k, v),
@@ -590,7 +600,7 @@ def simulate(
     for note in dict.fromkeys(str(w.message) for w in caught):
         console.print(f"[yellow]note:[/yellow] {note}")
     frame = result.to_pandas()
-    out.mkdir(parents=True, exist_ok=True)
+    make_folder(out)
     atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))
     import matplotlib.pyplot as plt
 

@@ -385,9 +385,10 @@ def _normal_quantile(q):
 
 def write_drift(table, out) -> Path:
     """Write ``drift.csv`` into ``out`` (atomically) and a JSON summary; returns the CSV path."""
+    from ._paths import make_folder
     from .io.writers import atomic_write_text
 
-    out = Path(out)
+    out = make_folder(out)  # a symbolic link is refused, not written through
     path = atomic_write_text(out / "drift.csv", table.to_csv(index=False))
     friction = table[table["kind"] == "friction"]
     summary = {

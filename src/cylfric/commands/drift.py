@@ -58,7 +58,9 @@ def register(app) -> None:
             if path is not None and not path.exists():
                 raise BadInput(f"{path}: not found; expected a datasheet.json or a fit folder")
         if out is not None:
-            out.mkdir(parents=True, exist_ok=True)
+            from .._paths import make_folder
+
+            make_folder(out)  # a symbolic link is refused (exit 2), not written through
         if b is None:
             if _trend(a, a.stem if a.is_file() else a.name, out, order, campaign) is None:
                 raise BadInput(
