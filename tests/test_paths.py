@@ -200,3 +200,28 @@ def test_folder_targets_refuse_a_file_out(datasheet, tmp_path):
     result = runner.invoke(app, ["export", str(datasheet), "--to", "matlab", "--out", str(path)])
     assert result.exit_code == 2 and "is a file; expected a folder" in result.output
     assert path.read_text() == "% mine\n"
+
+
+@pytest.mark.parametrize(
+    ("glob", "problem"),
+    [("/data/runs/*.txt", "is absolute"), ("C:/runs/*.txt", "is absolute"),
+     ("../other/*.txt", "climbs out"), ("runs/../../*.txt", "climbs out")],
+)
+def test_a_glob_outside_the_campaign_is_refused_with_its_line(glob, problem, campaigns,
+                                                               tmp_path):
+    folder = tmp_path / "campaign"
+    folder.mkdir()
+    for path in (campaigns / "rig1").iterdir():
+        (folder / path.name).write_bytes(path.read_bytes())
+    (folder / "campaign.toml").write_text(f'# runs\n[files]\nglob = "{glob}"\n')
+    result = runner.invoke(app, ["fit", str(folder), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2, result.output
+    message = " ".join(result.output.split())
+    assert f"campaign.toml, line 3: files.glob = '{glob}' {problem}" in message
+    assert "relative to it" in message and "Traceback" not in result.output
+
+
+def test_a_command_line_glob_outside_the_campaign_is_refused(campaigns, tmp_path):
+    result = runner.invoke(app, ["fit", str(campaigns / "rig1"), "--glob", "/tmp/*.txt",
+                                 "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2 and "--glob = '/tmp/*.txt' is absolute" in result.output

@@ -242,13 +242,13 @@ def run_fit(
     viscosity_correction=None,
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
-    from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config
+    from .io.campaign import DYNAMIC_TESTS, check_glob, discover_runs, load_config
     from .pipeline import fit_campaign
 
     fixed = _fixed(list(fix))
     config = load_config(campaign)
     if glob is not None:
-        config = dataclasses.replace(config, glob=glob)
+        config = dataclasses.replace(config, glob=check_glob(glob, campaign, key="--glob"))
     n_files = sum(  # the constant-velocity runs the bar counts (not presliding/breakaway tests)
         str(info.extra.get("test", "")).strip().lower() not in DYNAMIC_TESTS
         for info in discover_runs(campaign, config)
