@@ -166,7 +166,12 @@ def fit_one(folder, out, name, options, started=None) -> dict:
             },
         )
     except Exception as exc:  # noqa: BLE001 - a failing campaign is reported, not fatal
-        reason = str(exc).replace("\n", " ")
+        if isinstance(exc, OSError):  # the file and the action, as the command line says it
+            from ._paths import os_error_message
+
+            reason = os_error_message(exc)
+        else:
+            reason = str(exc).replace("\n", " ")
         if not isinstance(exc, ValueError | OSError):
             reason = f"unexpected {type(exc).__name__}: {reason}"
         row.update(status="failed", reason=reason, **{"runs [-]": None, "excluded [-]": None})
