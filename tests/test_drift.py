@@ -232,3 +232,74 @@ def test_viscosity_correction_lets_runs_at_two_temperatures_be_identified_as_one
         viscosity_corrected(points, oil=OIL_VG46, reference_temperature=40.0)
     same = viscosity_corrected(points, oil=OIL_VG46, reference_temperature=t_ref, temperature=t_ref)
     assert_allclose(same["velocity [m/s]"], points["velocity [m/s]"], rtol=1e-12)
+
+
+# Issue 23, item 7: datasheets whose laws differ are compared only where that is exact.
+
+
+def _quadratic_fc(model: FrictionModel) -> FrictionModel:
+    """``model`` with F_c a quadratic law of pressure: the same values at 0 and its slope at
+    0, plus a small curvature [N/Pa^2] (made up)."""
+    coefficients = model.coefficients(include_dynamic=False)
+    linear = coefficients["F_c"]
+    coefficients["F_c"] = {"law": "quadratic", "intercept": linear["intercept"],
+                           "slope": linear["slope"], "curvature": 1e-14}
+    return model.replace(coefficients=coefficients)  # the covariance of _model kept
+
+
+def test_different_pressure_laws_compare_only_the_friction_and_say_why(tmp_path):
+    a, b = _model(), _quadratic_fc(_model())
+    table = drift(a, b, n=3)
+    compared = set(table[table["kind"] == "parameter"]["quantity"])
+    assert not any(name.startswith("F_c") for name in compared)  # intercept/slope: other meaning
+    assert "F_s.intercept" in compared  # same law in both: still compared
+    assert len(table[table["kind"] == "friction"]) == 9
+    (note,) = table.attrs["notes"]
+    assert "pressure laws of F_c differ" in note and "linear" in note and "quadratic" in note
+    write_drift(table, tmp_path)
+    assert json.loads((tmp_path / "drift.json").read_text())["notes"] == [note]
+
+
+def test_different_friction_laws_compare_no_coefficient():
+    a = _model()
+    coefficients = a.coefficients(include_dynamic=False)
+    reduced = FrictionModel(
+        {"F_c": coefficients["F_c"], "F_s": None, "sigma_2": coefficients["sigma_2"],
+         "v_r": None, "alpha": None},
+        friction_law="coulomb_viscous", validity=VALIDITY,
+    )
+    table = drift(a, reduced, n=2)
+    assert (table["kind"] == "friction").all() and len(table) == 4
+    assert "friction laws differ" in table.attrs["notes"][0]
+    # the friction values are each model's own: at (v, p) they mean the same under any law
+    v, p = table["velocity [m/s]"].to_numpy(), table["pressure [Pa]"].to_numpy()
+    assert_allclose(table["b"], reduced.friction(v, p), rtol=1e-12)
+
+
+def test_different_pressure_references_are_refused_naming_both(tmp_path):
+    first, second = tmp_path / "a.json", tmp_path / "b.json"
+    first.write_text(json.dumps(_model().to_datasheet()))
+    second.write_text(json.dumps(_model().replace(reference="sum").to_datasheet()))
+    with pytest.raises(ValueError, match=r"a\.json and .*b\.json have different pressure "
+                                         r"references .*'mean'.*'sum'"):
+        drift(first, second)
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    result = CliRunner().invoke(app, ["drift", str(first), str(second)])
+    assert result.exit_code == 2 and "different pressure references" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_the_command_prints_the_note(tmp_path):
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    first, second = tmp_path / "a.json", tmp_path / "b.json"
+    first.write_text(json.dumps(_model().to_datasheet()))
+    second.write_text(json.dumps(_quadratic_fc(_model()).to_datasheet()))
+    result = CliRunner().invoke(app, ["drift", str(first), str(second)])
+    assert result.exit_code == 0, result.output
+    assert "note: pressure laws of F_c differ" in " ".join(result.output.split())

@@ -14,22 +14,44 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_bytes", "atomic_write_text"]
+from ._paths import OutputPathError, failed, os_error_message, refuse_link
+
+__all__ = ["atomic_write_bytes", "atomic_write_text", "failed", "os_error_message"]
 
 _UMASK = os.umask(0o022)
 os.umask(_UMASK)  # read once at import: mkstemp makes 0600 files, outputs get 0666 & ~umask
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` through a temporary file and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    """Write ``data`` to ``path`` through a temporary file and a rename.
+
+    Raises OutputPathError (a ValueError) when ``path`` is a symbolic link, and OSError
+    naming ``path`` and the action (see the module docstring) when the write fails.
+    """
+    path = refuse_link(path, "output file")
+    if path.exists() and not path.is_file() and not path.is_dir():
+        raise OutputPathError(
+            f"output file {path} is not a regular file (a device, pipe or socket); cylfric "
+            "writes a new file and renames it over the old one, which would replace it: "
+            "choose the path of a regular file"
+        )
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        folder = exc.filename or path.parent
+        raise failed(exc, f"writing {path}: creating the folder", folder) from exc
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise failed(exc, "writing", path) from exc
     try:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
         os.chmod(tmp, 0o666 & ~_UMASK)
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise failed(exc, "writing", path) from exc
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

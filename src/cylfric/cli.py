@@ -79,9 +79,13 @@ def guarded(command):
                 soft_wrap=True,
             )
             raise typer.Exit(BAD_INPUT_EXIT) from None
-        except OSError as exc:
+        except OSError as exc:  # the file, the action when known, the system's reason
+            from ._paths import os_error_message
+
+            if STATE["debug"]:
+                traceback.print_exc()
             err_console.print(
-                terminal(f"error: {exc.filename or ''}: {exc.strerror}", markup=False),
+                terminal(f"error: {os_error_message(exc)}", markup=False),
                 markup=False,
                 soft_wrap=True,
             )
@@ -249,13 +253,13 @@ def run_fit(
     viscosity_correction=None,
 ):
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
-    from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config
+    from .io.campaign import DYNAMIC_TESTS, check_glob, discover_runs, load_config
     from .pipeline import fit_campaign
 
     fixed = _fixed(list(fix))
     config = load_config(campaign)
     if glob is not None:
-        config = dataclasses.replace(config, glob=glob)
+        config = dataclasses.replace(config, glob=check_glob(glob, campaign, key="--glob"))
     n_files = sum(  # the constant-velocity runs the bar counts (not presliding/breakaway tests)
         str(info.extra.get("test", "")).strip().lower() not in DYNAMIC_TESTS
         for info in discover_runs(campaign, config)
@@ -394,8 +398,10 @@ def demo(
 
     Writes the raw files to OUT/campaign (regenerated on every run) and the fit to OUT/fit.
     """
+    from ._paths import refuse_link
     from .simulate.bench import BenchSettings, generate_campaign
 
+    refuse_link(out)  # a symbolic link is refused (exit 2), not written through
     settings = BenchSettings(seed=seed)
     campaign = out / "campaign"
     n = len(settings.pressures_bar) * len(settings.speeds_mm_s)
@@ -490,6 +496,9 @@ def generate(
     ),
 ):
     """Virtual test bench: write a campaign of raw files and manifest.csv."""
+    from ._paths import refuse_link
+
+    refuse_link(out_dir, "OUT_DIR")  # a symbolic link is refused, not written through
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())) and not force:
         raise BadInput(
             f"{out_dir} is not empty; generate writes raw files and manifest.csv that would "
@@ -600,6 +609,9 @@ def simulate(
         friction = friction.replace(sigma_0=s0, sigma_1=math.sqrt(s0 * m))
     if not (m > 0 and k > 0 and t_end > 0):
         raise BadInput("--mass, --stiffness and --duration must be > 0")
+    from ._paths import make_folder, refuse_link
+
+    refuse_link(out)  # before the simulation: a symbolic link is refused, not written through
     params = friction.params_at(friction.operating_pressure(p))
     drives = {
         "spring": lambda: SpringPull(k, v),
@@ -627,7 +639,7 @@ def simulate(
     for note in dict.fromkeys(str(w.message) for w in caught):
         console.print(f"[yellow]note:[/yellow] {terminal(note)}")
     frame = result.to_pandas()
-    out.mkdir(parents=True, exist_ok=True)
+    make_folder(out)
     atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))
     import matplotlib.pyplot as plt
 

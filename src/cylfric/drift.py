@@ -109,6 +109,23 @@ def drift(a, b, *, pressures=None, velocities=None, n=5, level=0.95):
         (``kind`` = ``"friction"``): ``quantity``, ``unit``, ``velocity [m/s]``,
         ``pressure [Pa]`` (NaN for coefficients), ``a``, ``b``, ``change``, ``stderr``
         (of the change), ``z [-]`` and ``significant``. SI units (``unit``).
+        ``attrs["notes"]`` says which coefficients were left out and why.
+
+    Raises
+    ------
+    ValueError
+        The two datasheets' pressure laws see different pressures (``reference``: chamber
+        A, B, their sum, mean or maximum): the same operating pressure is then a different
+        state of the cylinder and nothing compares; the message names both and their
+        references.
+
+    Notes
+    -----
+    Coefficients are compared only where they mean the same thing: both datasheets have
+    the same friction law (``stribeck``, ``coulomb_viscous``, ``coulomb``) and the
+    parameter has the same pressure law (``linear``, ``quadratic``, ...). Otherwise only
+    the friction at the operating points is compared (a force at a velocity and an
+    operating pressure is the same quantity under any law) and a note says why.
     """
     import pandas as pd
 
@@ -116,13 +133,17 @@ def drift(a, b, *, pressures=None, velocities=None, n=5, level=0.95):
 
     if not 0 < level < 1:
         raise ValueError(f"level = {level}: expected 0 < level < 1")
-    model_a, _, _ = load_fit(a)
-    model_b, _, _ = load_fit(b)
+    model_a, _, label_a = load_fit(a)
+    model_b, _, label_b = load_fit(b)
+    names = (_described(a, model_a, label_a), _described(b, model_b, label_b))
+    comparable, notes = _comparable(model_a, model_b, names)
     z_crit = _normal_quantile(0.5 + level / 2)
     rows = []
     for name, pa in model_a.parameters.items():
         pb = model_b.parameters.get(name)
         if pa.value is None or pb is None or pb.value is None or pa.unit != pb.unit:
+            continue
+        if pa.parameter not in comparable:
             continue
         if pa.parameter in ("sigma_0", "sigma_1"):
             continue  # bristle parameters: assumed in most datasheets, not fitted
@@ -172,7 +193,47 @@ def drift(a, b, *, pressures=None, velocities=None, n=5, level=0.95):
     table["significant"] = np.abs(table["z [-]"]) > z_crit
     table.attrs["level"] = level
     table.attrs["z_critical"] = z_crit
+    table.attrs["notes"] = notes
     return table
+
+
+def _described(source, model, label) -> str:
+    """How the message names a datasheet: its path as given, else its file, else its label."""
+    if isinstance(source, str | Path):
+        return str(source)
+    return model.source or label
+
+
+def _comparable(model_a, model_b, names) -> tuple[set, list[str]]:
+    """(parameters whose coefficients mean the same in both models, notes on the others);
+    ValueError when the pressure references differ (nothing compares then)."""
+    first, second = names
+    if model_a.reference != model_b.reference:
+        raise ValueError(
+            f"{first} and {second} have different pressure references ({first}: "
+            f"{model_a.reference!r}, {second}: {model_b.reference!r}; the pressure their laws "
+            "see: chamber a, b, sum, mean or max): the same operating pressure is a different "
+            "state of the cylinder, so neither their coefficients nor their friction at an "
+            "operating point compare. Compare datasheets fitted with the same reference"
+        )
+    if model_a.friction_law != model_b.friction_law:
+        return set(), [
+            f"friction laws differ ({first}: {model_a.friction_law}, {second}: "
+            f"{model_b.friction_law}): their coefficients mean different things, so none is "
+            "compared; the friction at the operating points is (a force at a velocity and "
+            "pressure is the same quantity under any law)"
+        ]
+    comparable, notes = set(), []
+    for parameter, law_a in model_a.laws.items():
+        law_b = model_b.laws.get(parameter)
+        if law_a == law_b:
+            comparable.add(parameter)
+        elif law_a is not None and law_b is not None:
+            notes.append(
+                f"pressure laws of {parameter} differ ({first}: {law_a}, {second}: {law_b}): "
+                "its coefficients are not compared; the friction at the operating points is"
+            )
+    return comparable, notes
 
 
 def _friction_se(model, v, p):
@@ -385,20 +446,23 @@ def _normal_quantile(q):
 
 def write_drift(table, out) -> Path:
     """Write ``drift.csv`` into ``out`` (atomically) and a JSON summary; returns the CSV path."""
+    from ._paths import make_folder
     from .io.writers import atomic_write_text
 
-    out = Path(out)
+    out = make_folder(out)  # a symbolic link is refused, not written through
     path = atomic_write_text(out / "drift.csv", table.to_csv(index=False))
     friction = table[table["kind"] == "friction"]
+    z = np.abs(friction["z [-]"].to_numpy(dtype=float))
     summary = {
         "level": table.attrs.get("level"),
         "z_critical": table.attrs.get("z_critical"),
         "significant_points": int(friction["significant"].sum()),
         "points": int(len(friction)),
-        "max_abs_z": None if friction.empty else float(np.nanmax(np.abs(friction["z [-]"]))),
+        "max_abs_z": None if np.isnan(z).all() else float(np.nanmax(z)),  # None: no stderr
         "significant_parameters": list(
             table[(table["kind"] == "parameter") & table["significant"]]["quantity"]
         ),
+        "notes": list(table.attrs.get("notes", [])),
     }
     atomic_write_text(out / "drift.json", json.dumps(summary, indent=1) + "\n")
     return path

@@ -166,7 +166,12 @@ def fit_one(folder, out, name, options, started=None) -> dict:
             },
         )
     except Exception as exc:  # noqa: BLE001 - a failing campaign is reported, not fatal
-        reason = str(exc).replace("\n", " ")
+        if isinstance(exc, OSError):  # the file and the action, as the command line says it
+            from ._paths import os_error_message
+
+            reason = os_error_message(exc)
+        else:
+            reason = str(exc).replace("\n", " ")
         if not isinstance(exc, ValueError | OSError):
             reason = f"unexpected {type(exc).__name__}: {reason}"
         row.update(status="failed", reason=reason, **{"runs [-]": None, "excluded [-]": None})
@@ -205,7 +210,8 @@ def fit_many(
         Folder of campaign folders (see :func:`find_campaigns`); never modified.
     out : path-like
         Output folder: ``fit_many.csv`` and one :func:`~cylfric.pipeline.fit_campaign`
-        output folder per campaign (named by the campaign's path under ``root``).
+        output folder per campaign (named by the campaign's path under ``root``, which must
+        stay inside ``out``: :func:`cylfric._paths.inside`). A symbolic link is refused.
     workers : int, optional
         Local worker processes (default: the number of cores). Ignored only by a
         distributed scheduler address, whose cluster has its own workers (then it must be
@@ -242,7 +248,9 @@ def fit_many(
     unknown = set(fit_options) - set(_FIT_OPTIONS)
     if unknown:
         raise ValueError(f"unknown fit options {sorted(unknown)}; valid: {list(_FIT_OPTIONS)}")
-    root, out = Path(root), Path(out)
+    from ._paths import inside, make_folder, refuse_link
+
+    root, out = Path(root), refuse_link(out)  # a symbolic link is refused, not written through
     campaigns = find_campaigns(root, exclude=[out])
     if not campaigns:
         raise ValueError(
@@ -264,13 +272,14 @@ def fit_many(
         context = start_worker_server(report=fit_options.get("report", True))
     from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
-    out.mkdir(parents=True, exist_ok=True)
+    make_folder(out)
     if scheduler != "serial" and (distributed or workers > 1):
         # fits side by side: each on one core (a fit alone reads files on two)
         fit_options.setdefault("workers", 1)
     t0, started = time.perf_counter(), time.time()
-    jobs = [
-        (f, out / _name(f, root), _name(f, root), dict(fit_options), started) for f in campaigns
+    jobs = [  # OUT/<campaign's path under root>, never outside OUT
+        (f, inside(out, _name(f, root), "campaign"), _name(f, root), dict(fit_options), started)
+        for f in campaigns
     ]
     # largest first: a long fit started last would leave the other workers idle at the end
     order = sorted(range(len(jobs)), key=lambda i: -_size(campaigns[i]))

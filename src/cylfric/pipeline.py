@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ._paths import failed, make_folder, refuse_link
 from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config, read_run
 from .io.writers import atomic_write_text
 from .steady_state import extract_campaign
@@ -82,7 +83,10 @@ def fit_campaign(
     the marker, or holding any file or folder cylfric did not write, is refused
     (ValueError naming those files), so nothing of the user's is ever deleted. A lock file
     beside ``out`` refuses a second concurrent fit into it; an ``out`` inside the campaign
-    folder is refused (it would be read back as runs).
+    folder is refused (it would be read back as runs), and so is an ``out`` that is a
+    symbolic link (:func:`cylfric._paths.refuse_link`: the message names its target, which
+    can be passed instead). An OSError (full disk, read-only folder) names the file or
+    folder and the action.
 
     Parameters
     ----------
@@ -137,10 +141,14 @@ def fit_campaign(
 
         export = parse_targets(export)
     _check_out(folder, out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(out.parent, f"--out {out}: its folder")
     with _lock(out):
         _remove_leftovers(out)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+        try:
+            staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+        except OSError as exc:
+            action = f"writing --out {out}: creating a staging folder in"
+            raise failed(exc, action, out.parent) from exc
         mask = os.umask(0)
         os.umask(mask)
         staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
@@ -284,7 +292,9 @@ def _check_reusable(out: Path):
 
 
 def _check_out(folder: Path, out: Path):
-    """Refuse an output folder that would read back as runs or whose files would be lost."""
+    """Refuse an output folder that would read back as runs or whose files would be lost,
+    or that is a symbolic link."""
+    refuse_link(out)
     campaign, target = folder.resolve(), out.resolve()
     if target == campaign or campaign in target.parents or target in campaign.parents:
         sibling = campaign.parent / f"{campaign.name or 'campaign'}-fit"
@@ -328,6 +338,8 @@ def _lock(out: Path):
                     f"choose another --out (lock file {lock})"
                 ) from None
             lock.unlink(missing_ok=True)  # a stale lock of a process that is gone
+        except OSError as exc:  # a read-only folder, a full disk
+            raise failed(exc, f"writing --out {out}: creating the lock file", lock) from exc
     else:  # pragma: no cover - lost a race twice
         raise ValueError(f"cannot take the lock {lock}")
     try:
@@ -354,13 +366,16 @@ def _swap_in(staging: Path, out: Path):
     old = None
     if out.exists():
         old = out.parent / f".{out.name}.old-{os.getpid()}"
-        out.rename(old)
+        try:
+            out.rename(old)
+        except OSError as exc:
+            raise failed(exc, "writing --out: moving the previous folder aside", out) from exc
     try:
         staging.rename(out)
-    except OSError:
+    except OSError as exc:
         if old is not None:
             old.rename(out)
-        raise
+        raise failed(exc, "writing --out: renaming the finished folder to", out) from exc
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
 

@@ -33,7 +33,6 @@ import math
 import tempfile
 import warnings
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -420,9 +419,12 @@ class TestPlan:
         return fig
 
     def write(self, out) -> dict:
-        """Write ``plan.csv``, ``uncertainty.csv``, ``plan.png``/``.svg`` and ``plan.html``."""
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        """Write ``plan.csv``, ``uncertainty.csv``, ``plan.png``/``.svg`` and ``plan.html``
+        into the folder ``out`` (created; a symbolic link is refused, see
+        :func:`cylfric._paths.refuse_link`)."""
+        from ._paths import make_folder
+
+        out = make_folder(out)
         sheet = self.sheet()
         files = {"csv": atomic_write_text(out / "plan.csv", sheet.to_csv(index=False))}
         table = self.uncertainty.table()

@@ -7,7 +7,6 @@ Everything is evaluated through :class:`~cylfric.model.FrictionModel` (``frictio
 from __future__ import annotations
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 
@@ -167,7 +166,7 @@ def compare(models: dict, out, pressures, velocities, *, level=0.95) -> dict:
     models : dict
         Name -> FrictionModel.
     out : path-like
-        Output folder (created).
+        Output folder (created; a symbolic link is refused).
     pressures : sequence of float
         Pressures [Pa]: one curve of friction against velocity each, and the table rows.
     velocities : sequence of float
@@ -188,8 +187,9 @@ def compare(models: dict, out, pressures, velocities, *, level=0.95) -> dict:
     velocities = [float(v) for v in velocities]
     if not pressures or not velocities:
         raise ValueError("compare: give at least one pressure [Pa] and one velocity [m/s]")
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    from .._paths import make_folder
+
+    out = make_folder(out)  # a symbolic link is refused, not written through
     table = comparison_table(models, pressures, velocities, level)
     paths = {"csv": atomic_write_text(out / "compare.csv", table.to_csv(index=False))}
     fig = _figure(models, pressures, velocities, level)

@@ -293,9 +293,11 @@ def predict(
     """Scale a seal's friction to another cylinder size by seal contact length."""
     import json
 
+    from .._paths import refuse_link
     from ..io.writers import atomic_write_text
     from ..model import FrictionModel
 
+    refuse_link(out)  # before the prediction: a symbolic link is refused, not replaced
     catalog = _db(db)
     target_bore = _one(bore, "length", "mm", "--bore")
     target_rod = _one(rod, "length", "mm", "--rod")
@@ -350,7 +352,10 @@ def export(
     path: Path = typer.Argument(..., help="JSON file to write."),
     db: Path = typer.Option(None, "--db", help=DB_HELP),
 ):
-    """Export the whole catalogue as one JSON file."""
+    """Export the whole catalogue as one JSON file (a symbolic link PATH is refused)."""
+    from .._paths import refuse_link
+
+    refuse_link(path, "PATH")
     catalog = _db(db)
     catalog.export_json(path)
     console.print(terminal(f"exported {len(catalog)} entries to {path}"), highlight=False)

@@ -50,7 +50,13 @@ def register(app) -> None:
             None, "--campaign", help="Raw-file folder of A (for --order mtime)."
         ),
     ):
-        """Change of friction between two fits (z-scores), and friction against run order."""
+        """Change of friction between two fits (z-scores), and friction against run order.
+
+        Coefficients are compared only when both fits have the same friction law and the
+        coefficient's pressure law is the same; otherwise only the friction at operating
+        points is (a note says why). Fits whose pressure laws see different pressures
+        (reference a, b, sum, mean, max) are refused (exit 2).
+        """
         from rich.markup import escape
         from rich.table import Table
 
@@ -61,7 +67,9 @@ def register(app) -> None:
             if path is not None and not path.exists():
                 raise BadInput(f"{path}: not found; expected a datasheet.json or a fit folder")
         if out is not None:
-            out.mkdir(parents=True, exist_ok=True)
+            from .._paths import make_folder
+
+            make_folder(out)  # a symbolic link is refused (exit 2), not written through
         if b is None:
             if _trend(a, a.stem if a.is_file() else a.name, out, order, campaign) is None:
                 raise BadInput(
@@ -92,7 +100,10 @@ def register(app) -> None:
                 f"{row['z [-]']:+.2f}",
                 "yes" if row["significant"] else "no",
             )
-        console.print(view)
+        if len(params):
+            console.print(view)
+        for note in table.attrs.get("notes", []):
+            console.print(f"[yellow]note:[/yellow] {escape(note)}", highlight=False)
         friction = table[table["kind"] == "friction"]
         view = Table(title="Change of the friction over the common validity range")
         for column in ("p [bar]", "v [mm/s]", "a [N]", "b [N]", "change [N]", "z", "sig."):

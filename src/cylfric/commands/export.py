@@ -20,7 +20,14 @@ def register(app) -> None:
     def export_command(
         datasheet: Path = typer.Argument(..., help="A datasheet.json file (never modified)."),
         to: str = typer.Option(..., "--to", help=f"Target: {', '.join(TARGET_NAMES)}."),
-        out: Path = typer.Option(Path("cylfric-export"), "--out", "-o", help="Output folder."),
+        out: Path = typer.Option(
+            Path("cylfric-export"),
+            "--out",
+            "-o",
+            help="Output folder. For fmu and modelica, a path ending in .fmu or .mo (and not "
+            "an existing folder) is the file itself; its stem names the model when it is an "
+            "identifier and --name is not given. A symbolic link is refused.",
+        ),
         name: str = typer.Option(
             None, "--name", help="Name of the exported files (default: the datasheet's name)."
         ),
@@ -35,16 +42,26 @@ def register(app) -> None:
 
         Lossy targets (simscape, hopsan) fit the simulator's own friction block over the
         datasheet's validity range and write a loss report (CSV, text, figure) beside it.
+        --out f.fmu (fmu) and --out Seal.mo (modelica) write that one file; the other
+        targets write several files into the --out folder.
         """
-        from ..export import TARGETS, export
+        from .._paths import refuse_link
+        from ..export import SINGLE_FILE, TARGETS, export
 
         target = to.strip().lower()
         if target not in TARGETS:
             raise BadInput(f"--to {to!r}: unknown export target; valid: {sorted(TARGETS)}")
         if not datasheet.is_file():
             raise BadInput(f"{datasheet}: no such datasheet file; expected a datasheet.json")
-        if out.exists() and not out.is_dir():
-            raise BadInput(f"--out {out} is a file; expected a folder")
+        refuse_link(out)  # a symbolic link (folder or file) is refused, not written through
+        suffix = SINGLE_FILE.get(target)
+        as_file = suffix is not None and out.suffix.lower() == suffix and not out.is_dir()
+        if out.exists() and not out.is_dir() and not as_file:
+            files = ", ".join(f"{k}: {v}" for k, v in SINGLE_FILE.items())
+            raise BadInput(
+                f"--out {out} is a file; expected a folder (a file path only for the "
+                f"single-file targets, with their suffix: {files})"
+            )
         import warnings
 
         options = {} if name is None else {"name": name}

@@ -78,6 +78,9 @@ def _run(record, config, out, per_direction, validate, drawer, accept_implausibl
     ):
         if not path.is_file():
             raise BadInput(f"{what} {path}: no such file")
+    from .._paths import make_folder, refuse_link
+
+    refuse_link(out)  # a symbolic link is refused (exit 2), not written through
     if out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
     inputs = {p.resolve() for p in (record, config, validate) if p is not None}
@@ -121,7 +124,7 @@ def _run(record, config, out, per_direction, validate, drawer, accept_implausibl
     if replay is not None:
         jobs[VALIDATION_FIGURE] = ("validation", _validation_figure_data(replay))
     drawer.submit(jobs)  # the child draws while the JSON and CSV are written
-    out.mkdir(parents=True, exist_ok=True)
+    make_folder(out)
     refined = fit.refinement.model if fit.refinement is not None else None
     if refined is not None:
         sheet = refined.to_datasheet()

@@ -71,6 +71,9 @@ def register(app: typer.Typer) -> None:
         ),
     ):
         """A D-optimal test plan: runs in order (plan.csv, plan.html) and its uncertainty."""
+        from .._paths import refuse_link
+
+        refuse_link(out)  # before the design: a symbolic link is refused, not written through
         p_range = _range(pressures, "pressure", "bar", "--pressures")
         v_range = _range(speeds, "velocity", "mm/s", "--speeds")
         if not v_range[0] > 0:

@@ -11,12 +11,24 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
+import re
+import shutil
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
 from .result import ExportResult
 
-__all__ = ["export", "ExportResult", "TARGETS", "LOSSLESS", "resolve", "parse_targets"]
+__all__ = [
+    "export",
+    "ExportResult",
+    "TARGETS",
+    "LOSSLESS",
+    "SINGLE_FILE",
+    "resolve",
+    "parse_targets",
+]
 
 TARGETS = {
     "fmu": "cylfric.export.fmu:export_fmu",
@@ -29,6 +41,12 @@ TARGETS = {
 
 LOSSLESS = ("fmu", "matlab", "modelica")
 """Targets that carry the full model (no loss report)."""
+
+SINGLE_FILE = {"fmu": ".fmu", "modelica": ".mo"}
+"""Targets that write one file -> its suffix: an ``out`` ending in it (and not an existing
+folder) is that file (:func:`export`). The others write several files into a folder."""
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")  # a model name valid in C and Modelica
 
 
 def resolve(target: str):
@@ -88,7 +106,12 @@ def export(model_or_datasheet, to: str, out, **options) -> ExportResult:
     to : {"fmu", "matlab", "modelica", "simscape", "hopsan"}
         Target (:data:`TARGETS`).
     out : path-like
-        Output folder (created).
+        Output folder (created). For a single-file target (:data:`SINGLE_FILE`: ``fmu``,
+        ``modelica``), a path ending in its suffix (``Friction.fmu``, ``Seal.mo``) that is
+        not an existing folder is the file itself; its stem becomes the model name when it
+        is an identifier (``[A-Za-z_][A-Za-z0-9_]*``) and no ``name`` is given; otherwise
+        the model keeps its name and the file is written under the name given. A symbolic
+        link (folder or file) is refused (:func:`cylfric._paths.refuse_link`).
     **options
         Keywords of the target's function (e.g. ``name``, ``velocity_range`` [m/s],
         ``pressure_range`` [Pa]); unknown keywords raise ValueError listing the valid ones.
@@ -107,8 +130,42 @@ def export(model_or_datasheet, to: str, out, **options) -> ExportResult:
     unknown = sorted(set(options) - set(accepted))
     if unknown:
         raise ValueError(f"export to {to}: unknown option(s) {unknown}; valid: {accepted}")
+    from .._paths import refuse_link
+
+    out = refuse_link(out)
     model = _model(model_or_datasheet)
-    result = function(model, Path(out), **options)
+    suffix = SINGLE_FILE.get(to)
+    if suffix is not None and out.suffix.lower() == suffix and not out.is_dir():
+        return _export_file(function, to, model, out, options)
+    return _result(to, function(model, out, **options))
+
+
+def _result(to, result) -> ExportResult:
     if isinstance(result, ExportResult):
         return result
     return ExportResult(to, tuple(Path(p) for p in result), None)
+
+
+def _export_file(function, to, model, path: Path, options) -> ExportResult:
+    """Export into a staging folder beside ``path``, then rename the one file to ``path``."""
+    from .._paths import failed, make_folder
+
+    if path.exists() and not path.is_file():
+        raise ValueError(f"--out {path} exists and is not a file; expected a {to} file path")
+    if "name" not in options and _NAME.fullmatch(path.stem):
+        options = {**options, "name": path.stem}
+    make_folder(path.parent, f"--out {path}: its folder")
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.staging-", dir=path.parent))
+    except OSError as exc:
+        raise failed(exc, f"writing {path}: creating a staging folder in", path.parent) from exc
+    try:
+        result = _result(to, function(model, staging, **options))
+        (written,) = result.files  # a single-file target
+        try:
+            os.replace(written, path)
+        except OSError as exc:
+            raise failed(exc, "writing", path) from exc
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return ExportResult(to, (path,), result.loss)

@@ -96,7 +96,9 @@ class CampaignConfig:
     Attributes
     ----------
     glob : str
-        Which files of the folder are runs.
+        Which files of the folder are runs: a pattern relative to the campaign folder
+        (``"*.txt"``, ``"runs/*.txt"``); an absolute pattern or one with a ``..`` part is
+        refused (:func:`check_glob`), so runs are never read from outside the folder.
     name_pattern : str or None
         Regular expression with named groups (``pressure_bar``, ``velocity_mm_s`` and any
         others, e.g. ``seal``) matched against the file name.
@@ -427,6 +429,9 @@ def _validate_config(doc, path):
         raise BenchFileError(
             path, f"{where}: {error.message}", line=_line_of(path, key) if key else None
         )
+    glob = doc.get("files", {}).get("glob")
+    if glob is not None:
+        check_glob(glob, path, line=_line_of(path, "glob"))
     pattern = doc.get("files", {}).get("name_pattern")
     if pattern is not None:
         compile_name_pattern(pattern, path)
@@ -470,6 +475,24 @@ def compile_name_pattern(pattern: str, path=None):
             "pattern without them",
             line=_line_of(path, "name_pattern") if path is not None else None,
         ) from None
+
+
+def check_glob(glob: str, where, line=None, key="files.glob") -> str:
+    """Refuse a glob that would reach outside the campaign folder: absolute (``/data/*.txt``,
+    ``C:/...``) or with a ``..`` part. BenchFileError naming ``where`` (campaign.toml,
+    with the line of the key, or the campaign folder for ``--glob``) and what to write."""
+    text = glob.replace("\\", "/")
+    absolute = text.startswith("/") or re.match(r"^[A-Za-z]:", text) is not None  # or C:
+    if absolute or ".." in text.split("/"):
+        problem = "is absolute" if absolute else "climbs out of the campaign folder with '..'"
+        raise BenchFileError(
+            where,
+            f"{key} = {glob!r} {problem}; run files are searched in the campaign folder only: "
+            'write a pattern relative to it, e.g. glob = "*.txt" or "runs/*.txt" (or fit the '
+            "folder that holds the files)",
+            line=line,
+        )
+    return glob
 
 
 def name_tokens(name: str) -> dict:
@@ -710,6 +733,7 @@ def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]
     if not folder.is_dir():
         raise BenchFileError(folder, "not a folder; expected a campaign folder of run files")
     config = config or load_config(folder)
+    check_glob(config.glob, folder, key="glob")  # also a --glob of the command line
     manifest = _read_manifest(folder)
     pattern = (
         compile_name_pattern(config.name_pattern, folder / CONFIG_NAME)
@@ -778,6 +802,7 @@ def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
     if not manifest:
         return []
     config = config or load_config(folder)
+    check_glob(config.glob, folder, key="glob")
     return sorted(
         p.relative_to(folder).as_posix()
         for p in folder.glob(config.glob)

@@ -419,8 +419,9 @@ def generate_campaign(
     unknown = [t for t in tests if t not in TESTS]
     if unknown or not tests:
         raise ValueError(f"unknown tests {unknown or tests}; valid: {list(TESTS)}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    from .._paths import make_folder
+
+    out = make_folder(out_dir, "out_dir")  # a symbolic link is refused, not written through
     dynamic_tests = tuple(t for t in tests if t in DYNAMIC_TESTS)
     if "constant-velocity" not in tests:
         rows = generate_dynamic_tests(
