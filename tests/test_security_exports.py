@@ -254,3 +254,32 @@ def test_c_string_compiles_to_the_same_bytes(tmp_path):
 def test_identifier_mangles_to_a_c_identifier(name, expected):
     assert escape.identifier(name) == expected
     assert re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", escape.identifier(name))
+
+
+def test_fit_of_a_hostile_campaign_folder_exports_text_as_data(tmp_path):
+    """A campaign folder and a run file named with a newline, a comment closer, quotes,
+    markup and ESC, fitted with the report and every export: the name reaches the files
+    only as data."""
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    folder = tmp_path / f"rig\n{MARKER}_f(); */ \" ' % ; [bold] \x1b[31m é"
+    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 80.0), speeds_mm_s=(2, 10, 50)))
+    (folder / "manifest.csv").unlink()
+    first = sorted(folder.glob("*.txt"))[0]
+    first.rename(folder / f"run\n{MARKER}_r(); */{first.name}".replace("/", "|"))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        app, ["fit", str(folder), "--out", str(out), "--export", "fmu,matlab,modelica,hopsan"]
+    )
+    assert result.exit_code == 0, result.output
+    texts = _text_files(out)
+    # CSV tables hold the names verbatim as quoted fields: data, read back as they were
+    import pandas as pd
+
+    points = pd.read_csv(out / "points.csv")
+    assert any(f"run\n{MARKER}_r();" in str(name) for name in points["file"])
+    _assert_payload_is_data({n: t for n, t in texts.items() if not n.endswith(".csv")})
+    assert "<script" not in texts["report.html"].lower()
