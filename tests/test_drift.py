@@ -170,7 +170,7 @@ OIL_VG46 = ((313.15, 46e-6), (373.15, 6.8e-6))
 
 
 def test_walther_viscosity_passes_its_two_points_and_falls_with_temperature():
-    from cylfric.drift import walther_viscosity
+    from cylfric.viscosity import walther_viscosity
 
     assert_allclose(walther_viscosity(313.15, OIL_VG46), 46e-6, rtol=1e-12)
     assert_allclose(walther_viscosity(373.15, OIL_VG46), 6.8e-6, rtol=1e-12)
@@ -190,7 +190,7 @@ def test_viscosity_correction_lets_runs_at_two_temperatures_be_identified_as_one
     """Points at 30 and 50 degC of a seal whose Stribeck curve follows the Hersey number:
     friction(v, T) = friction_ref(v nu(T) / nu(T_ref)). Identified raw, the two
     temperatures disagree; mapped to 40 degC they give back the reference model."""
-    from cylfric.drift import viscosity_corrected, walther_viscosity
+    from cylfric.viscosity import viscosity_corrected, walther_viscosity
     from cylfric.identify import identify
 
     truth = FrictionModel()  # the thesis law (eq. 4.1-4.3) at the reference 40 degC

@@ -22,7 +22,7 @@ from numpy.testing import assert_allclose
 from typer.testing import CliRunner
 
 from cylfric.cli import app
-from cylfric.drift import walther_viscosity
+from cylfric.viscosity import walther_viscosity
 from cylfric.io import BenchFileError, load_config
 from cylfric.model import FrictionModel
 from cylfric.pipeline import fit_campaign

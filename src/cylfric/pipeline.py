@@ -130,7 +130,7 @@ def fit_campaign(
     viscosity_correction : bool, optional
         Identify at the reference temperature of ``campaign.toml [oil]``, each point's speed
         mapped by the oil's viscosity at its run's temperature (equal Hersey number; see
-        :func:`cylfric.drift.correct_campaign`). None (default): when both ``[oil]`` and
+        :func:`cylfric.viscosity.correct_campaign`). None (default): when both ``[oil]`` and
         temperatures are there; a note says which is missing otherwise. True: required
         (ValueError without them). False: never. The datasheet records the correction in
         ``fit.viscosity_correction``.
@@ -585,7 +585,7 @@ def _export_summary(out: Path, result) -> dict:
 
 def _correct_viscosity(extraction, config, enabled):
     """The points at the reference temperature of ``[oil]`` (or as they are, with a note)."""
-    from .drift import correct_campaign
+    from .viscosity import correct_campaign
 
     return correct_campaign(extraction.points, extraction.runs, config.oil, enabled=enabled)
 

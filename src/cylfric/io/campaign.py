@@ -72,7 +72,7 @@ class OilSettings:
     ----------
     points : ((float, float), (float, float))
         Two (temperature [K], kinematic viscosity [m^2/s]) points of the oil's data sheet
-        (``viscosity_40C``, ``viscosity_100C``), as :func:`cylfric.drift.walther_viscosity`
+        (``viscosity_40C``, ``viscosity_100C``), as :func:`cylfric.viscosity.walther_viscosity`
         takes them.
     reference_temperature : float
         Temperature the datasheet is identified at [K] (default 40 degC, where ISO 3448
