@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .core import (
+from .names import (
     DYNAMIC_PARAMETERS,
     FRICTION_LAWS,
     PARAMETER_UNITS,

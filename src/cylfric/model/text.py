@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
-from .core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
+from .names import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 
 __all__ = ["law_lines", "fit_report", "format_value", "parameter_table", "html_summary"]
 
