@@ -377,7 +377,7 @@ def test_closed_loop_record_is_identified_and_replayed():
 FORKED = """
 import sys
 from cylfric.cli import main
-from cylfric.commands import motion
+from cylfric.cli import motion
 
 original = motion._Drawer.collect
 

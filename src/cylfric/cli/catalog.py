@@ -12,8 +12,8 @@ from pathlib import Path
 
 import typer
 
-from ..cli import BadInput, console, guarded, numbers
 from ..escape import terminal
+from .common import BadInput, console, guarded, numbers
 
 catalog_app = typer.Typer(
     add_completion=False,

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import typer
 
-from ..cli import BadInput, console, guarded
 from ..escape import plot_text, terminal
+from .common import BadInput, console, guarded
 
 
 def _trend(source, label, out, order, campaign):

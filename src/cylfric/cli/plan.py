@@ -7,8 +7,8 @@ from pathlib import Path
 
 import typer
 
-from ..cli import BadInput, console, guarded, progress_bar
 from ..escape import terminal
+from .common import BadInput, console, guarded, progress_bar
 
 
 def _range(text: str, dimension: str, unit: str, option: str) -> tuple[float, float]:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import typer
 
-from ..cli import BadInput, console, fixed_parameters, guarded, progress_bar
 from ..escape import terminal
+from .common import BadInput, console, fixed_parameters, guarded, progress_bar
 
 
 def register(app: typer.Typer) -> None:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import typer
 
-from ..cli import BadInput, console, guarded
 from ..escape import terminal
+from .common import BadInput, console, guarded
 
 TARGET_NAMES = ("fmu", "modelica", "simscape", "hopsan", "matlab")
 

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import typer
 
-from ..cli import BadInput, console, guarded
 from ..escape import terminal
+from .common import BadInput, console, guarded
 
 SIGNALS_CSV = "motion_signals.csv"
 FIT_JSON = "motion_fit.json"

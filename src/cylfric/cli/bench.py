@@ -1,0 +1,199 @@
+"""``cylfric generate`` and ``simulate``: the virtual test bench and the simulator."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import typer
+
+from ..escape import terminal
+from ..units import parse_quantity
+from .common import BadInput, _numbers, _progress, app, console, guarded
+
+
+@app.command()
+@guarded
+def generate(
+    out_dir: Path = typer.Argument(..., help="Folder to write the campaign into."),
+    pressures: str = typer.Option(
+        None, "--pressures", help="Pressures, bar or with units (default: the thesis' 10 levels)."
+    ),
+    speeds: str = typer.Option(
+        None, "--speeds", help="Speeds, mm/s or with units (default: 27 speeds 1-135 mm/s)."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Random seed (deterministic output)."),
+    decimal_comma: bool = typer.Option(False, "--decimal-comma", help="Write 0,017 not 0.017."),
+    pressure_channel: bool = typer.Option(
+        False, "--pressure-channel", help="Add a measured pressure column."
+    ),
+    force: bool = typer.Option(
+        False, "--force", help="Write into a folder that already holds files (overwriting)."
+    ),
+    tests: str = typer.Option(
+        "constant-velocity",
+        "--tests",
+        help="Tests to write, comma-separated: constant-velocity, presliding, breakaway "
+        "(force-controlled, for sigma_0 and sigma_1), or all.",
+    ),
+):
+    """Virtual test bench: write a campaign of raw files and manifest.csv."""
+    from .._paths import refuse_link
+
+    refuse_link(out_dir, "OUT_DIR")  # a symbolic link is refused, not written through
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())) and not force:
+        raise BadInput(
+            f"{out_dir} is not empty; generate writes raw files and manifest.csv that would "
+            "overwrite what is there: choose an empty folder or add --force"
+        )
+    from ..simulate.bench import TESTS, BenchSettings, DynamicTestSettings, generate_campaign
+
+    chosen = [t.strip() for t in tests.split(",") if t.strip()]
+    chosen = list(TESTS) if chosen == ["all"] else chosen
+    unknown = [t for t in chosen if t not in TESTS]
+    if unknown or not chosen:
+        raise BadInput(
+            f"--tests {tests!r}: unknown test(s) {unknown}; valid: {', '.join(TESTS)}, all"
+        )
+    kwargs = {"seed": seed, "decimal_comma": decimal_comma, "pressure_channel": pressure_channel}
+    if pressures:
+        kwargs["pressures_bar"] = tuple(p / 1e5 for p in _numbers(pressures, "pressure", "bar"))
+    if speeds:
+        kwargs["speeds_mm_s"] = tuple(v * 1e3 for v in _numbers(speeds, "velocity", "mm/s"))
+    if any(v <= 0 for v in kwargs.get("speeds_mm_s", (1,))):
+        raise BadInput("--speeds must be > 0")
+    if any(p < 0 for p in kwargs.get("pressures_bar", (0,))):
+        raise BadInput("--pressures must be >= 0")
+    settings = BenchSettings(**kwargs)
+    n = len(settings.pressures_bar) * len(settings.speeds_mm_s) * ("constant-velocity" in chosen)
+    rates = len(DynamicTestSettings().breakaway_rates)
+    n += len(settings.pressures_bar) * (("presliding" in chosen) + rates * ("breakaway" in chosen))
+    with _progress() as progress:
+        task = progress.add_task("virtual bench", total=n)
+        info = generate_campaign(
+            out_dir, settings, progress=lambda _: progress.advance(task), tests=chosen
+        )
+    console.print(
+        terminal(
+            f"wrote {len(info['files'])} files and manifest.csv to {out_dir} "
+            f"({info['steps']:.3g} simulated steps)"
+        )
+    )
+
+
+DRIVES = ("spring", "sine", "ramp-force", "servo-step")
+
+
+@app.command()
+@guarded
+def simulate(
+    model: str = typer.Argument(
+        ..., help="A datasheet.json or a literature set name (thesis_2016, thesis_2016_revised)."
+    ),
+    out: Path = typer.Option(Path("cylfric-sim"), "--out", "-o", help="Output folder."),
+    drive: str = typer.Option("spring", "--drive", help=f"One of {', '.join(DRIVES)}."),
+    pressure: str = typer.Option("50bar", "--pressure", help="Chamber pressure (bar)."),
+    speed: str = typer.Option("5mm/s", "--speed", help="Spring speed or sine amplitude."),
+    duration: str = typer.Option("10s", "--duration", help="Simulated time."),
+    mass: str = typer.Option("10kg", "--mass", help="Moving mass."),
+    stiffness: str = typer.Option("2e4", "--stiffness", help="Spring or servo stiffness (N/m)."),
+    sigma_0: str = typer.Option(
+        None,
+        "--sigma-0",
+        help="Bristle stiffness (N/m); default: the model's (sigma_1 = sqrt(sigma_0 m) then).",
+    ),
+    max_output_gib: float = typer.Option(
+        1.0,
+        "--max-output-gib",
+        help="Refuse (exit 2) before allocating when the outputs would exceed this many GiB "
+        "(samples every 1 ms x 8 signals x 8 bytes: 1 GiB is about 4.6 h simulated).",
+    ),
+):
+    """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure.
+
+    Outputs every 1 ms; their size is estimated before the run and a simulation above
+    --max-output-gib (default 1 GiB) is refused with exit 2: shorten --duration or raise
+    the limit.
+    """
+    import numpy as np
+
+    from ..friction.literature import LITERATURE
+    from ..io.writers import atomic_write_text
+    from ..model import FrictionModel
+    from ..report.figures import save_figure
+    from ..simulate import (
+        AppliedForce,
+        Cylinder,
+        PositionServo,
+        PrescribedMotion,
+        SpringPull,
+    )
+    from ..simulate import simulate as run_simulation
+
+    if Path(model).is_file():
+        friction = FrictionModel.from_datasheet(model)
+    elif model in LITERATURE and LITERATURE[model].coefficients:
+        friction = FrictionModel(dict(LITERATURE[model].coefficients))
+    else:
+        sets = sorted(k for k, s in LITERATURE.items() if s.coefficients)
+        raise BadInput(f"{model!r}: not a datasheet file nor a literature set; valid sets: {sets}")
+    p = parse_quantity(pressure, "pressure", "bar")
+    v = parse_quantity(speed, "velocity", "mm/s")
+    t_end = parse_quantity(duration, "time", "s")
+    m = parse_quantity(mass, "mass", "kg")
+    k = parse_quantity(stiffness, "stiffness", "N/m")
+    if drive not in DRIVES:
+        raise BadInput(f"--drive {drive!r}: expected one of {list(DRIVES)}")
+    if sigma_0 is not None:
+        s0 = parse_quantity(sigma_0, "stiffness", "N/m")
+        if not s0 > 0:
+            raise BadInput("--sigma-0 must be > 0")
+        friction = friction.replace(sigma_0=s0, sigma_1=math.sqrt(s0 * m))
+    if not (m > 0 and k > 0 and t_end > 0):
+        raise BadInput("--mass, --stiffness and --duration must be > 0")
+    from .._paths import make_folder, refuse_link
+
+    refuse_link(out)  # before the simulation: a symbolic link is refused, not written through
+    params = friction.params_at(friction.operating_pressure(p))
+    drives = {
+        "spring": lambda: SpringPull(k, v),
+        "sine": lambda: PrescribedMotion(lambda t: v * np.sin(2 * np.pi * t)),
+        "ramp-force": lambda: AppliedForce(lambda t: 2 * params["F_s"] * t / t_end),
+        "servo-step": lambda: PositionServo(
+            lambda t: 0.01 * (t > 0.1), kp=k, kd=2 * math.sqrt(k * m), ki=k
+        ),
+    }
+    # warnings reach the user once each, as notes (not as Python's own lines with a path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = run_simulation(
+                Cylinder(m),
+                friction,
+                drives[drive](),
+                t_end,
+                pressure_a=p,
+                max_output_bytes=max_output_gib * 2**30,
+            )
+        except ValueError as exc:  # e.g. a law extrapolated below 0 outside its validity
+            named = str(exc).startswith(model) or not Path(model).is_file()
+            raise BadInput(str(exc) if named else f"{model}: {exc}") from None
+    for note in dict.fromkeys(str(w.message) for w in caught):
+        console.print(f"[yellow]note:[/yellow] {terminal(note)}")
+    frame = result.to_pandas()
+    make_folder(out)
+    atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), constrained_layout=True)
+    result.plot(ax=axes)
+    fig.suptitle(f"{drive} at {p / 1e5:g} bar ({model})")
+    save_figure(fig, out, "simulation")
+    f = result.outputs["friction_force"]
+    console.print(
+        terminal(
+            f"{drive}: {len(frame)} samples over {t_end:g} s; friction {f.min():.1f} to "
+            f"{f.max():.1f} N; wrote {out / 'simulation.csv'} and simulation.png/svg"
+        )
+    )
