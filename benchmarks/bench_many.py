@@ -237,9 +237,13 @@ def _timeline(out: Path) -> dict:
 
 
 def _import_cpu() -> float:
-    """Processor time [s] of what a fit-many worker's server imports (median of 3)."""
+    """Processor time [s] of what a fit-many worker imports for a fit (median of 3)."""
     code = (
-        "import time, cylfric._worker_server; print(time.process_time())"
+        "import time, numpy, jsonschema, pandas, cylfric.pipeline, cylfric.datasheet, "
+        "cylfric.quality, cylfric.identify.steady\n"
+        "from cylfric.io._scan import scan_lines\n"
+        "scan_lines(numpy.frombuffer(b'0.1\\t2.5\\n', dtype=numpy.uint8))\n"
+        "print(time.process_time())"
     )
     times = [
         float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout)

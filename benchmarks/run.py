@@ -232,9 +232,14 @@ FIT_STARTUP = "import cylfric.cli, cylfric.pipeline"
 """What ``cylfric fit`` loads before it forks its extraction child (numpy and the command
 line; the child then loads numba and the compiled reader, the caller pandas, scipy.optimize
 and jsonschema)."""
-FIT_EVERYTHING = "import cylfric.cli, cylfric.pipeline, cylfric._warm"
-"""Everything a fit loads, in one process (``cylfric._warm`` also loads the compiled reader:
-numba's first call in a process); ``cylfric fit`` splits it between two processes."""
+FIT_EVERYTHING = (
+    "import numpy, jsonschema, pandas, cylfric.cli, cylfric.pipeline, cylfric.datasheet, "
+    "cylfric.quality, cylfric.identify.steady\n"
+    "from cylfric.io._scan import scan_lines\n"
+    "scan_lines(numpy.frombuffer(b'0.1\\t2.5\\n', dtype=numpy.uint8))"
+)
+"""Everything a fit loads, in one process, the compiled reader included (numba's first call
+in a process)."""
 LIBRARY_STARTUP = "import numpy, pandas, scipy.optimize, jsonschema"
 """The libraries the process that identifies and writes the datasheet needs, whatever the
 design (the reading, with numba, could run in a second process meanwhile)."""

@@ -197,7 +197,7 @@ def test_unknown_window_method_lists_valid():
 
 @pytest.fixture(scope="module")
 def campaign_of_20(tmp_path_factory):
-    """20 files: enough for extract_campaign to fork a second process (PARALLEL_MIN_FILES)."""
+    """20 files: enough for extract_campaign to read on a pool (PARALLEL_MIN_FILES)."""
     folder = tmp_path_factory.mktemp("twenty")
     generate_campaign(
         folder, replace(SMALL, pressures_bar=(0.1, 83.0), speeds_mm_s=tuple(range(2, 22, 2)))
@@ -205,56 +205,41 @@ def campaign_of_20(tmp_path_factory):
     return folder
 
 
-def _forks(monkeypatch):
-    import cylfric.steady_state as ss
+def _forks():
+    from cylfric._parallel import can_fork
 
-    if not ss._can_fork():
-        pytest.skip("this platform or process cannot fork an extraction worker")
-    return ss
+    if not can_fork():
+        pytest.skip("this platform or process cannot fork extraction workers")
 
 
-def test_two_core_extraction_equals_the_serial_one(campaign_of_20, monkeypatch):
-    import os
-
+def test_the_pool_extraction_equals_the_serial_one(campaign_of_20):
     import pandas as pd
 
-    ss = _forks(monkeypatch)
-    pids, original = [], ss._point_rows
-    monkeypatch.setattr(
-        ss, "_point_rows", lambda *a, **k: pids.append(os.getpid()) or original(*a, **k)
-    )
-    received, receive = [], ss._receive
-    monkeypatch.setattr(ss, "_receive", lambda pipe: received.append(receive(pipe)) or received[-1])
-    names, imported = [], []
+    _forks()
+    names = []
     serial = extract_campaign(campaign_of_20, workers=1)
-    pids.clear()
-    parallel = extract_campaign(
-        campaign_of_20, progress=names.append, meanwhile=lambda: imported.append(True)
-    )
-    assert imported == [True]
-    assert received and len(pids) + len(received) == 20  # the child took some files
+    parallel = extract_campaign(campaign_of_20, progress=names.append)
     assert sorted(names) == sorted(Path(r["file"]).name for r in serial.runs)
     pd.testing.assert_frame_equal(parallel.points, serial.points)
     assert parallel.runs == serial.runs and parallel.bytes_read == serial.bytes_read
 
 
-@pytest.mark.parametrize("joins", [True, False], ids=["caller joins", "caller only collects"])
-def test_files_of_a_dead_child_are_extracted_here(campaign_of_20, monkeypatch, joins):
-    """Also when the caller chose not to join (_worth_joining) and only collected."""
+def test_files_of_a_dead_worker_are_extracted_here(campaign_of_20, monkeypatch):
     import os
 
     import pandas as pd
 
-    ss = _forks(monkeypatch)
+    import cylfric.steady_state as ss
+
+    _forks()
     parent, original = os.getpid(), ss._point_rows
 
-    def dies_in_the_child(*args, **kwargs):
+    def dies_in_a_worker(*args, **kwargs):
         if os.getpid() != parent:
             os._exit(3)
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(ss, "_point_rows", dies_in_the_child)
-    monkeypatch.setattr(ss, "_worth_joining", lambda *args: joins)
+    monkeypatch.setattr(ss, "_point_rows", dies_in_a_worker)
     parallel = extract_campaign(campaign_of_20)
     monkeypatch.undo()
     pd.testing.assert_frame_equal(
@@ -262,11 +247,11 @@ def test_files_of_a_dead_child_are_extracted_here(campaign_of_20, monkeypatch, j
     )
 
 
-def test_a_bad_file_read_by_the_child_is_named_and_skippable(campaign_of_20, tmp_path, monkeypatch):
-    _forks(monkeypatch)
+def test_a_bad_file_read_by_a_worker_is_named_and_skippable(campaign_of_20, tmp_path):
+    _forks()
     folder = tmp_path / "c"
     shutil.copytree(campaign_of_20, folder)
-    bad = sorted(folder.glob("run_*.txt"))[1]  # odd index: the child's share
+    bad = sorted(folder.glob("run_*.txt"))[1]
     bad.write_text(bad.read_text().replace("\t", "\tx", 40))
     with pytest.raises(BenchFileError, match=bad.name):
         extract_campaign(folder)
@@ -274,83 +259,9 @@ def test_a_bad_file_read_by_the_child_is_named_and_skippable(campaign_of_20, tmp
     assert [Path(s["file"]).name for s in result.skipped] == [bad.name]
 
 
-def test_the_file_queue_refuses_more_indices_than_the_pipe_holds():
-    """A blocking write of too many indices would hang before the child exists; instead the
-    extraction stays serial."""
-    import os
-    import struct
-
-    from cylfric.steady_state import _file_queue
-
-    assert _file_queue(20_000) is None  # 80 kB: more than a pipe's 64 KiB
-    fd = _file_queue(100)
-    try:
-        assert struct.unpack("<100i", os.read(fd, 400)) == tuple(range(100))
-        assert os.read(fd, 4) == b""  # the write end is closed: end of the queue
-    finally:
-        os.close(fd)
-
-
-def test_the_caller_leaves_the_files_to_the_child_when_joining_costs_more(
-    campaign_of_20, monkeypatch
-):
-    """When joining does not pay (_worth_joining, tested below), the caller only collects
-    the child's results; the points are the serial ones."""
-    import os
-
-    import pandas as pd
-
-    ss = _forks(monkeypatch)
-    parent, original, here = os.getpid(), ss._point_rows, []
-    monkeypatch.setattr(
-        ss,
-        "_point_rows",
-        lambda *a, **k: (here.append(1) if os.getpid() == parent else None) or original(*a, **k),
-    )
-    monkeypatch.setattr(ss, "_worth_joining", lambda *args: False)
-    parallel = extract_campaign(campaign_of_20)
-    assert here == []  # every file was read by the child
-    monkeypatch.undo()
-    pd.testing.assert_frame_equal(
-        parallel.points, extract_campaign(campaign_of_20, workers=1).points
-    )
-
-
-@pytest.mark.parametrize(
-    ("queued", "elapsed", "child_start", "loaded", "joins"),
-    [
-        (0, 1.0, 0.0, False, False),  # nothing left
-        (10, 0.1, 0.0, True, True),  # compiled code already here: joining is free
-        (20, 0.5, 0.0, False, True),  # the child has taken none yet
-        (10, 0.5, 0.0, False, True),  # 10 left at 10 files/0.5 s: 0.5 s > 0.45 s
-        (2, 0.5, 0.0, False, False),  # 2 left at 18 files/0.5 s: 0.06 s < 0.45 s
-        # the child's own start (its load, 0.45 s) is not reading time: 10 files in 0.15 s
-        (10, 0.6, 0.45, False, False),  # 10 left: 0.15 s < 0.45 s
-        (10, 0.6, 0.0, False, True),  # the same counts without a start: 0.6 s > 0.45 s
-    ],
-)
-def test_the_caller_joins_when_the_childs_remaining_time_exceeds_the_load(
-    monkeypatch, queued, elapsed, child_start, loaded, joins
-):
-    import os
-    import struct
-
-    import cylfric.steady_state as ss
-
-    monkeypatch.setattr(ss, "_compiled_loaded", lambda: loaded)
-    read_end, write_end = os.pipe()
-    try:
-        os.write(write_end, struct.pack(f"<{queued}i", *range(queued)))
-        monkeypatch.setattr(ss, "COMPILED_LOAD_SECONDS", 0.45)
-        assert ss._worth_joining(read_end, 20, elapsed, child_start) is joins
-    finally:
-        os.close(read_end)
-        os.close(write_end)
-
-
 def test_the_datasheet_hashes_the_bytes_each_file_had_when_read(campaign_of_20):
-    """The reader hashes each file's bytes on the core that reads it (also in the forked
-    child); the datasheet's provenance lists exactly the files' SHA-256."""
+    """The reader hashes each file's bytes on the core that reads it (also in a pool
+    worker); the datasheet's provenance lists exactly the files' SHA-256."""
     import hashlib
 
     from cylfric.datasheet import build_datasheet

@@ -71,7 +71,7 @@ def test_two_local_workers_give_the_datasheets_of_serial_fits(eight, tmp_path):
     seen = []
     result = fit_many(eight, tmp_path / "par", workers=2, report=False, progress=seen.append)
     assert result.succeeded == 8 and result.failed == 0
-    assert "multiprocessing" in result.scheduler
+    assert result.scheduler == "local process pool, 2 process(es)"
     assert sorted(r["campaign"] for r in seen) == [f"cyl{i:02d}" for i in range(8)]
     for i in range(8):
         name = f"cyl{i:02d}"
@@ -229,78 +229,22 @@ def test_fit_many_adds_each_datasheet_to_a_real_catalogue(eight, tmp_path):
     assert all(c.startswith("not added") for c in again.summary["catalog"])  # ... reported
 
 
-# The worker server (issue 15, the parallel start-up): cylfric._worker_server is what the
-# server preloads; inside the server it makes the server leave at once when the command
-# ends (os._exit after flushing), everywhere else it only imports.
-_SERVER_SCRIPT = """
-import atexit, os, sys
-atexit.register(print, "earlier exit handler ran")  # runs after a later one (LIFO)
-import cylfric._worker_server as w
-if sys.argv[1] == "install":
-    w._install_fast_exit()
-    pid = os.fork()
-    if pid == 0:  # a forked worker inherits the handler: there it does nothing
-        w._exit_now()
-        os._exit(5)
-    print("forked child status", os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]))
-print("installed in this process:", w._server_pid == os.getpid())
-sys.exit(3)
-"""
-
-
-@pytest.mark.parametrize("mode", ["import", "install"])
-def test_the_worker_server_leaves_at_once_and_only_the_server(mode):
-    done = subprocess.run(
-        [sys.executable, "-c", _SERVER_SCRIPT, mode], capture_output=True, text=True
-    )
-    if mode == "import":  # a plain import (not in the fork server): the exit is untouched
-        assert done.returncode == 3, done.stderr[-2000:]
-        assert "installed in this process: False" in done.stdout
-        assert "earlier exit handler ran" in done.stdout
-    else:  # installed: os._exit(0) before the earlier handlers and the teardown, output kept
-        assert done.returncode == 0, done.stderr[-2000:]
-        assert "forked child status 5" in done.stdout  # _exit_now is a no-op in a child
-        assert "installed in this process: True" in done.stdout  # flushed before os._exit
-        assert "earlier exit handler ran" not in done.stdout
-
-
-def test_the_workers_fork_from_the_server_that_preloaded_the_pipeline():
-    from concurrent.futures import ProcessPoolExecutor
-
-    from cylfric.many import start_worker_server
-
-    context = start_worker_server(report=False)
-    assert context.get_start_method() == "forkserver"
-    assert start_worker_server(report=False) is context  # a second call: the same server
-    # evaluated in a fresh worker, before it runs any task that could import something
-    probe = (
-        "(__import__('sys').modules['cylfric._worker_server']._server_pid, "
-        "__import__('os').getppid(), "
-        "[m for m in ('cylfric._warm', 'cylfric.many', 'dask.multiprocessing', 'scipy.optimize')"
-        " if m in __import__('sys').modules])"
-    )
-    with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
-        server, parent, loaded = pool.submit(eval, probe).result()
-    assert server == parent  # the fast exit was installed in the server the worker forked from
-    assert loaded == ["cylfric._warm", "cylfric.many", "dask.multiprocessing", "scipy.optimize"]
-
-
 _COMMAND_SCRIPT = """
 import sys, warnings
 warnings.simplefilter("ignore")
 from cylfric.many import fit_many
 result = fit_many(sys.argv[1], sys.argv[2], workers=2, report=False)
 print("fitted", result.succeeded)
-loaded = ("numba", "scipy", "pandas", "distributed", "cylfric.io")
+loaded = ("numba", "scipy", "pandas", "dask", "cylfric.io")
 print("loaded", [m for m in loaded if m in sys.modules])
 """
 
 
 def test_the_calling_process_loads_no_reader_while_the_workers_fit(eight, tmp_path):
-    """The caller of fit_many with local workers imports Dask's local scheduler, neither
-    pandas, dask.distributed nor the readers (numba, scipy): 0.3 s of processor time each at
-    its start, and more at its exit (measured for issue 15); its fit_many.csv is still
-    written atomically (cylfric._atomic, re-exported by io.writers)."""
+    """The caller of fit_many with local workers (a standard process pool) imports neither
+    pandas, Dask nor the readers (numba, scipy): 0.3 s of processor time each at its start,
+    and more at its exit (measured for issue 15); the workers import what a fit needs. Its
+    fit_many.csv is still written atomically (cylfric._atomic, re-exported by io.writers)."""
     from cylfric._atomic import atomic_write_text
     from cylfric.io import writers
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import ast
-import pickle
 import subprocess
 import sys
 from pathlib import Path
@@ -63,34 +62,18 @@ def test_figures_follow_the_results_available(results):
     assert [stem for stem, _, _ in all_figures(full)] == STEMS
 
 
-def test_two_processes_draw_what_one_draws(results):
+def test_a_pool_draws_what_one_process_draws(results):
+    from cylfric._parallel import can_fork
+
     extraction, _, full = results
-    if not F._can_fork():
-        pytest.skip("this platform or process cannot fork a figure worker")
+    if not can_fork():
+        pytest.skip("this platform or process cannot fork figure workers")
     serial = render_all(full, extraction.offset, workers=1)
     parallel = render_all(full, extraction.offset, workers=2)
     assert [r[:2] for r in parallel] == [r[:2] for r in serial]  # stems, captions, in order
     assert [r[0] for r in serial] == STEMS
     assert _png(parallel) == _png(serial)
     assert all(svg.lstrip().startswith(b"<?xml") for _, _, _, svg in parallel)
-
-
-def test_figures_are_drawn_here_when_the_worker_dies(results, monkeypatch):
-    extraction, _, full = results
-    if not F._can_fork():
-        pytest.skip("this platform or process cannot fork a figure worker")
-
-    def broken_dump(*args, **kwargs):
-        raise RuntimeError("the worker cannot send its figures")
-
-    monkeypatch.setattr(pickle, "dump", broken_dump)  # only the forked worker sends
-    drawn_here = []
-    draw = F.render
-    monkeypatch.setattr(F, "render", lambda fig: drawn_here.append(fig) or draw(fig))
-    rendered = render_all(full, extraction.offset, workers=2)
-    assert [stem for stem, *_ in rendered] == STEMS
-    assert len(drawn_here) == len(STEMS)  # the worker's share was drawn again here
-    assert all(png.startswith(b"\x89PNG") for _, _, png, _ in rendered)
 
 
 def test_report_imports_nothing_from_identify():

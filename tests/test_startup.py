@@ -60,25 +60,14 @@ def test_window_velocity_is_the_savitzky_golay_derivative():
         assert_allclose(smoothed_velocity(t, x, window=window), expected, rtol=0, atol=1e-10)
 
 
-def test_the_pipeline_imports_the_identification_only_while_extracting():
-    """pandas, the quality gate, scipy.optimize, jsonschema and the identification load in
-    extract_campaign's ``meanwhile`` (while the forked child reads the files), not when the
-    pipeline is imported: the reading needs none of them."""
+def test_the_pipeline_imports_the_identification_only_where_it_is_used():
+    """pandas, the quality gate, scipy.optimize, jsonschema and the identification load
+    where a fit first uses them, not when the pipeline is imported: the reading (also in
+    the forked pool workers) needs none of them."""
     script = (
         "import sys\nimport cylfric.pipeline, cylfric.cli\n"
         "print([m for m in ('scipy.optimize', 'scipy.ndimage', 'jsonschema', 'cylfric.identify',"
         " 'pandas', 'cylfric.quality') if m in sys.modules])"
-    )
-    done = _run(script)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
-
-
-def test_the_pipelines_meanwhile_loads_the_identification():
-    script = (
-        "import sys\nfrom cylfric.pipeline import _import_next_stages\n_import_next_stages()\n"
-        "print([m for m in ('scipy.optimize', 'jsonschema', 'cylfric.identify.steady', 'pandas',"
-        " 'cylfric.quality') if m not in sys.modules])"
     )
     done = _run(script)
     assert done.returncode == 0, done.stderr

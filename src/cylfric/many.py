@@ -8,12 +8,10 @@ campaign that fails is reported there, not raised.
 
 Schedulers (``scheduler=``):
 
-- ``None`` (default): local worker processes through Dask's multiprocessing scheduler
-  (``dask.compute(..., scheduler=dask.multiprocessing.get)``); it starts in about 0.3 s where a
-  ``distributed.LocalCluster`` of two processes takes 1.8-6.9 s on a 2-core machine
-  (measured for issue 15). Its workers are forked from a server process that imported
-  the pipeline once (``forkserver`` with preload, :func:`start_worker_server`), so no
-  worker pays the 1.3-1.45 s import; the server leaves at once when the caller ends.
+- ``None`` (default): local worker processes, a standard
+  :class:`concurrent.futures.ProcessPoolExecutor` (:func:`cylfric._parallel.starmap`);
+  it starts in well under a second where a ``distributed.LocalCluster`` of two processes
+  takes 1.8-6.9 s on a 2-core machine (measured for issue 15).
 - ``"local-cluster"``: a ``dask.distributed.LocalCluster(n_workers, threads_per_worker=1,
   processes=True)`` (its dashboard, its resilience to a dying worker).
 - ``"tcp://host:8786"`` (any scheduler address): a Dask distributed cluster; every worker
@@ -34,7 +32,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
-__all__ = ["find_campaigns", "fit_many", "start_worker_server", "ManyResult", "SUMMARY_COLUMNS"]
+__all__ = ["find_campaigns", "fit_many", "ManyResult", "SUMMARY_COLUMNS"]
 
 SUMMARY_COLUMNS = (
     "campaign",
@@ -240,10 +238,12 @@ def fit_many(
 
     Notes
     -----
-    The local workers start from a fork server, which, as Python's ``spawn`` and
-    ``forkserver`` start methods do, runs the calling script's main module again: call
-    ``fit_many`` from a script under ``if __name__ == "__main__":`` (notebooks and the
-    ``cylfric fit-many`` command need nothing).
+    The local workers are forked where the calling process can fork
+    (:func:`cylfric._parallel.starmap`); elsewhere (a notebook, whose kernel runs threads;
+    Windows, macOS) they start fresh, which, as Python's ``spawn`` and ``forkserver``
+    start methods do, runs the calling script's main module again: call ``fit_many`` from
+    a script under ``if __name__ == "__main__":`` (notebooks and the ``cylfric fit-many``
+    command need nothing).
     """
     unknown = set(fit_options) - set(_FIT_OPTIONS)
     if unknown:
@@ -267,9 +267,6 @@ def fit_many(
     if distributed and workers is not None:
         raise ValueError("workers is set by the cluster behind a scheduler address; leave it out")
     workers = workers or os.cpu_count() or 1
-    context = None
-    if scheduler is None:  # the workers' server imports the pipeline while this process goes on
-        context = start_worker_server(report=fit_options.get("report", True))
     from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     make_folder(out)
@@ -297,8 +294,10 @@ def fit_many(
         for job in jobs:
             done(fit_one(*job))
     elif scheduler is None:
-        used = f"dask multiprocessing scheduler, {workers} process(es)"
-        _run_processes([jobs[i] for i in order], workers, done, context)
+        from ._parallel import starmap
+
+        used = f"local process pool, {workers} process(es)"
+        starmap(fit_one, [jobs[i] for i in order], workers=workers, done=lambda _, row: done(row))
     else:
         used = _run_distributed([jobs[i] for i in order], scheduler, workers, done)
     for job in jobs:  # a worker lost with its task: reported like any failure
@@ -347,81 +346,6 @@ def _add_to_catalog(db, out: Path, name: str) -> str:
     except Exception as exc:  # noqa: BLE001 - reported in the summary, the fit stands
         return f"not added: {type(exc).__name__}: {exc}"
     return "added"
-
-
-def start_worker_server(report=True):
-    """Start the server the local workers of :func:`fit_many` fork from, if not running.
-
-    The server (a ``multiprocessing`` fork server) imports :mod:`cylfric._worker_server`
-    once: everything a fit needs, its compiled code loaded, and the part of Dask that runs a
-    task in a worker; with ``report`` also :mod:`cylfric.report`. It starts at once and
-    imports while the caller goes on, so a caller that starts it first thing (as
-    ``cylfric fit-many`` does, before it imports Dask itself) overlaps its own
-    imports with the server's. :func:`fit_many` calls it too; a second call returns the
-    running server (whose preload the first call chose).
-
-    Parameters
-    ----------
-    report : bool
-        Also preload the report (figures and HTML) for fits with ``report=True``.
-
-    Returns
-    -------
-    multiprocessing.context.BaseContext
-        The context whose processes fork from the server (``spawn`` where there is no fork
-        server: Windows).
-    """
-    import multiprocessing
-
-    if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover
-        return multiprocessing.get_context("spawn")  # Windows
-    from multiprocessing import forkserver
-
-    preload = ["cylfric._worker_server"] + (["cylfric.report"] if report else [])
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(preload)
-    forkserver.ensure_running()
-    return context
-
-
-def _run_processes(jobs, workers, done, context):
-    """Dask's multiprocessing scheduler on a pool of ``workers`` processes of ``context``
-    (:func:`start_worker_server`: forked from a server that imported the pipeline once, so no
-    worker pays that import); ``done`` sees each row as its task finishes."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    import dask
-    import dask.multiprocessing
-    from dask.callbacks import Callback
-
-    class _Finished(Callback):
-        def _posttask(self, key, result, dsk, state, worker_id):
-            if isinstance(result, dict) and "status" in result:
-                done(result)
-
-    # keys that sort in the order of ``jobs``: Dask's local scheduler starts ready tasks in
-    # key order
-    tasks = [
-        dask.delayed(fit_one, pure=False)(*job, dask_key_name=f"fit-{i:06d}")
-        for i, job in enumerate(jobs)
-    ]
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        try:
-            with _Finished():
-                # chunksize=1: one campaign per message. Dask's multiprocessing default (6)
-                # sent 6 of 8 campaigns to one worker as a batch while the other sat idle
-                dask.compute(
-                    *tasks,
-                    # the function, not the name "processes": for a name Dask first imports
-                    # dask.distributed (to look for a default client: 0.3 s of processor
-                    # time here and 0.1 s more at exit, measured for issue 15)
-                    scheduler=dask.multiprocessing.get,
-                    pool=pool,
-                    num_workers=workers,
-                    chunksize=1,
-                )
-        except Exception:  # noqa: BLE001 - a dead worker process: the rest are reported lost
-            pass
 
 
 def _run_distributed(jobs, scheduler, workers, done) -> str:

@@ -20,7 +20,7 @@ from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config, read_run
 from .io.writers import atomic_write_text
 from .steady_state import extract_campaign
 
-if TYPE_CHECKING:  # pandas and the gate load while the files are read (_import_next_stages)
+if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
     import pandas as pd
 
 __all__ = ["fit_campaign", "FitOutputs"]
@@ -124,8 +124,9 @@ def fit_campaign(
         written into ``out/export/<target>/`` after the datasheet; lossy targets' loss
         reports are summarised in ``report.html``.
     workers : int, optional
-        Processes for the extraction and the figures (default 2 on Linux, else 1; see
-        :func:`~cylfric.steady_state.extract_campaign`); 1 keeps the fit on one core, as
+        Processes for the extraction and the figures (default 2, where they can be forked:
+        :mod:`cylfric._parallel`; see :func:`~cylfric.steady_state.extract_campaign`); 1
+        keeps the fit on one core, as
         the workers of :func:`cylfric.many.fit_many` do when several fits run at once.
     viscosity_correction : bool, optional
         Identify at the reference temperature of ``campaign.toml [oil]``, each point's speed
@@ -402,17 +403,6 @@ def _sign_settings(folder) -> str:
     return f"; set in {'; '.join(found)}" if found else f"; {path} keeps the default signs"
 
 
-def _import_next_stages():
-    """Import pandas, the quality gate, the identification and the datasheet (scipy.optimize,
-    jsonschema: about 0.7 s of processor time) while the forked extraction child already
-    reads files: the reading itself needs neither pandas nor scipy."""
-    import jsonschema  # noqa: F401  (the datasheet's validation loads it on first use)
-    import pandas  # noqa: F401
-
-    from . import datasheet, quality  # noqa: F401
-    from .identify import steady  # noqa: F401  (the package itself loads its names lazily)
-
-
 def _fit(
     folder,
     out,
@@ -442,7 +432,6 @@ def _fit(
             config,
             skip_bad=skip_bad,
             progress=progress,
-            meanwhile=_import_next_stages,
             exclude=[info.path.name for info in dynamic_runs],
             workers=workers,
         )

@@ -14,25 +14,17 @@ unit, and :func:`find_windows` can return its intermediate components.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import os
-import pickle
-import select
-import signal
-import struct
-import sys
-import threading
-import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ._parallel import run
 from .io.campaign import CampaignConfig, discover_runs, load_config, read_run, unlisted_files
 from .io.text import BenchFileError
 
-if TYPE_CHECKING:  # pandas loads while the files are read (see extract_campaign)
+if TYPE_CHECKING:  # pandas is imported once the points are collected: reading needs none
     import pandas as pd
 
 __all__ = [
@@ -496,173 +488,8 @@ class Extraction:
 
 
 PARALLEL_MIN_FILES = 16
-"""Fewest files for which :func:`extract_campaign` forks a second process."""
-
-
-def _can_fork() -> bool:
-    return (
-        sys.platform.startswith("linux") and hasattr(os, "fork") and threading.active_count() == 1
-    )
-
-
-def _send(pipe, item):
-    data = pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL)
-    pipe.write(struct.pack("<Q", len(data)) + data)
-    pipe.flush()
-
-
-def _receive(pipe):
-    head = pipe.read(8)
-    if len(head) < 8:
-        raise EOFError
-    data = pipe.read(struct.unpack("<Q", head)[0])
-    return pickle.loads(data)
-
-
-def _file_queue(n):
-    """Read end of a pipe holding the indices 0..n-1 (4 bytes each), or None if they do not
-    fit in the pipe's buffer at once (a pipe has 64 KiB, less when the user has many)."""
-    read_end, write_end = os.pipe()
-    data = struct.pack(f"<{n}i", *range(n))
-    os.set_blocking(write_end, False)
-    try:
-        written = os.write(write_end, data)
-    except BlockingIOError:
-        written = 0
-    os.close(write_end)
-    if written == len(data):
-        return read_end
-    os.close(read_end)
-    return None
-
-
-RESULTS_PIPE_BYTES = 1 << 20
-"""Buffer of the child's results pipe [bytes]: each file's points and summary pickle to about
-1.1 kB, so a default 64 KiB pipe blocked the child after about 60 files while this process
-was still importing the next stages (``meanwhile``); 1 MiB holds about 900 files."""
-
-
-def _widen(fd):
-    """Ask Linux for a ``RESULTS_PIPE_BYTES`` pipe buffer (F_SETPIPE_SZ); keep the default
-    where the system refuses (a user over its pipe quota)."""
-    import fcntl
-
-    with contextlib.suppress(OSError, AttributeError):
-        fcntl.fcntl(fd, getattr(fcntl, "F_SETPIPE_SZ", 1031), RESULTS_PIPE_BYTES)
-
-
-COMPILED_LOAD_SECONDS = 0.45
-"""What a process's first read costs before its first file: importing numba (0.15-0.2 s)
-and loading numba's CPU target with the reader's compiled code (0.25-0.3 s of processor
-time; measured on the 2-core CI machine)."""
-
-
-def _compiled_loaded() -> bool:
-    """Whether this process has already loaded the reader's compiled code."""
-    scan = sys.modules.get("cylfric.io._scan")  # not imported here: that would load numba
-    return scan is not None and bool(scan.scan_lines.signatures)
-
-
-def _worth_joining(queue_read, n, elapsed, child_start=0.0) -> bool:
-    """Whether this process should take files too, ``elapsed`` [s] after the fork.
-
-    The child alone would need ``remaining / rate`` more seconds; joining first costs this
-    process the load of the compiled code (``COMPILED_LOAD_SECONDS``, unless loaded), after
-    which both take files: joining pays exactly when the child's remaining time is longer
-    than that cost. The child's rate is the files it took over the time since its own start
-    (``child_start`` [s] after the fork: the same load, when the compiled code was not
-    loaded before the fork).
-    """
-    import fcntl
-    import termios
-
-    try:
-        queued = struct.unpack("i", fcntl.ioctl(queue_read, termios.FIONREAD, b"\0" * 4))[0]
-    except OSError:  # pragma: no cover - no FIONREAD on this pipe: always take files
-        return True
-    remaining, taken = queued // 4, n - queued // 4
-    if remaining == 0:
-        return False
-    if taken == 0 or _compiled_loaded():
-        return True
-    reading = max(elapsed - child_start, 0.05)  # [s] since the child's first file began
-    return remaining * reading / taken > COMPILED_LOAD_SECONDS
-
-
-def _extract_all(one, n, workers, report, meanwhile=None):
-    """``[one(i) for i in range(n)]``, on two cores when allowed (see extract_campaign).
-
-    The two processes take files from a shared queue (a pipe of file indices: a read of 4
-    bytes is atomic), so this process may first run ``meanwhile`` (e.g. imports for the
-    next stage) while the child already extracts, and then takes files too only when that
-    pays (:func:`_worth_joining`).
-    """
-    workers = (2 if sys.platform.startswith("linux") else 1) if workers is None else workers
-    results = [None] * n
-    parallel = workers >= 2 and n >= PARALLEL_MIN_FILES and _can_fork()
-    queue_read = _file_queue(n) if parallel else None
-    if queue_read is None:
-        if meanwhile is not None:
-            meanwhile()
-        for index in range(n):
-            results[index] = one(index)
-            report(index)
-        return results
-    read_end, write_end = os.pipe()
-    _widen(write_end)
-    child_start = 0.0 if _compiled_loaded() else COMPILED_LOAD_SECONDS
-    started = time.perf_counter()
-    pid = os.fork()
-    if pid == 0:  # the child: take files from the queue, send each result, leave quietly
-        status = 1
-        try:
-            os.close(read_end)
-            with os.fdopen(write_end, "wb") as pipe:
-                while len(token := os.read(queue_read, 4)) == 4:
-                    index = struct.unpack("<i", token)[0]
-                    _send(pipe, (index, one(index)))
-            status = 0
-        finally:
-            os._exit(status)
-    os.close(write_end)
-    try:
-        with os.fdopen(read_end, "rb") as pipe:
-
-            def collect(block):
-                """Read the child's finished results; False once it is gone."""
-                while select.select([pipe], [], [], None if block else 0)[0]:
-                    try:  # each message is written whole: a readable pipe holds one
-                        index, result = _receive(pipe)
-                    except Exception:  # noqa: BLE001 - a dead child: its files are read here
-                        return False
-                    results[index] = result
-                    report(index)
-                    if block:
-                        return True
-                return True
-
-            if meanwhile is not None:
-                meanwhile()
-            alive = True
-            join = _worth_joining(queue_read, n, time.perf_counter() - started, child_start)
-            while join and len(token := os.read(queue_read, 4)) == 4:
-                index = struct.unpack("<i", token)[0]
-                results[index] = one(index)
-                report(index)
-                alive = alive and collect(block=False)
-            while alive and any(result is None for result in results):
-                alive = collect(block=True)
-    finally:
-        os.close(queue_read)
-        if any(result is None for result in results):
-            with contextlib.suppress(ProcessLookupError):
-                os.kill(pid, signal.SIGTERM)
-        os.waitpid(pid, 0)
-    for index in range(n):  # the child died: the file it had taken is read here
-        if results[index] is None:
-            results[index] = one(index)
-            report(index)
-    return results
+"""Fewest files for which :func:`extract_campaign` reads on a pool of processes
+(:func:`cylfric._parallel.run`); fewer are read here, one after another."""
 
 
 def extract_campaign(
@@ -672,7 +499,6 @@ def extract_campaign(
     skip_bad=False,
     progress=None,
     workers=None,
-    meanwhile=None,
     exclude=(),
     **options,
 ) -> Extraction:
@@ -682,14 +508,11 @@ def extract_campaign(
     only each run's points are kept). By default the first bad file raises
     :class:`~cylfric.io.BenchFileError`; with ``skip_bad`` it is listed in
     ``Extraction.skipped`` with the reason and the rest goes on. ``progress`` is called with
-    each file name. ``workers`` (default 2 on Linux, else 1): with 2, and at least
-    ``PARALLEL_MIN_FILES`` files, in a process without other threads, a forked child and
-    this process take files from a shared queue (the per-file work is small numpy calls
-    that hold the GIL, so threads would not help); the result is the same either way, and
-    files of a child that died are extracted here. ``meanwhile`` (a callable) runs in this
-    process once the child has started, before it takes files (the pipeline imports pandas
-    and the identification there); after it, this process reads files too only when the
-    child's remaining work is longer than loading the compiled reader here. ``exclude``
+    each file name as it is done. ``workers`` (default 2): with 2 or more, and at least
+    ``PARALLEL_MIN_FILES`` files, the files are read on a pool of forked processes
+    (:func:`cylfric._parallel.run`; the per-file work is small numpy calls that hold the
+    GIL, so threads would not help), else here, one after another; the result is the same
+    either way. ``exclude``
     names files of the campaign that are not constant-velocity runs (the presliding and
     breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they are not read here.
     Input files are never modified.
@@ -729,11 +552,12 @@ def extract_campaign(
         }
         return rows, summary, None
 
-    def report(index):
+    def report(index, _result=None):
         if progress is not None:
             progress(infos[index].path.name)
 
-    results = _extract_all(one, len(infos), workers, report, meanwhile)
+    workers = 2 if workers is None else workers
+    results = run(one, len(infos), workers=workers, min_items=PARALLEL_MIN_FILES, done=report)
     for index, info in enumerate(infos):
         rows, summary, error = results[index]
         if error is not None:
@@ -765,7 +589,7 @@ def extract_campaign(
                 for r in rows:
                     r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
                 _offset_rows(rows, campaign_offset=offset)
-    import pandas as pd  # loaded meanwhile (pipeline): the reading runs without it
+    import pandas as pd
 
     rows = [r for run_rows in per_run for r in run_rows]
     points = (

@@ -72,13 +72,9 @@ def register(app: typer.Typer) -> None:
             "strict": strict,
             "viscosity_correction": viscosity_correction,
         }
-        from ..many import find_campaigns, fit_many, start_worker_server
+        from ..many import find_campaigns, fit_many
 
         total = len(find_campaigns(root, exclude=[out]))  # a few ms
-        if scheduler is None and total:
-            # before anything heavy: the workers' server imports the pipeline while this
-            # process imports Dask (a bad argument or no campaign starts no server)
-            start_worker_server(report=not no_report)
         from rich.table import Table
         from rich.text import Text
 

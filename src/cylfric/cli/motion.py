@@ -58,14 +58,10 @@ def register(app) -> None:
         friction above the largest recorded force). Fix the units (motion.toml [units], the
         record's header) or give --accept-implausible to write it with its flags.
         """
-        drawer = _Drawer()  # first: a forked child imports matplotlib meanwhile
-        try:
-            _run(record, config, out, per_direction, validate, drawer, accept_implausible)
-        finally:
-            drawer.close()
+        _run(record, config, out, per_direction, validate, accept_implausible)
 
 
-def _run(record, config, out, per_direction, validate, drawer, accept_implausible=False):
+def _run(record, config, out, per_direction, validate, accept_implausible=False):
     import hashlib
     import json
 
@@ -123,7 +119,6 @@ def _run(record, config, out, per_direction, validate, drawer, accept_implausibl
     jobs = {FIGURE: ("fit", _fit_figure_data(fit))}
     if replay is not None:
         jobs[VALIDATION_FIGURE] = ("validation", _validation_figure_data(replay))
-    drawer.submit(jobs)  # the child draws while the JSON and CSV are written
     make_folder(out)
     refined = fit.refinement.model if fit.refinement is not None else None
     if refined is not None:
@@ -131,8 +126,7 @@ def _run(record, config, out, per_direction, validate, drawer, accept_implausibl
         atomic_write_text(out / "datasheet.json", json.dumps(sheet, indent=2) + "\n")
     atomic_write_text(out / FIT_JSON, json.dumps(document, indent=2, default=float) + "\n")
     atomic_write_text(out / SIGNALS_CSV, _csv(fit.signals))
-    pngs = drawer.collect()
-    for name, png in pngs.items():
+    for name, png in _draw_all(jobs).items():
         atomic_write_bytes(out / name, png)
     _print_summary(fit, replay, out)
 
@@ -147,104 +141,6 @@ def _csv(columns: dict) -> str:
     buffer.write(",".join(f'"{n}"' for n in names) + "\n")
     np.savetxt(buffer, np.column_stack([columns[n] for n in names]), delimiter=",", fmt="%.9g")
     return buffer.getvalue()
-
-
-class _Drawer:
-    """Draws the figures, in a child forked at the start of the command when it can.
-
-    A fresh ``cylfric`` process spends most of its time importing scipy.signal and
-    matplotlib. On Linux, in a process without other threads and before numpy is loaded,
-    a child forked first imports matplotlib while this process imports scipy and fits; it
-    then receives plain arrays through a pipe, draws, and sends the PNG bytes back. Anywhere
-    else, or if the child fails, the figures are drawn in this process: same bytes either way.
-    """
-
-    def __init__(self):
-        import os
-        import sys
-        import threading
-
-        self.pid = None
-        self.jobs = {}
-        if not (
-            sys.platform.startswith("linux")
-            and hasattr(os, "fork")
-            and threading.active_count() == 1
-            and "numpy" not in sys.modules
-        ):
-            return
-        job_read, self.job_write = os.pipe()
-        self.result_read, result_write = os.pipe()
-        pid = os.fork()
-        if pid == 0:  # the child: import matplotlib now, draw what arrives, leave
-            status = 1
-            try:
-                import pickle
-
-                os.close(self.job_write)
-                os.close(self.result_read)
-                import matplotlib.backends.backend_agg  # noqa: F401
-                import matplotlib.figure  # noqa: F401
-
-                with os.fdopen(job_read, "rb") as pipe:
-                    raw = pipe.read()
-                if raw:
-                    pngs = _draw_all(pickle.loads(raw))
-                    with os.fdopen(result_write, "wb") as pipe:
-                        pickle.dump(pngs, pipe, protocol=pickle.HIGHEST_PROTOCOL)
-                status = 0
-            finally:
-                os._exit(status)
-        os.close(job_read)
-        os.close(result_write)
-        self.pid = pid
-
-    def submit(self, jobs: dict) -> None:
-        """Hand ``{name: (kind, data)}`` to the child (or keep it to draw here)."""
-        import os
-        import pickle
-
-        self.jobs = jobs
-        if self.pid is None:
-            return
-        fd, self.job_write = self.job_write, None
-        try:
-            with os.fdopen(fd, "wb") as pipe:
-                pickle.dump(jobs, pipe, protocol=pickle.HIGHEST_PROTOCOL)
-        except OSError:
-            pass  # the child is gone: collect() draws here
-
-    def collect(self) -> dict:
-        """``{name: png bytes}`` of the submitted jobs."""
-        import os
-        import pickle
-
-        if self.pid is None:
-            return _draw_all(self.jobs)
-        pngs = None
-        fd, self.result_read = self.result_read, None
-        try:
-            with os.fdopen(fd, "rb") as pipe:
-                pngs = pickle.load(pipe)
-        except (EOFError, OSError, pickle.UnpicklingError):
-            pngs = None
-        finally:
-            _, status = os.waitpid(self.pid, 0)
-            self.pid = None
-        if not isinstance(pngs, dict) or status != 0 or set(pngs) != set(self.jobs):
-            return _draw_all(self.jobs)  # the child failed: draw here
-        return pngs
-
-    def close(self):
-        """Let an unused child go (on errors before :meth:`draw`)."""
-        import os
-
-        if self.pid is not None:  # an error before collect(): the child sees EOF and exits
-            for fd in (self.job_write, self.result_read):
-                if fd is not None:
-                    os.close(fd)
-            os.waitpid(self.pid, 0)
-            self.pid = None
 
 
 def _draw_all(jobs: dict) -> dict:

@@ -503,83 +503,21 @@ def save_rendered(folder, stem, png: bytes, svg: bytes) -> dict:
     }
 
 
-# Drawing time of each figure (PNG and SVG) on the 270-file demo campaign [ms], measured on
-# a 2-core machine with matplotlib 3.11: shares are balanced by it.
-_COST_MS = {
-    "parameters": 250,
-    "fit": 200,
-    "sensitivity_curves": 160,
-    "sensitivity": 105,
-    "residuals": 95,
-    "directions": 95,
-}
-
-
-def _draw(figures):
-    return [(stem, caption, *render(build())) for stem, caption, build in figures]
-
-
-def _can_fork() -> bool:
-    import multiprocessing
-    import sys
-    import threading
-
-    return (
-        sys.platform.startswith("linux")
-        and "fork" in multiprocessing.get_all_start_methods()
-        and threading.active_count() == 1
-    )
-
-
-def _shares(figures, workers):
-    """Split figures into ``workers`` shares of about equal drawing time, heaviest first."""
-    shares = [[] for _ in range(workers)]
-    loads = [0.0] * workers
-    for figure in sorted(figures, key=lambda f: -_COST_MS.get(f[0], 100)):
-        i = loads.index(min(loads))
-        shares[i].append(figure)
-        loads[i] += _COST_MS.get(figure[0], 100)
-    return shares
-
-
 def render_all(ident, offset=None, *, workers=2):
     """Draw every report figure: ``[(stem, caption, png, svg)]`` in report order.
 
-    With ``workers=2`` on Linux, in a process without other threads, one forked child
-    draws about half of the figures while this process draws the rest (matplotlib is
-    single-threaded; the machine has a second core). Anywhere else, or if the child fails,
-    every figure is drawn here. The result is the same either way.
+    With ``workers`` >= 2 the figures are drawn on a pool of forked processes
+    (:func:`cylfric._parallel.run`: matplotlib is single-threaded, and the workers inherit
+    it loaded); where no pool can be forked, here, one after another. The result is the
+    same either way.
     """
-    import os
-    import pickle
+    from .._parallel import run
 
     figures = all_figures(ident, offset)
-    if workers < 2 or len(figures) < 2 or not _can_fork():
-        return _draw(figures)
-    mine, theirs = _shares(figures, 2)
-    read_end, write_end = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # the child: draw its share, send it, leave without cleanup handlers
-        status = 1
-        try:
-            os.close(read_end)
-            with os.fdopen(write_end, "wb") as pipe:
-                pickle.dump(_draw(theirs), pipe, protocol=pickle.HIGHEST_PROTOCOL)
-            status = 0
-        finally:
-            os._exit(status)
-    os.close(write_end)
-    drawn = _draw(mine)
-    with os.fdopen(read_end, "rb") as pipe:
-        try:
-            received = pickle.load(pipe)
-        except (EOFError, pickle.UnpicklingError):  # the child died: draw its share here
-            received = None
-    _, status = os.waitpid(pid, 0)
-    if received is None or status != 0:
-        received = _draw(theirs)
-    by_stem = {item[0]: item for item in drawn + received}
-    return [by_stem[stem] for stem, _, _ in figures]
+    drawn = run(lambda i: render(figures[i][2]()), len(figures), workers=workers)
+    return [
+        (stem, caption, *images) for (stem, caption, _), images in zip(figures, drawn, strict=True)
+    ]
 
 
 def all_figures(ident=None, offset=None, points=None):

@@ -1,0 +1,152 @@
+"""Parallel work in one place: a standard process pool, or plain serial where it does not pay.
+
+Three things in cylfric run on several cores: the run files of one campaign
+(:func:`cylfric.steady_state.extract_campaign`), the figures of a report
+(:func:`cylfric.report.figures.render_all`) and whole campaigns
+(:func:`cylfric.many.fit_many`). All of them use a
+:class:`concurrent.futures.ProcessPoolExecutor`, through one of two functions:
+
+- :func:`run`: ``[task(i) for i in range(n)]`` with workers forked from this process, or
+  in this process where a pool would not pay or cannot be forked. A forked worker starts
+  with everything this process has loaded (numpy, the campaign's configuration, the task
+  itself, which may be a closure): only the index is pickled on the way in, nothing is
+  imported again. Where forking is not available (Windows, macOS) or not safe (a process
+  with other threads: a thread holding a lock at the fork leaves it locked in the child),
+  the tasks run here, one after another.
+- :func:`starmap`: ``[function(*a) for a in arguments]`` with a picklable module-level
+  function, forked where it can, else started fresh (a notebook: its kernel runs threads).
+
+The results are the same whichever way the work ran.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import sys
+import threading
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from typing import Any
+
+__all__ = ["can_fork", "run", "starmap"]
+
+
+def can_fork() -> bool:
+    """Whether :func:`run` may fork workers here: on Linux, in a process without other
+    threads."""
+    return sys.platform.startswith("linux") and threading.active_count() == 1
+
+
+_task: Callable[[int], Any] | None = None
+"""The task of the pool this worker belongs to (set in each worker by :func:`_install`)."""
+
+
+def _install(task: Callable[[int], Any]) -> None:
+    global _task
+    _task = task
+
+
+def _call(index: int) -> Any:
+    return _task(index)
+
+
+def run(
+    task: Callable[[int], Any],
+    n: int,
+    *,
+    workers: int = 1,
+    min_items: int = 2,
+    done: Callable[[int], None] | None = None,
+) -> list:
+    """``[task(i) for i in range(n)]``, in ``workers`` forked processes when that pays.
+
+    Parameters
+    ----------
+    task : callable
+        ``task(index)`` for index 0..n-1; any callable (a closure too: the workers are
+        forked, so it is not pickled). Its return value is pickled back.
+    n : int
+        Number of items.
+    workers : int
+        Worker processes; 1 (or ``n < min_items``, or no :func:`can_fork`) runs every task
+        in this process, one after another.
+    min_items : int
+        Fewest items for which a pool is started: below it, starting the workers costs more
+        than they save (the callers say where they measured their threshold).
+    done : callable, optional
+        ``done(index, result)`` in this process as each task finishes (in the order they
+        finish).
+
+    Returns
+    -------
+    list
+        The results, in index order. An exception raised by a task is raised here (the
+        tasks not yet started are cancelled). The tasks a dead worker (a crash, a signal)
+        left unfinished are run here.
+    """
+    pool = None
+    if workers >= 2 and n >= max(min_items, 2) and can_fork():
+        pool = ProcessPoolExecutor(
+            max_workers=min(workers, n),
+            mp_context=multiprocessing.get_context("fork"),
+            initializer=_install,
+            initargs=(task,),  # inherited by the forked workers, not pickled
+        )
+    return _collect(pool, _call, task, [(index,) for index in range(n)], done)
+
+
+def starmap(
+    function: Callable[..., Any],
+    arguments: Sequence[tuple],
+    *,
+    workers: int,
+    done: Callable[[int], None] | None = None,
+) -> list:
+    """``[function(*a) for a in arguments]`` on a pool of ``workers`` processes.
+
+    Unlike :func:`run` it needs no fork: ``function`` (a module-level function) and its
+    ``arguments`` are pickled, so where this process cannot fork (a notebook's kernel runs
+    threads; Windows, macOS) the workers are started fresh (``forkserver`` or ``spawn``,
+    which run the calling script's main module again: guard it with
+    ``if __name__ == "__main__":``). ``done(index, result)`` as each call finishes;
+    results in order. When a worker dies (a crash, a signal, memory), the calls the pool
+    had not finished are not run again (they might kill this process too): their results
+    are None. ``workers`` < 2: serial, here.
+    """
+    pool = None
+    if workers >= 2 and len(arguments) >= 2:
+        methods = multiprocessing.get_all_start_methods()
+        fresh = "forkserver" if "forkserver" in methods else "spawn"
+        method = "fork" if "fork" in methods and can_fork() else fresh
+        pool = ProcessPoolExecutor(
+            max_workers=min(workers, len(arguments)),
+            mp_context=multiprocessing.get_context(method),
+        )
+    return _collect(pool, function, None if pool else function, list(arguments), done)
+
+
+def _collect(pool, remote, local, arguments, done) -> list:
+    """``remote(*a)`` on ``pool`` (None: no pool) for each ``a``, results in order; what
+    the pool did not finish, ``local(*a)`` here (None: left as None)."""
+    n = len(arguments)
+    results: list = [None] * n
+    finished = [False] * n
+    if pool is not None:
+        try:
+            futures = {pool.submit(remote, *a): index for index, a in enumerate(arguments)}
+            for future in as_completed(futures):
+                index = futures[future]
+                results[index], finished[index] = future.result(), True
+                if done is not None:
+                    done(index, results[index])
+        except BrokenProcessPool:
+            pass  # a worker died: what the pool had not finished is run below
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+    for index in range(n):
+        if not finished[index] and local is not None:
+            results[index] = local(*arguments[index])
+            if done is not None:
+                done(index, results[index])
+    return results
