@@ -13,7 +13,16 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import BadInput, console, guarded, numbers
+from .common import (
+    JSON_HELP,
+    BadInput,
+    console,
+    guarded,
+    model_document,
+    numbers,
+    print_json,
+    print_table,
+)
 
 catalog_app = typer.Typer(
     add_completion=False,
@@ -102,13 +111,19 @@ def add(
 
 @catalog_app.command("list")
 @guarded
-def list_entries(db: Path = typer.Option(None, "--db", help=DB_HELP)):
+def list_entries(
+    db: Path = typer.Option(None, "--db", help=DB_HELP),
+    json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
+):
     """List the catalogue (metadata in engineering units, validity ranges)."""
     from rich.markup import escape
     from rich.table import Table
 
     catalog = _db(db)
     frame = catalog.list()
+    if json_output:
+        print_json({"catalog": catalog.path, "entries": frame.to_dict("records")})
+        return
     cells = {
         "name": lambda r: terminal(r["name"]),
         "seal": lambda r: _text(r["seal"]),
@@ -135,7 +150,7 @@ def list_entries(db: Path = typer.Option(None, "--db", help=DB_HELP)):
         table.add_column(escape(column), overflow="fold")
     for row in rows:
         table.add_row(*(row[k] for k in shown))
-    console.print(table)
+    print_table(table)
 
 
 @catalog_app.command("show")
@@ -143,6 +158,7 @@ def list_entries(db: Path = typer.Option(None, "--db", help=DB_HELP)):
 def show(
     name: str = typer.Argument(..., help="Catalogue name."),
     db: Path = typer.Option(None, "--db", help=DB_HELP),
+    json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Show an entry: metadata and its pressure laws with standard errors."""
     from rich.table import Table
@@ -150,6 +166,11 @@ def show(
     catalog = _db(db)
     meta = catalog.metadata(name)
     model = catalog.model(name)
+    if json_output:
+        units = {"bore": "bore [m]", "rod": "rod [m]", "temperature": "temperature [K]"}
+        metadata = {units.get(k, k): v for k, v in meta.items()}
+        print_json({**model_document(model), "name": name, "metadata": metadata})
+        return
     table = Table(title=terminal(name), show_header=False)
     table.add_column("", style="bold")
     table.add_column("")
@@ -173,7 +194,7 @@ def show(
         )
     table.add_row("method", terminal(model.provenance.get("method", "-")))
     table.add_row("added", terminal(meta["added"]))
-    console.print(table)
+    print_table(table)
 
 
 def _default_points(models):
@@ -227,7 +248,7 @@ def compare(
             f"{_fmt(row['lower [N]'], 1, 4)}-{_fmt(row['upper [N]'], 1, 4)}",
             "yes" if row["inside validity"] else "extrapolated",
         )
-    console.print(table)
+    print_table(table)
     console.print(
         terminal(f"outputs in {out}: compare.csv, compare.png, compare.svg"), highlight=False
     )
@@ -242,6 +263,7 @@ def select(
         None, "--max-friction", help="Keep entries whose upper 95 % limit is below, N or 150N."
     ),
     db: Path = typer.Option(None, "--db", help=DB_HELP),
+    json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Rank the catalogue by friction at an operating point (lowest first), with bands."""
     from rich.markup import escape
@@ -252,6 +274,16 @@ def select(
     limit = _one(max_friction, "force", "N", "--max-friction")
     catalog = _db(db)
     ranked = catalog.select(p, v, max_friction=limit)
+    if json_output:
+        print_json(
+            {
+                "pressure [Pa]": p,
+                "velocity [m/s]": v,
+                "max friction [N]": limit,
+                "ranked": ranked.to_dict("records"),
+            }
+        )
+        return
     title = f"Friction at {p / 1e5:.4g} bar, {abs(v) * 1e3:.4g} mm/s"
     if limit is not None:
         title += f", upper limit <= {limit:.4g} N"
@@ -268,7 +300,7 @@ def select(
             "yes" if row["inside validity"] else "extrapolated",
             terminal(row["friction law"]),
         )
-    console.print(table)
+    print_table(table)
     if ranked.empty:
         console.print("no entry meets the limit", highlight=False)
 

@@ -12,7 +12,9 @@ from __future__ import annotations
 import functools
 import math
 import re
+import sys
 import traceback
+from pathlib import Path
 
 import typer
 from rich.console import Console
@@ -234,6 +236,99 @@ def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
     return table
 
 
+_NUMBER = re.compile(r"[-+]?(\d[\d.,]*|\.\d+)([eE][-+]?\d+)?")
+"""A number as the tables show it (``70.18``, ``-3.2e-05``, ``1.5-7``: ranges are split)."""
+
+
+def _numeric(text: str) -> bool:
+    parts = [p for p in re.split(r"\s*(?:±|\+/-|(?<=\d)-(?=\d)| )\s*", text.strip()) if p]
+    return bool(parts) and all(_NUMBER.fullmatch(p) or p in ("-", "n/a") for p in parts)
+
+
+def print_table(table: Table) -> None:
+    """Print ``table`` without ever cutting a number: columns of numbers do not wrap and keep
+    their full width, text columns wrap (at most 20 characters kept together), and the table
+    is printed wider than the terminal when it needs to be."""
+    from rich.measure import Measurement
+
+    for column in table.columns:
+        cells = [str(c) for c in column.cells]
+        header = str(column.header)
+        if cells and all(_numeric(c) for c in cells if c.strip()):
+            column.no_wrap = True
+            column.min_width = max(len(c) for c in [*cells, header])
+        else:
+            words = [w for c in [*cells, header] for w in c.split()]
+            column.min_width = min(20, max((len(w) for w in words), default=1))
+    measure = Measurement.get(console, console.options.update_width(10_000), table)
+    if measure.minimum > console.width:
+        # the natural width when it is not absurd, else the least that keeps every number
+        # (with a little room: rich's minimum can leave the last column no width at all)
+        natural = measure.maximum <= max(2 * console.width, 160)
+        width = measure.maximum if natural else measure.minimum + 2 * len(table.columns)
+        saved = console._width  # rich lays a table out by the console's own width
+        console.width = width
+        try:
+            console.print(table, crop=False)
+        finally:
+            console._width = saved
+    else:
+        console.print(table)
+
+
+def print_json(document: object) -> None:
+    """``document`` as JSON on standard output (``--json``): plain numbers in SI unless a
+    key names another unit, NaN as null, no markup or colour."""
+    import json
+
+    sys.stdout.write(json.dumps(_plain(document), indent=1, allow_nan=False) + "\n")
+    sys.stdout.flush()
+
+
+def _plain(value: object) -> object:
+    """JSON-ready: numpy scalars as numbers, NaN/inf as None, paths as text."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    if hasattr(value, "item") and not isinstance(value, str | bytes):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    return str(value)
+
+
+def model_document(model) -> dict:
+    """A FrictionModel for ``--json``: its laws as text and every coefficient in SI with its
+    unit, standard error, pressure law and status; the validity ranges in SI."""
+    table = model.to_pandas()
+    parameters = {
+        name: {
+            "law": row["law"],
+            "value": row["value"],
+            "stderr": row["stderr"],
+            "unit": row["unit"],
+            "status": row["status"],
+        }
+        for name, row in table.iterrows()
+    }
+    return {
+        "name": model.record.get("name"),
+        "friction_law": model.friction_law,
+        "pressure_reference": model.reference,
+        "laws": model.law_lines(),
+        "parameters": parameters,
+        "validity": dict(model.validity) if model.validity is not None else None,
+        "rmse [N]": model.statistics.get("rmse"),
+    }
+
+
+JSON_HELP = "Print a JSON document on standard output instead of tables (for scripts)."
+
 # public names for the command modules
 progress_bar = _progress
 numbers = _numbers
@@ -250,4 +345,8 @@ __all__ = [
     "numbers",
     "fixed_parameters",
     "summary_table",
+    "print_table",
+    "print_json",
+    "JSON_HELP",
+    "model_document",
 ]

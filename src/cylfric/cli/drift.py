@@ -7,20 +7,21 @@ from pathlib import Path
 import typer
 
 from ..escape import plot_text, terminal
-from .common import BadInput, console, guarded
+from .common import JSON_HELP, BadInput, console, guarded, print_json, print_table
 
 
-def _trend(source, label, out, order, campaign):
+def _trend(source, label, out, order, campaign, quiet=False):
     from ..drift import figure_run_order, load_fit, run_order_trend
 
     model, points, _ = load_fit(source)
     if points is None:
         return None
     trend = run_order_trend(points, model, order=order, campaign=campaign)
-    console.print(
-        f"[bold]{terminal(label)}[/bold]: friction against run order ({len(trend.runs)} runs)"
-    )
-    console.print(terminal(trend.summary(), markup=False, multiline=True), markup=False)
+    if not quiet:
+        console.print(
+            f"[bold]{terminal(label)}[/bold]: friction against run order ({len(trend.runs)} runs)"
+        )
+        console.print(terminal(trend.summary(), markup=False, multiline=True), markup=False)
     if out is not None:
         import io
 
@@ -49,6 +50,7 @@ def register(app) -> None:
         campaign: Path = typer.Option(
             None, "--campaign", help="Raw-file folder of A (for --order mtime)."
         ),
+        json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Change of friction between two fits (z-scores), and friction against run order.
 
@@ -71,10 +73,24 @@ def register(app) -> None:
 
             make_folder(out)  # a symbolic link is refused (exit 2), not written through
         if b is None:
-            if _trend(a, a.stem if a.is_file() else a.name, out, order, campaign) is None:
+            label = a.stem if a.is_file() else a.name
+            trend = _trend(a, label, out, order, campaign, quiet=json_output)
+            if trend is None:
                 raise BadInput(
                     f"{a}: no points.csv beside the datasheet; the run-order trend needs a fit "
                     "output folder (or give a second datasheet B to compare)"
+                )
+            if json_output:
+                print_json(
+                    {
+                        "fit": a,
+                        "order": trend.order,
+                        "between_slope [N/run]": trend.between_slope,
+                        "between_stderr [N/run]": trend.between_stderr,
+                        "within_slope [N/stroke]": trend.within_slope,
+                        "within_stderr [N/stroke]": trend.within_stderr,
+                        "runs": trend.runs.to_dict("records"),
+                    }
                 )
             return
         if order != "run" or campaign is not None:
@@ -83,6 +99,20 @@ def register(app) -> None:
                 "--campaign RAW); with two fits the run-order trends use the run order"
             )
         table = compute(a, b, level=level)
+        if json_output:
+            if out is not None:
+                write_drift(table, out)
+            print_json(
+                {
+                    "a": a,
+                    "b": b,
+                    "level": level,
+                    "z_critical": table.attrs.get("z_critical"),
+                    "notes": list(table.attrs.get("notes", [])),
+                    "rows": table.to_dict("records"),
+                }
+            )
+            return
         from ..model.core import engineering_unit
 
         params = table[table["kind"] == "parameter"]
@@ -101,7 +131,7 @@ def register(app) -> None:
                 "yes" if row["significant"] else "no",
             )
         if len(params):
-            console.print(view)
+            print_table(view)
         for note in table.attrs.get("notes", []):
             console.print(f"[yellow]note:[/yellow] {escape(note)}", highlight=False)
         friction = table[table["kind"] == "friction"]
@@ -118,7 +148,7 @@ def register(app) -> None:
                 f"{row['z [-]']:+.2f}",
                 "yes" if row["significant"] else "no",
             )
-        console.print(view)
+        print_table(view)
         console.print(
             f"{int(friction['significant'].sum())} of {len(friction)} operating points changed "
             f"more than their uncertainty (|z| > {table.attrs['z_critical']:.2f}, "

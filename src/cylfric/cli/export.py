@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import BadInput, console, guarded
+from .common import JSON_HELP, BadInput, console, guarded, print_json
 
 TARGET_NAMES = ("fmu", "modelica", "simscape", "hopsan", "matlab")
 
@@ -37,6 +37,7 @@ def register(app) -> None:
             help="FMU only: 'friction' (the friction element, default) or 'cylinder' (with "
             "the moving mass, driven by a force or a position servo).",
         ),
+        json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Datasheet -> FMU, Modelica package, Simscape or Hopsan parameters, MATLAB function.
 
@@ -72,7 +73,23 @@ def register(app) -> None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = export(datasheet, target, out, **options)
-        for message in dict.fromkeys(str(w.message) for w in caught):  # each once, as a note
+        notes = list(dict.fromkeys(str(w.message) for w in caught))
+        if json_output:
+            losses = [
+                {"block": r.title, "rms [N]": r.rms, "max [N]": r.max_abs}
+                for r in result.loss or ()
+            ]
+            print_json(
+                {
+                    "target": target,
+                    "files": list(result.files),
+                    "lossless": result.loss is None,
+                    "loss": losses,
+                    "notes": notes,
+                }
+            )
+            return
+        for message in notes:  # each once, as a note
             console.print(f"[yellow]note:[/yellow] {terminal(message)}", highlight=False)
         for line in result.summary().splitlines():
             console.print(terminal(line, markup=False), markup=False, highlight=False)

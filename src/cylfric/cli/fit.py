@@ -11,6 +11,7 @@ from rich.table import Table
 
 from ..escape import terminal
 from .common import (
+    JSON_HELP,
     BadInput,
     _fixed,
     _progress,
@@ -18,6 +19,9 @@ from .common import (
     app,
     console,
     guarded,
+    model_document,
+    print_json,
+    print_table,
 )
 
 __all__ = ["run_fit"]
@@ -75,7 +79,7 @@ def run_fit(
         finally:
             progress.stop()
     if not quiet:
-        console.print(_summary_table(result.datasheet))
+        print_table(_summary_table(result.datasheet))
         skipped = result.extraction.skipped
         if skipped:
             console.print(f"[yellow]{len(skipped)} file(s) skipped[/yellow] (see skipped.csv):")
@@ -197,7 +201,7 @@ def demo(
     console.print(terminal(f"virtual campaign: {n} files in {campaign}"))
     result = run_fit(campaign, out / "fit", quiet=True)
     sheet = result.datasheet
-    console.print(_summary_table(sheet, "Recovered from the virtual campaign"))
+    print_table(_summary_table(sheet, "Recovered from the virtual campaign"))
     table = Table(title="Recovered against the thesis (eq. 4.1-4.3, alpha, v_r; p in bar)")
     for col in ("parameter", "thesis", "recovered"):
         table.add_column(col, justify="right")
@@ -213,20 +217,27 @@ def demo(
     table.add_row("alpha", "1", f"{params['alpha']:.3f}")
     table.add_row("v_r", "10 mm/s", f"{params['v_r'] * 1e3:.2f} mm/s")
     table.add_row("offset", f"{35.67 / 2:.2f} N (35.67 N up-down)", f"{sheet['offset']:.2f} N")
-    console.print(table)
+    print_table(table)
     console.print(terminal(f"report: {out / 'fit' / 'report.html'}"))
 
 
 @app.command()
 @guarded
-def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
+def show(
+    datasheet: Path = typer.Argument(..., help="A datasheet.json file."),
+    json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
+):
     """Summarise a datasheet."""
     from ..datasheet import read_datasheet
     from ..model import FrictionModel
 
     sheet = read_datasheet(datasheet)
+    if json_output:
+        document = model_document(FrictionModel.from_datasheet(sheet))
+        print_json({"datasheet": datasheet, **document, "per_pressure": sheet.get("per_pressure")})
+        return
     title = terminal(f"Friction datasheet {sheet.get('name', '')}")
-    console.print(_summary_table(sheet, title))
+    print_table(_summary_table(sheet, title))
     report = FrictionModel.from_datasheet(sheet).fit_report(min_correlation=0.3)
     console.print(terminal(report, markup=False, multiline=True), markup=False, highlight=False)
     rows = sheet.get("per_pressure", [])
@@ -253,4 +264,4 @@ def show(datasheet: Path = typer.Argument(..., help="A datasheet.json file.")):
                 f"{r['rmse']:.2f}",
                 str(r["n_points"]),
             )
-        console.print(table)
+        print_table(table)

@@ -7,7 +7,14 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import BadInput, console, fixed_parameters, guarded, progress_bar
+from .common import (
+    BadInput,
+    console,
+    fixed_parameters,
+    guarded,
+    print_table,
+    progress_bar,
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -109,7 +116,7 @@ def register(app: typer.Typer) -> None:
                     )
                 ),
             )
-        console.print(table)
+        print_table(table)
         console.print(
             terminal(
                 f"{result.scheduler}: {result.seconds:.1f} s; summary in {out / 'fit_many.csv'}"

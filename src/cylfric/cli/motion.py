@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import BadInput, console, guarded
+from .common import BadInput, console, guarded, print_table
 
 SIGNALS_CSV = "motion_signals.csv"
 FIT_JSON = "motion_fit.json"
@@ -265,7 +265,7 @@ def _print_summary(fit, replay, out) -> None:
         table.add_column(column, justify="left" if column == "parameter" else "right")
     for name, value in fit.parameters.items():
         table.add_row(name, f"{value:.5g}", f"{fit.stderr[name]:.2g}", PARAMETER_UNITS[name])
-    console.print(table)
+    print_table(table)
     for flag in fit.flags:  # only with --accept-implausible
         console.print(f"[yellow]implausible:[/yellow] {escape(str(flag))}")
     console.print(

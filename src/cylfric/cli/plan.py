@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import BadInput, console, guarded, progress_bar
+from .common import BadInput, console, guarded, print_table, progress_bar
 
 
 def _range(text: str, dimension: str, unit: str, option: str) -> tuple[float, float]:
@@ -160,7 +160,7 @@ def register(app: typer.Typer) -> None:
             shown.add_column(terminal(column), justify="right")
         for row in table.itertuples(index=False):
             shown.add_row(*(f"{x:.3g}" if isinstance(x, float) else terminal(x) for x in row))
-        console.print(shown)
+        print_table(shown)
         levels = result.runs["pressure [Pa]"].nunique()
         console.print(
             f"{runs} runs at {levels} pressure level(s) and "
