@@ -16,6 +16,7 @@ import sys
 import traceback
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
@@ -24,7 +25,11 @@ from rich.table import Table
 
 from . import __version__
 from .escape import terminal
+from .options import FitOptions
 from .units import UnitError, parse_quantity
+
+if TYPE_CHECKING:
+    from .pipeline import FitOutputs
 
 app = typer.Typer(
     add_completion=True,
@@ -238,28 +243,16 @@ def _summary_table(sheet: dict, title="Friction datasheet") -> Table:
 
 
 def run_fit(
-    campaign: Path,
-    out: Path,
-    *,
-    fix=(),
-    pressure_law="linear",
-    per_direction=False,
-    skip_bad=False,
-    report=True,
-    quiet=False,
-    glob=None,
-    strict=False,
-    export=(),
-    viscosity_correction=None,
-):
+    campaign: Path, out: Path, options: FitOptions | None = None, *, quiet: bool = False
+) -> FitOutputs:
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
     from .io.campaign import DYNAMIC_TESTS, check_glob, discover_runs, load_config
     from .pipeline import fit_campaign
 
-    fixed = _fixed(list(fix))
+    options = options or FitOptions()
     config = load_config(campaign)
-    if glob is not None:
-        config = dataclasses.replace(config, glob=check_glob(glob, campaign, key="--glob"))
+    if options.glob is not None:
+        config = dataclasses.replace(config, glob=check_glob(options.glob, campaign, key="--glob"))
     n_files = sum(  # the constant-velocity runs the bar counts (not presliding/breakaway tests)
         str(info.extra.get("test", "")).strip().lower() not in DYNAMIC_TESTS
         for info in discover_runs(campaign, config)
@@ -274,17 +267,9 @@ def run_fit(
             result = fit_campaign(
                 campaign,
                 out,
-                fixed=fixed,
-                pressure_law=pressure_law,
-                per_direction=per_direction,
-                skip_bad=skip_bad,
-                report=report,
+                options,
                 progress=lambda _: progress.advance(task),
                 after_extraction=progress.stop,
-                glob=glob,
-                strict=strict,
-                export=export,
-                viscosity_correction=viscosity_correction,
             )
         finally:
             progress.stop()
@@ -310,7 +295,7 @@ def run_fit(
                 markup=False,
                 highlight=False,
             )
-        opened = f"; open {out / 'report.html'}" if report else ""
+        opened = f"; open {out / 'report.html'}" if options.report else ""
         console.print(terminal(f"outputs in {out}{opened}", markup=False), markup=False)
     return result
 
@@ -356,7 +341,7 @@ def fit(
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
         raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
-    targets = ()
+    targets: list[str] = []
     if export is not None:
         from .export import parse_targets, resolve
 
@@ -366,19 +351,18 @@ def fit(
                 resolve(target)
         except (ValueError, ImportError) as exc:
             raise BadInput(f"--export {export!r}: {exc}") from None
-    run_fit(
-        campaign,
-        out,
-        fix=fix,
+    options = FitOptions(
+        fixed=_fixed(list(fix)),
         pressure_law=pressure_law,
         per_direction=per_direction,
         skip_bad=skip_bad,
         report=not no_report,
         glob=glob,
         strict=strict,
-        export=targets,
+        export=tuple(targets),
         viscosity_correction=viscosity_correction,
     )
+    run_fit(campaign, out, options)
 
 
 THESIS_VALUES = {
@@ -409,7 +393,7 @@ def demo(
         task = progress.add_task("virtual bench", total=n)
         generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
     console.print(terminal(f"virtual campaign: {n} files in {campaign}"))
-    result = run_fit(campaign, out / "fit", quiet=True)
+    result = run_fit(campaign, out / "fit", FitOptions(), quiet=True)
     sheet = result.datasheet
     console.print(_summary_table(sheet, "Recovered from the virtual campaign"))
     table = Table(title="Recovered against the thesis (eq. 4.1-4.3, alpha, v_r; p in bar)")

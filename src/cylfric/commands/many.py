@@ -8,6 +8,7 @@ import typer
 
 from ..cli import BadInput, console, fixed_parameters, guarded, progress_bar
 from ..escape import terminal
+from ..options import FitOptions
 
 
 def register(app: typer.Typer) -> None:
@@ -62,16 +63,16 @@ def register(app: typer.Typer) -> None:
             raise BadInput(f"{root}: not a folder; expected a folder of campaign folders")
         if workers is not None and workers < 1:
             raise BadInput(f"--workers {workers}: expected at least 1")
-        options = {
-            "fixed": fixed_parameters(list(fix)),
-            "pressure_law": pressure_law,
-            "per_direction": per_direction,
-            "skip_bad": skip_bad,
-            "report": not no_report,
-            "glob": glob,
-            "strict": strict,
-            "viscosity_correction": viscosity_correction,
-        }
+        options = FitOptions(
+            fixed=fixed_parameters(list(fix)),
+            pressure_law=pressure_law,
+            per_direction=per_direction,
+            skip_bad=skip_bad,
+            report=not no_report,
+            glob=glob,
+            strict=strict,
+            viscosity_correction=viscosity_correction,
+        )
         from ..many import find_campaigns, fit_many, start_worker_server
 
         total = len(find_campaigns(root, exclude=[out]))  # a few ms
@@ -87,11 +88,11 @@ def register(app: typer.Typer) -> None:
             result = fit_many(
                 root,
                 out,
+                options,
                 workers=workers,
                 scheduler=scheduler,
                 catalog=catalog,
                 progress=lambda _: progress.advance(task),
-                **options,
             )
         table = Table(title=f"fit-many: {result.succeeded} of {len(result.rows)} fitted")
         for column in ("campaign", "status", "runs", "excluded", "seconds", "reason"):
