@@ -8,7 +8,6 @@ bar, mm/s, s, kg, N/m as each option's help says.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 import re
@@ -246,17 +245,14 @@ def run_fit(
     campaign: Path, out: Path, options: FitOptions | None = None, *, quiet: bool = False
 ) -> FitOutputs:
     """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
-    from .io.campaign import DYNAMIC_TESTS, check_glob, discover_runs, load_config
+    from .io.campaign import Campaign, check_glob
     from .pipeline import fit_campaign
 
     options = options or FitOptions()
-    config = load_config(campaign)
     if options.glob is not None:
-        config = dataclasses.replace(config, glob=check_glob(options.glob, campaign, key="--glob"))
-    n_files = sum(  # the constant-velocity runs the bar counts (not presliding/breakaway tests)
-        str(info.extra.get("test", "")).strip().lower() not in DYNAMIC_TESTS
-        for info in discover_runs(campaign, config)
-    )
+        check_glob(options.glob, campaign, key="--glob")
+    opened = Campaign.open(campaign, options.glob)  # read once, passed down to every step
+    n_files = len(opened.steady_runs)  # the bar counts these (not presliding/breakaway tests)
     progress = _progress()
     task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
     # warnings reach the user once, as the notes printed below (not as Python's own lines)
@@ -265,7 +261,7 @@ def run_fit(
         progress.start()
         try:
             result = fit_campaign(
-                campaign,
+                opened,
                 out,
                 options,
                 progress=lambda _: progress.advance(task),

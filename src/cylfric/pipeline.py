@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._paths import failed, make_folder, refuse_link
-from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config, read_run
+from .io.campaign import Campaign, read_run
 from .io.writers import atomic_write_text
 from .options import FitOptions
 from .steady_state import extract_campaign
@@ -60,7 +60,7 @@ def _csv(path, frame: pd.DataFrame):
 
 
 def fit_campaign(
-    folder: str | os.PathLike[str],
+    folder: Campaign | str | os.PathLike[str],
     out: str | os.PathLike[str],
     options: FitOptions | None = None,
     *,
@@ -84,8 +84,10 @@ def fit_campaign(
 
     Parameters
     ----------
-    folder : path-like
-        Campaign folder of raw bench files (never modified).
+    folder : path-like or Campaign
+        Campaign folder of raw bench files (never modified), or the
+        :class:`~cylfric.io.campaign.Campaign` already opened from it (its campaign.toml
+        and manifest.csv are not read again; ``options.glob``, when set, must be its glob).
     out : path-like
         Output folder: ``datasheet.json``, ``points.csv``, ``per_pressure.csv``,
         ``sensitivity.csv``, ``law_comparison.csv``, ``dynamic.csv`` and ``breakaway.csv``
@@ -106,6 +108,14 @@ def fit_campaign(
         a ValueError, and so is an unknown keyword.
     """
     options = FitOptions.from_keywords(options, **keywords)
+    source = folder if isinstance(folder, Campaign) else Path(folder)
+    if isinstance(source, Campaign):
+        folder = source.folder
+        if options.glob is not None and options.glob != source.config.glob:
+            raise ValueError(
+                f"options.glob = {options.glob!r} but the campaign was opened with glob "
+                f"{source.config.glob!r}; open it with Campaign.open(folder, glob=...)"
+            )
     folder, out = Path(folder), Path(out)
     _check_out(folder, out)
     make_folder(out.parent, f"--out {out}: its folder")
@@ -120,7 +130,7 @@ def fit_campaign(
         os.umask(mask)
         staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
         try:
-            result = _fit(folder, staging, options, progress, after_extraction)
+            result = _fit(source, staging, options, progress, after_extraction)
             _write_marker(staging)
             _check_reusable(out)  # again: a file may have been added during the fit
             _swap_in(staging, out)
@@ -365,23 +375,22 @@ def _import_next_stages():
 
 
 def _fit(
-    folder: Path,
+    source: Campaign | Path,
     out: Path,
     options: FitOptions,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
 ) -> FitOutputs:
-    """Fit ``folder`` into ``out`` (the staging folder) as ``options`` say."""
+    """Fit the campaign (opened here from a folder) into ``out`` (the staging folder) as
+    ``options`` say; campaign.toml and manifest.csv are read once, by :meth:`Campaign.open`."""
     timings = {}
     t0 = time.perf_counter()
-    config = load_config(folder)
-    if options.glob is not None:
-        config = replace(config, glob=options.glob)
-    dynamic_runs = _dynamic_runs(folder, config)
+    campaign = source if isinstance(source, Campaign) else Campaign.open(source, options.glob)
+    folder, config = campaign.folder, campaign.config
+    dynamic_runs = campaign.dynamic_runs
     try:
         extraction = extract_campaign(
-            folder,
-            config,
+            campaign,
             skip_bad=options.skip_bad,
             progress=progress,
             meanwhile=_import_next_stages,
@@ -533,15 +542,6 @@ def _correct_viscosity(extraction, config, enabled):
     from .drift import correct_campaign
 
     return correct_campaign(extraction.points, extraction.runs, config.oil, enabled=enabled)
-
-
-def _dynamic_runs(folder, config):
-    """Runs of the campaign that ``manifest.csv`` marks as presliding or breakaway tests."""
-    return [
-        info
-        for info in discover_runs(folder, config)
-        if str(info.extra.get("test", "")).strip().lower() in DYNAMIC_TESTS
-    ]
 
 
 def _identify_dynamic(infos, config, model):
