@@ -412,7 +412,7 @@ def _fit(
         raise ValueError(_strict_message(quality.excluded))
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    from .datasheet import build_datasheet, write_datasheet
+    from .datasheet import datasheet_model, write_datasheet
     from .identify import UnphysicalFrictionError, identify
 
     try:
@@ -435,13 +435,16 @@ def _fit(
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=options.name)
+    model = datasheet_model(ident, extraction=extraction, campaign=str(folder), name=options.name)
+    sheet, record = model.to_datasheet(), dict(model.record)
     if correction.record is not None:
         sheet["fit"]["viscosity_correction"] = correction.record
+        record["fit"] = {**record.get("fit", {}), "viscosity_correction": correction.record}
     if dynamic is not None:
         from .model.serialize import clean
 
-        sheet["dynamic_fit"] = clean(dynamic.summary())
+        sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
+    model = model.replace(record=record)  # the datasheet's model, for the exports as it is
     files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
     if dynamic is not None:
         files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
@@ -468,7 +471,7 @@ def _fit(
         t0 = time.perf_counter()
         for target in options.export:
             try:
-                exports[target] = export_to(sheet, target, out / "export" / target)
+                exports[target] = export_to(model, target, out / "export" / target)
             except (ValueError, RuntimeError, OSError) as exc:  # a compiler's output: 1st line
                 first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
                 raise ExportFailed(f"--export {target} failed: {first}", target) from exc
