@@ -64,3 +64,31 @@ def test_one_fit_reads_the_campaign_files_once(folder, tmp_path, reads):
     assert result.exit_code == 0, result.output
     assert (tmp_path / "fit" / "dynamic.csv").is_file()  # the dynamic tests were identified
     assert reads == {"campaign.toml": 1, "manifest.csv": 1}
+
+
+def test_campaign_holds_what_the_steps_need(folder, reads):
+    from cylfric.io.campaign import Campaign, discover_runs, unlisted_files
+
+    campaign = Campaign.open(folder)
+    assert reads == {"campaign.toml": 1, "manifest.csv": 1}
+    assert campaign.folder == folder and campaign.config.glob == "*.txt"
+    assert [r.path for r in campaign.runs] == [r.path for r in discover_runs(folder)]
+    assert list(campaign.unlisted) == unlisted_files(folder)
+    assert set(campaign.manifest) == {r.path.name for r in campaign.runs}
+    kinds = {str(r.extra.get("test")) for r in campaign.dynamic_runs}
+    assert kinds == {"presliding", "breakaway"}
+    assert len(campaign.steady_runs) + len(campaign.dynamic_runs) == len(campaign.runs)
+    assert all(r.extra.get("test") == "constant-velocity" for r in campaign.steady_runs)
+
+
+def test_a_campaign_is_passed_with_its_own_configuration(folder, tmp_path):
+    from cylfric.io.campaign import Campaign
+    from cylfric.pipeline import fit_campaign
+    from cylfric.steady_state import extract_campaign
+
+    campaign = Campaign.open(folder, glob="run_00*.txt")
+    assert campaign.config.glob == "run_00*.txt"
+    with pytest.raises(ValueError, match="campaign was opened with glob 'run_00\\*.txt'"):
+        fit_campaign(campaign, tmp_path / "o", glob="*.txt")
+    with pytest.raises(ValueError, match="config comes with the Campaign"):
+        extract_campaign(campaign, campaign.config)
