@@ -1,13 +1,18 @@
-"""Helpers shared by the quality-gate tests: edited copies of a campaign, `cylfric fit
---no-report` through the CLI runner, and the excluded runs it wrote."""
+"""Helpers shared by the tests: edited copies of a campaign, `cylfric fit --no-report`
+through the CLI runner, the excluded runs it wrote, and :func:`needs_fork`."""
 
 from __future__ import annotations
 
+import functools
+import os
 import shutil
+import subprocess
+import sys
 
 import pandas as pd
 from typer.testing import CliRunner
 
+from cylfric._parallel import can_fork
 from cylfric.cli import app
 
 runner = CliRunner()
@@ -38,3 +43,26 @@ def edit_file(path, old, new):
     text = path.read_text()
     assert old in text
     path.write_text(text.replace(old, new))
+
+
+def needs_fork(test):
+    """Run ``test`` here when this process can fork workers, else in a fresh pytest process:
+    an earlier test of this worker may have left threads behind (Dask's thread pool), and a
+    process with other threads does not fork (:func:`cylfric._parallel.can_fork`)."""
+
+    @functools.wraps(test)
+    def wrapper(*args, **kwargs):
+        if can_fork():
+            return test(*args, **kwargs)
+        assert not os.environ.get("CYLFRIC_FRESH_TEST"), "a fresh process cannot fork either"
+        done = subprocess.run(
+            [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist"]
+            + [f"{test.__code__.co_filename}::{test.__name__}"],
+            env={**os.environ, "CYLFRIC_FRESH_TEST": "1"},
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert done.returncode == 0, done.stdout[-3000:]
+
+    return wrapper

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fit_helpers import needs_fork
 from numpy.testing import assert_allclose
 
 from cylfric.friction import params_at_pressure, stribeck
@@ -205,17 +206,10 @@ def campaign_of_20(tmp_path_factory):
     return folder
 
 
-def _forks():
-    from cylfric._parallel import can_fork
-
-    if not can_fork():
-        pytest.skip("this platform or process cannot fork extraction workers")
-
-
+@needs_fork
 def test_the_pool_extraction_equals_the_serial_one(campaign_of_20):
     import pandas as pd
 
-    _forks()
     names = []
     serial = extract_campaign(campaign_of_20, workers=1)
     parallel = extract_campaign(campaign_of_20, progress=names.append)
@@ -224,6 +218,7 @@ def test_the_pool_extraction_equals_the_serial_one(campaign_of_20):
     assert parallel.runs == serial.runs and parallel.bytes_read == serial.bytes_read
 
 
+@needs_fork
 def test_files_of_a_dead_worker_are_extracted_here(campaign_of_20, monkeypatch):
     import os
 
@@ -231,7 +226,6 @@ def test_files_of_a_dead_worker_are_extracted_here(campaign_of_20, monkeypatch):
 
     import cylfric.steady_state as ss
 
-    _forks()
     parent, original = os.getpid(), ss._point_rows
 
     def dies_in_a_worker(*args, **kwargs):
@@ -247,8 +241,8 @@ def test_files_of_a_dead_worker_are_extracted_here(campaign_of_20, monkeypatch):
     )
 
 
+@needs_fork
 def test_a_bad_file_read_by_a_worker_is_named_and_skippable(campaign_of_20, tmp_path):
-    _forks()
     folder = tmp_path / "c"
     shutil.copytree(campaign_of_20, folder)
     bad = sorted(folder.glob("run_*.txt"))[1]

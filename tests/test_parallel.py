@@ -7,11 +7,10 @@ import os
 import threading
 
 import pytest
+from fit_helpers import needs_fork
 
 from cylfric import _parallel
 from cylfric._parallel import can_fork, run, starmap
-
-needs_fork = pytest.mark.skipif(not can_fork(), reason="this process cannot fork workers")
 
 
 def _square(x):

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from fit_helpers import needs_fork
 
 import cylfric.report
 from cylfric.identify import add_sensitivity, identify
@@ -62,12 +63,9 @@ def test_figures_follow_the_results_available(results):
     assert [stem for stem, _, _ in all_figures(full)] == STEMS
 
 
+@needs_fork
 def test_a_pool_draws_what_one_process_draws(results):
-    from cylfric._parallel import can_fork
-
     extraction, _, full = results
-    if not can_fork():
-        pytest.skip("this platform or process cannot fork figure workers")
     serial = render_all(full, extraction.offset, workers=1)
     parallel = render_all(full, extraction.offset, workers=2)
     assert [r[:2] for r in parallel] == [r[:2] for r in serial]  # stems, captions, in order

@@ -23,6 +23,7 @@ __all__ = [
     "DatasheetError",
     "SCHEMA",
     "build_datasheet",
+    "datasheet_model",
     "write_datasheet",
     "read_datasheet",
     "validate",
@@ -53,6 +54,32 @@ def build_datasheet(
     pressure_reference=None,
 ) -> dict:
     """Datasheet dict from an :class:`~cylfric.identify.Identification`.
+
+    The datasheet of :func:`datasheet_model` (same parameters).
+    """
+    return datasheet_model(
+        identification,
+        extraction=extraction,
+        files=files,
+        campaign=campaign,
+        name=name,
+        pressure_reference=pressure_reference,
+    ).to_datasheet()
+
+
+def datasheet_model(
+    identification,
+    *,
+    extraction=None,
+    files=None,
+    campaign=None,
+    name=None,
+    pressure_reference=None,
+) -> FrictionModel:
+    """The identified model with the campaign's record: what the datasheet holds.
+
+    ``datasheet_model(...).to_datasheet()`` is :func:`build_datasheet`; the model itself
+    goes to the exports without a detour through the dict.
 
     Parameters
     ----------
@@ -117,7 +144,7 @@ def build_datasheet(
     }
     if pressure_reference is not None:
         changes["reference"] = pressure_reference
-    return model.replace(**changes).to_datasheet()
+    return model.replace(**changes)
 
 
 def write_datasheet(path, sheet: dict) -> Path:

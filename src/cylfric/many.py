@@ -28,9 +28,13 @@ import csv
 import io
 import os
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
+from typing import Any
+
+from .options import FitOptions
 
 __all__ = ["find_campaigns", "fit_many", "ManyResult", "SUMMARY_COLUMNS"]
 
@@ -133,11 +137,14 @@ def _name(folder: Path, root: Path) -> str:
     return folder.relative_to(root).as_posix()
 
 
-def fit_one(folder, out, name, options, started=None) -> dict:
+def fit_one(
+    folder: Path, out: Path, name: str, options: FitOptions, started: float | None = None
+) -> dict[str, Any]:
     """Fit one campaign (what each worker runs); never raises: returns a summary row.
 
-    ``started`` is the wall-clock time (``time.time()`` [s]) the ``start [s]`` column
-    counts from (default: now)."""
+    ``options`` are those of every campaign; the datasheet is named ``name``. ``started`` is
+    the wall-clock time (``time.time()`` [s]) the ``start [s]`` column counts from (default:
+    now)."""
     import warnings
 
     t0, cpu0 = time.perf_counter(), time.process_time()
@@ -153,7 +160,7 @@ def fit_one(folder, out, name, options, started=None) -> dict:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = fit_campaign(folder, out, name=name, **options)
+            result = fit_campaign(folder, out, replace(options, name=name))
         excluded = result.excluded
         row.update(
             status="ok",
@@ -191,14 +198,15 @@ _FIT_OPTIONS = (
 
 
 def fit_many(
-    root,
-    out,
+    root: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    options: FitOptions | None = None,
     *,
-    workers=None,
-    scheduler=None,
-    catalog=None,
-    progress=None,
-    **fit_options,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    catalog: str | os.PathLike[str] | None = None,
+    progress: Callable[[dict[str, Any]], object] | None = None,
+    **fit_options: Any,
 ) -> ManyResult:
     """Fit every campaign folder under ``root`` in parallel; outputs in ``out/<folder>/``.
 
@@ -210,6 +218,10 @@ def fit_many(
         Output folder: ``fit_many.csv`` and one :func:`~cylfric.pipeline.fit_campaign`
         output folder per campaign (named by the campaign's path under ``root``, which must
         stay inside ``out``: :func:`cylfric._paths.inside`). A symbolic link is refused.
+    options : FitOptions, optional
+        The options of every fit (:class:`~cylfric.options.FitOptions`; its ``name`` must
+        be None: each datasheet is named after its campaign). Without ``options.workers``,
+        fits that run side by side each read on one core.
     workers : int, optional
         Local worker processes (default: the number of cores). Ignored only by a
         distributed scheduler address, whose cluster has its own workers (then it must be
@@ -222,9 +234,9 @@ def fit_many(
     progress : callable, optional
         Called with each campaign's summary row (a dict) as it finishes.
     **fit_options
-        Passed to :func:`~cylfric.pipeline.fit_campaign`: ``fixed``, ``pressure_law``,
-        ``per_direction``, ``skip_bad``, ``report``, ``glob``, ``strict``,
-        ``viscosity_correction``.
+        Without ``options``: the fields of :class:`~cylfric.options.FitOptions` that
+        build it: ``fixed``, ``pressure_law``, ``per_direction``, ``skip_bad``, ``report``,
+        ``glob``, ``strict``, ``viscosity_correction``.
 
     Returns
     -------
@@ -234,7 +246,8 @@ def fit_many(
     ------
     ValueError
         ``root`` is not a folder or holds no campaign, ``out`` lies inside a campaign,
-        an unknown fit option, workers < 1.
+        an unknown fit option, both ``options`` and fit keywords, ``options.name`` set,
+        workers < 1.
 
     Notes
     -----
@@ -248,6 +261,12 @@ def fit_many(
     unknown = set(fit_options) - set(_FIT_OPTIONS)
     if unknown:
         raise ValueError(f"unknown fit options {sorted(unknown)}; valid: {list(_FIT_OPTIONS)}")
+    options = FitOptions.from_keywords(options, **fit_options)
+    if options.name is not None:
+        raise ValueError(
+            f"options.name = {options.name!r}: fit_many names each datasheet after its "
+            "campaign folder; leave name None"
+        )
     from ._paths import inside, make_folder, refuse_link
 
     root, out = Path(root), refuse_link(out)  # a symbolic link is refused, not written through
@@ -270,12 +289,12 @@ def fit_many(
     from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     make_folder(out)
-    if scheduler != "serial" and (distributed or workers > 1):
+    if scheduler != "serial" and (distributed or workers > 1) and options.workers is None:
         # fits side by side: each on one core (a fit alone reads files on two)
-        fit_options.setdefault("workers", 1)
+        options = replace(options, workers=1)
     t0, started = time.perf_counter(), time.time()
     jobs = [  # OUT/<campaign's path under root>, never outside OUT
-        (f, inside(out, _name(f, root), "campaign"), _name(f, root), dict(fit_options), started)
+        (f, inside(out, _name(f, root), "campaign"), _name(f, root), options, started)
         for f in campaigns
     ]
     # largest first: a long fit started last would leave the other workers idle at the end

@@ -13,17 +13,20 @@ import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ._paths import failed, make_folder, refuse_link
-from .io.campaign import DYNAMIC_TESTS, discover_runs, load_config, read_run
+from .io.campaign import Campaign, read_run
 from .io.writers import atomic_write_text
+from .options import FitOptions
 from .steady_state import extract_campaign
 
 if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
+    from collections.abc import Callable
+
     import pandas as pd
 
-__all__ = ["fit_campaign", "FitOutputs"]
+__all__ = ["fit_campaign", "FitOptions", "FitOutputs"]
 
 
 @dataclass
@@ -57,22 +60,13 @@ def _csv(path, frame: pd.DataFrame):
 
 
 def fit_campaign(
-    folder,
-    out,
+    folder: Campaign | str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    options: FitOptions | None = None,
     *,
-    fixed=None,
-    pressure_law="linear",
-    per_direction=False,
-    skip_bad=False,
-    report=True,
-    progress=None,
-    after_extraction=None,
-    name=None,
-    glob=None,
-    strict=False,
-    export=(),
-    workers=None,
-    viscosity_correction=None,
+    progress: Callable[[str], object] | None = None,
+    after_extraction: Callable[[], object] | None = None,
+    **keywords: Any,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
 
@@ -90,57 +84,39 @@ def fit_campaign(
 
     Parameters
     ----------
-    folder : path-like
-        Campaign folder of raw bench files (never modified).
+    folder : path-like or Campaign
+        Campaign folder of raw bench files (never modified), or the
+        :class:`~cylfric.io.campaign.Campaign` already opened from it (its campaign.toml
+        and manifest.csv are not read again; ``options.glob``, when set, must be its glob).
     out : path-like
         Output folder: ``datasheet.json``, ``points.csv``, ``per_pressure.csv``,
         ``sensitivity.csv``, ``law_comparison.csv``, ``dynamic.csv`` and ``breakaway.csv``
         (with presliding/breakaway tests), ``skipped.csv`` (when files were
         skipped), ``excluded.csv`` (when the data-quality gate left runs out), and with
         ``report`` the figures (PNG, SVG) and ``report.html``.
-    fixed : dict, optional
-        Parameters held fixed (SI), e.g. ``{"alpha": 1.0, "v_r": 0.010}``.
-    pressure_law : str
-        Pressure law of the datasheet (linear, quadratic, exponential).
-    per_direction : bool
-        Also identify extension and retraction separately (``per_direction.csv``).
-    skip_bad : bool
-        Skip unreadable files instead of stopping at the first.
-    report : bool
-        Draw the figures and write ``report.html``.
+    options : FitOptions, optional
+        How to fit (:class:`~cylfric.options.FitOptions`: fixed parameters, pressure law,
+        per direction, skip bad files, report, name, glob, strict, export targets, workers,
+        viscosity correction); default ``FitOptions(**keywords)``.
     progress : callable, optional
         Called with each file name as it is read.
     after_extraction : callable, optional
         Called once every file is read (e.g. to stop a progress display).
-    name : str, optional
-        Name recorded in the datasheet.
-    glob : str, optional
-        Which files of the folder are runs (overrides campaign.toml ``[files] glob``).
-    strict : bool
-        Raise (ValueError) instead of leaving out runs the data-quality gate flags
-        (:func:`cylfric.quality.assess`); by default they are listed in ``excluded.csv``.
-    export : sequence of str
-        Export targets (``"fmu"``, ``"simscape"``, ...; :data:`cylfric.export.TARGETS`)
-        written into ``out/export/<target>/`` after the datasheet; lossy targets' loss
-        reports are summarised in ``report.html``.
-    workers : int, optional
-        Processes for the extraction and the figures (default 2, where they can be forked:
-        :mod:`cylfric._parallel`; see :func:`~cylfric.steady_state.extract_campaign`); 1
-        keeps the fit on one core, as
-        the workers of :func:`cylfric.many.fit_many` do when several fits run at once.
-    viscosity_correction : bool, optional
-        Identify at the reference temperature of ``campaign.toml [oil]``, each point's speed
-        mapped by the oil's viscosity at its run's temperature (equal Hersey number; see
-        :func:`cylfric.viscosity.correct_campaign`). None (default): when both ``[oil]`` and
-        temperatures are there; a note says which is missing otherwise. True: required
-        (ValueError without them). False: never. The datasheet records the correction in
-        ``fit.viscosity_correction``.
+    **keywords
+        The fields of :class:`~cylfric.options.FitOptions` (``fixed=``,
+        ``pressure_law=``, ``report=``, ...) when no ``options`` is given; both at once is
+        a ValueError, and so is an unknown keyword.
     """
+    options = FitOptions.from_keywords(options, **keywords)
+    source = folder if isinstance(folder, Campaign) else Path(folder)
+    if isinstance(source, Campaign):
+        folder = source.folder
+        if options.glob is not None and options.glob != source.config.glob:
+            raise ValueError(
+                f"options.glob = {options.glob!r} but the campaign was opened with glob "
+                f"{source.config.glob!r}; open it with Campaign.open(folder, glob=...)"
+            )
     folder, out = Path(folder), Path(out)
-    if export:
-        from .export import parse_targets
-
-        export = parse_targets(export)
     _check_out(folder, out)
     make_folder(out.parent, f"--out {out}: its folder")
     with _lock(out):
@@ -154,23 +130,7 @@ def fit_campaign(
         os.umask(mask)
         staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
         try:
-            result = _fit(
-                folder,
-                staging,
-                fixed,
-                pressure_law,
-                per_direction,
-                skip_bad,
-                report,
-                progress,
-                after_extraction,
-                name,
-                glob,
-                strict,
-                export or (),
-                workers,
-                viscosity_correction,
-            )
+            result = _fit(source, staging, options, progress, after_extraction)
             _write_marker(staging)
             _check_reusable(out)  # again: a file may have been added during the fit
             _swap_in(staging, out)
@@ -404,36 +364,26 @@ def _sign_settings(folder) -> str:
 
 
 def _fit(
-    folder,
-    out,
-    fixed,
-    pressure_law,
-    per_direction,
-    skip_bad,
-    report,
-    progress,
-    after_extraction,
-    name,
-    glob,
-    strict,
-    export=(),
-    workers=None,
-    viscosity_correction=None,
-):
+    source: Campaign | Path,
+    out: Path,
+    options: FitOptions,
+    progress: Callable[[str], object] | None = None,
+    after_extraction: Callable[[], object] | None = None,
+) -> FitOutputs:
+    """Fit the campaign (opened here from a folder) into ``out`` (the staging folder) as
+    ``options`` say; campaign.toml and manifest.csv are read once, by :meth:`Campaign.open`."""
     timings = {}
     t0 = time.perf_counter()
-    config = load_config(folder)
-    if glob is not None:
-        config = replace(config, glob=glob)
-    dynamic_runs = _dynamic_runs(folder, config)
+    campaign = source if isinstance(source, Campaign) else Campaign.open(source, options.glob)
+    folder, config = campaign.folder, campaign.config
+    dynamic_runs = campaign.dynamic_runs
     try:
         extraction = extract_campaign(
-            folder,
-            config,
-            skip_bad=skip_bad,
+            campaign,
+            skip_bad=options.skip_bad,
             progress=progress,
             exclude=[info.path.name for info in dynamic_runs],
-            workers=workers,
+            workers=options.workers,
         )
     finally:
         if after_extraction is not None:
@@ -441,21 +391,24 @@ def _fit(
     from .quality import assess
 
     quality = assess(extraction)  # the data as measured: the gate looks for data errors
-    correction = _correct_viscosity(extraction, config, viscosity_correction)
+    correction = _correct_viscosity(extraction, config, options.viscosity_correction)
     if correction.record is not None:  # the points the gate passed, at the reference temperature
         gated = _correct_viscosity(replace(extraction, points=quality.points), config, True)
         extraction = replace(extraction, points=correction.points, runs=correction.runs)
         quality = replace(quality, points=gated.points)
-    if strict and not quality.excluded.empty:
+    if options.strict and not quality.excluded.empty:
         raise ValueError(_strict_message(quality.excluded))
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    from .datasheet import build_datasheet, write_datasheet
+    from .datasheet import datasheet_model, write_datasheet
     from .identify import UnphysicalFrictionError, identify
 
     try:
         ident = identify(
-            quality.points, fixed=fixed, pressure_law=pressure_law, per_direction=per_direction
+            quality.points,
+            fixed=options.fixed,
+            pressure_law=options.pressure_law,
+            per_direction=options.per_direction,
         )
     except UnphysicalFrictionError as exc:
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder)}") from None
@@ -470,13 +423,16 @@ def _fit(
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    sheet = build_datasheet(ident, extraction=extraction, campaign=str(folder), name=name)
+    model = datasheet_model(ident, extraction=extraction, campaign=str(folder), name=options.name)
+    sheet, record = model.to_datasheet(), dict(model.record)
     if correction.record is not None:
         sheet["fit"]["viscosity_correction"] = correction.record
+        record["fit"] = {**record.get("fit", {}), "viscosity_correction": correction.record}
     if dynamic is not None:
         from .model.serialize import clean
 
-        sheet["dynamic_fit"] = clean(dynamic.summary())
+        sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
+    model = model.replace(record=record)  # the datasheet's model, for the exports as it is
     files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
     if dynamic is not None:
         files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
@@ -497,18 +453,18 @@ def _fit(
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
     timings["datasheet"] = time.perf_counter() - t0
     exports = {}
-    if export:
+    if options.export:
         from .export import export as export_to
 
         t0 = time.perf_counter()
-        for target in export:
+        for target in options.export:
             try:
-                exports[target] = export_to(sheet, target, out / "export" / target)
+                exports[target] = export_to(model, target, out / "export" / target)
             except (ValueError, RuntimeError, OSError) as exc:  # a compiler's output: 1st line
                 first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
                 raise ExportFailed(f"--export {target} failed: {first}", target) from exc
         timings["export"] = time.perf_counter() - t0
-    if report:
+    if options.report:
         from .report import write_report_folder
 
         t0 = time.perf_counter()
@@ -522,7 +478,7 @@ def _fit(
                 quality.excluded,
                 exports=summaries,
                 dynamic=dynamic,
-                workers=2 if workers is None else workers,
+                workers=2 if options.workers is None else options.workers,
             )
         )
         timings["report"] = time.perf_counter() - t0
@@ -577,15 +533,6 @@ def _correct_viscosity(extraction, config, enabled):
     from .viscosity import correct_campaign
 
     return correct_campaign(extraction.points, extraction.runs, config.oil, enabled=enabled)
-
-
-def _dynamic_runs(folder, config):
-    """Runs of the campaign that ``manifest.csv`` marks as presliding or breakaway tests."""
-    return [
-        info
-        for info in discover_runs(folder, config)
-        if str(info.extra.get("test", "")).strip().lower() in DYNAMIC_TESTS
-    ]
 
 
 def _identify_dynamic(infos, config, model):

@@ -21,10 +21,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ._parallel import run
-from .io.campaign import CampaignConfig, discover_runs, load_config, read_run, unlisted_files
+from .io.campaign import Campaign, CampaignConfig, read_run
 from .io.text import BenchFileError
 
 if TYPE_CHECKING:  # pandas is imported once the points are collected: reading needs none
+    import os
+
     import pandas as pd
 
 __all__ = [
@@ -493,7 +495,7 @@ PARALLEL_MIN_FILES = 16
 
 
 def extract_campaign(
-    folder,
+    folder: Campaign | str | os.PathLike[str],
     config: CampaignConfig | None = None,
     *,
     skip_bad=False,
@@ -516,14 +518,27 @@ def extract_campaign(
     names files of the campaign that are not constant-velocity runs (the presliding and
     breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they are not read here.
     Input files are never modified.
+
+    ``folder`` is a campaign folder (read with ``config``, default its campaign.toml) or a
+    :class:`~cylfric.io.campaign.Campaign` already opened (with its own configuration:
+    then ``config`` must be None), whose campaign.toml and manifest.csv are not read again.
     """
-    config = config or load_config(folder)
+    if isinstance(folder, Campaign):
+        if config is not None:
+            raise ValueError(
+                "config comes with the Campaign (Campaign.open(folder, config=...)); "
+                "pass config=None with a Campaign"
+            )
+        campaign = folder
+    else:
+        campaign = Campaign.open(folder, config=config)
+    config = campaign.config
     options = extraction_options(config, options)
     excluded = set(exclude)
-    infos = [i for i in discover_runs(folder, config) if i.path.name not in excluded]
+    infos = [i for i in campaign.runs if i.path.name not in excluded]
     if not infos:
         raise BenchFileError(
-            folder,
+            campaign.folder,
             "no constant-velocity runs (only presliding/breakaway tests); the steady-state "
             "fit needs constant-velocity runs",
         )
@@ -575,7 +590,7 @@ def extract_campaign(
     if not per_run:
         reasons = "; ".join(item["reason"] for item in skipped[:3])
         raise BenchFileError(
-            folder,
+            campaign.folder,
             f"none of the {len(skipped)} run file(s) could be read; the first: {reasons}",
         )
     run_offsets = [
@@ -602,6 +617,6 @@ def extract_campaign(
         offset_std,
         runs,
         total,
-        unlisted_files(folder, config),
-        str(folder),
+        list(campaign.unlisted),
+        str(campaign.folder),
     )

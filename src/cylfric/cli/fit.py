@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 from rich.table import Table
 
 from ..escape import terminal
+from ..options import FitOptions
 from .common import (
     JSON_HELP,
     BadInput,
@@ -24,36 +25,25 @@ from .common import (
     print_table,
 )
 
+if TYPE_CHECKING:
+    from ..pipeline import FitOutputs
+
 __all__ = ["run_fit"]
 
 
 def run_fit(
-    campaign: Path,
-    out: Path,
-    *,
-    fix=(),
-    pressure_law="linear",
-    per_direction=False,
-    skip_bad=False,
-    report=True,
-    quiet=False,
-    glob=None,
-    strict=False,
-    export=(),
-    viscosity_correction=None,
-):
-    """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary."""
-    from ..io.campaign import DYNAMIC_TESTS, check_glob, discover_runs, load_config
+    campaign: Path, out: Path, options: FitOptions | None = None, *, quiet: bool = False
+) -> FitOutputs:
+    """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary
+    (``quiet``: no summary)."""
+    from ..io.campaign import Campaign, check_glob
     from ..pipeline import fit_campaign
 
-    fixed = _fixed(list(fix))
-    config = load_config(campaign)
-    if glob is not None:
-        config = dataclasses.replace(config, glob=check_glob(glob, campaign, key="--glob"))
-    n_files = sum(  # the constant-velocity runs the bar counts (not presliding/breakaway tests)
-        str(info.extra.get("test", "")).strip().lower() not in DYNAMIC_TESTS
-        for info in discover_runs(campaign, config)
-    )
+    options = options or FitOptions()
+    if options.glob is not None:
+        check_glob(options.glob, campaign, key="--glob")
+    opened = Campaign.open(campaign, options.glob)  # read once, passed down to every step
+    n_files = len(opened.steady_runs)  # the bar counts these (not presliding/breakaway tests)
     progress = _progress()
     task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
     # warnings reach the user once, as the notes printed below (not as Python's own lines)
@@ -62,19 +52,11 @@ def run_fit(
         progress.start()
         try:
             result = fit_campaign(
-                campaign,
+                opened,
                 out,
-                fixed=fixed,
-                pressure_law=pressure_law,
-                per_direction=per_direction,
-                skip_bad=skip_bad,
-                report=report,
+                options,
                 progress=lambda _: progress.advance(task),
                 after_extraction=progress.stop,
-                glob=glob,
-                strict=strict,
-                export=export,
-                viscosity_correction=viscosity_correction,
             )
         finally:
             progress.stop()
@@ -100,8 +82,8 @@ def run_fit(
                 markup=False,
                 highlight=False,
             )
-        opened = f"; open {out / 'report.html'}" if report else ""
-        console.print(terminal(f"outputs in {out}{opened}", markup=False), markup=False)
+        shown = f"; open {out / 'report.html'}" if options.report else ""
+        console.print(terminal(f"outputs in {out}{shown}", markup=False), markup=False)
     return result
 
 
@@ -142,11 +124,14 @@ def fit(
         help="Identify at campaign.toml [oil] reference_temperature, each run's speeds "
         "mapped by its oil viscosity (default: on when [oil] and run temperatures are given).",
     ),
+    json_output: bool = typer.Option(
+        False, "--json", help=JSON_HELP + " The outputs are written as without it."
+    ),
 ):
     """Raw bench files -> datasheet.json, tables, figures and report.html."""
     if not campaign.is_dir():
         raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
-    targets = ()
+    targets: list[str] = []
     if export is not None:
         from ..export import parse_targets, resolve
 
@@ -156,19 +141,31 @@ def fit(
                 resolve(target)
         except (ValueError, ImportError) as exc:
             raise BadInput(f"--export {export!r}: {exc}") from None
-    run_fit(
-        campaign,
-        out,
-        fix=fix,
+    options = FitOptions(
+        fixed=_fixed(list(fix)),
         pressure_law=pressure_law,
         per_direction=per_direction,
         skip_bad=skip_bad,
         report=not no_report,
         glob=glob,
         strict=strict,
-        export=targets,
+        export=tuple(targets),
         viscosity_correction=viscosity_correction,
     )
+    result = run_fit(campaign, out, options, quiet=json_output)
+    if json_output:
+        excluded = result.excluded
+        print_json(
+            {
+                "out": out,
+                "datasheet": out / "datasheet.json",
+                **model_document(result.identification.model),
+                "skipped": list(result.extraction.skipped),
+                "excluded": [] if excluded is None else excluded.to_dict("records"),
+                "notes": list(result.identification.notes),
+                "exports": {k: list(v.files) for k, v in result.exports.items()},
+            }
+        )
 
 
 THESIS_VALUES = {
@@ -199,7 +196,7 @@ def demo(
         task = progress.add_task("virtual bench", total=n)
         generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
     console.print(terminal(f"virtual campaign: {n} files in {campaign}"))
-    result = run_fit(campaign, out / "fit", quiet=True)
+    result = run_fit(campaign, out / "fit", FitOptions(), quiet=True)
     sheet = result.datasheet
     print_table(_summary_table(sheet, "Recovered from the virtual campaign"))
     table = Table(title="Recovered against the thesis (eq. 4.1-4.3, alpha, v_r; p in bar)")

@@ -7,11 +7,14 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
+from ..options import FitOptions
 from .common import (
+    JSON_HELP,
     BadInput,
     console,
     fixed_parameters,
     guarded,
+    print_json,
     print_table,
     progress_bar,
 )
@@ -60,6 +63,7 @@ def register(app: typer.Typer) -> None:
             help="As for cylfric fit (default: on where campaign.toml has [oil] and the runs "
             "temperatures).",
         ),
+        json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Fit every campaign folder under ROOT in parallel; OUT/fit_many.csv says how each went.
 
@@ -69,16 +73,16 @@ def register(app: typer.Typer) -> None:
             raise BadInput(f"{root}: not a folder; expected a folder of campaign folders")
         if workers is not None and workers < 1:
             raise BadInput(f"--workers {workers}: expected at least 1")
-        options = {
-            "fixed": fixed_parameters(list(fix)),
-            "pressure_law": pressure_law,
-            "per_direction": per_direction,
-            "skip_bad": skip_bad,
-            "report": not no_report,
-            "glob": glob,
-            "strict": strict,
-            "viscosity_correction": viscosity_correction,
-        }
+        options = FitOptions(
+            fixed=fixed_parameters(list(fix)),
+            pressure_law=pressure_law,
+            per_direction=per_direction,
+            skip_bad=skip_bad,
+            report=not no_report,
+            glob=glob,
+            strict=strict,
+            viscosity_correction=viscosity_correction,
+        )
         from ..many import find_campaigns, fit_many
 
         total = len(find_campaigns(root, exclude=[out]))  # a few ms
@@ -90,12 +94,25 @@ def register(app: typer.Typer) -> None:
             result = fit_many(
                 root,
                 out,
+                options,
                 workers=workers,
                 scheduler=scheduler,
                 catalog=catalog,
                 progress=lambda _: progress.advance(task),
-                **options,
             )
+        if json_output:
+            print_json(
+                {
+                    "out": out,
+                    "scheduler": result.scheduler,
+                    "seconds [s]": result.seconds,
+                    "succeeded": result.succeeded,
+                    "campaigns": result.rows,
+                }
+            )
+            if result.succeeded == 0:
+                raise typer.Exit(2)
+            return
         table = Table(title=f"fit-many: {result.succeeded} of {len(result.rows)} fitted")
         for column in ("campaign", "status", "runs", "excluded", "seconds", "reason"):
             table.add_column(column)

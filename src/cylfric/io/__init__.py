@@ -5,6 +5,7 @@
 """
 
 from .campaign import (
+    Campaign,
     CampaignConfig,
     OilSettings,
     RunInfo,
@@ -19,6 +20,7 @@ from .writers import atomic_write_bytes, atomic_write_text, write_manifest, writ
 
 __all__ = [
     "BenchFileError",
+    "Campaign",
     "CampaignConfig",
     "OilSettings",
     "RunInfo",

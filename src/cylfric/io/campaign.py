@@ -15,9 +15,11 @@ import codecs
 import csv
 import fnmatch
 import math
+import os
 import re
 import tomllib
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..units import UnitError, parse_quantity, parse_temperature
@@ -25,6 +27,7 @@ from .matfile import read_mat
 from .text import BenchFileError, read_bench_arrays, si_columns
 
 __all__ = [
+    "Campaign",
     "CampaignConfig",
     "OilSettings",
     "RunInfo",
@@ -728,13 +731,26 @@ def _manifest_temperature(row: dict, path: Path, number: int, delimiter: str = "
 
 
 def discover_runs(folder, config: CampaignConfig | None = None) -> list[RunInfo]:
-    """List the run files of a campaign folder with their nominal metadata (sorted by name)."""
+    """List the run files of a campaign folder with their nominal metadata (sorted by name).
+
+    Reads ``campaign.toml`` (without ``config``) and ``manifest.csv``; a :class:`Campaign`
+    holds the result with everything else a fit needs, read once.
+    """
+    folder = _campaign_folder(folder)
+    config = config or load_config(folder)
+    check_glob(config.glob, folder, key="glob")  # also a --glob of the command line
+    return _discover(folder, config, _read_manifest(folder))
+
+
+def _campaign_folder(folder) -> Path:
     folder = Path(folder)
     if not folder.is_dir():
         raise BenchFileError(folder, "not a folder; expected a campaign folder of run files")
-    config = config or load_config(folder)
-    check_glob(config.glob, folder, key="glob")  # also a --glob of the command line
-    manifest = _read_manifest(folder)
+    return folder
+
+
+def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[RunInfo]:
+    """The runs of ``folder`` (its glob already checked) with their nominal metadata."""
     pattern = (
         compile_name_pattern(config.name_pattern, folder / CONFIG_NAME)
         if config.name_pattern
@@ -803,6 +819,13 @@ def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
         return []
     config = config or load_config(folder)
     check_glob(config.glob, folder, key="glob")
+    return _unlisted(folder, config, manifest)
+
+
+def _unlisted(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[str]:
+    """Files matching the (checked) glob that a non-empty ``manifest`` does not list."""
+    if not manifest:
+        return []
     return sorted(
         p.relative_to(folder).as_posix()
         for p in folder.glob(config.glob)
@@ -812,6 +835,80 @@ def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
         and p.name not in _SKIP_NAMES
         and not p.name.startswith(".")
     )
+
+
+def _is_dynamic(info: RunInfo) -> bool:
+    """Whether ``manifest.csv``'s ``test`` column marks the run a presliding or breakaway test."""
+    return str(info.extra.get("test", "")).strip().lower() in DYNAMIC_TESTS
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A campaign folder read once: its configuration, manifest rows and runs.
+
+    :meth:`open` reads ``campaign.toml`` and ``manifest.csv`` once each and lists the runs;
+    a fit passes the ``Campaign`` to every step (:func:`cylfric.pipeline.fit_campaign`,
+    :func:`cylfric.steady_state.extract_campaign`), so none reads them again. The run files
+    themselves are read by the steps (:func:`read_run`).
+
+    Attributes
+    ----------
+    folder : Path
+        The campaign folder.
+    config : CampaignConfig
+        ``campaign.toml`` (defaults without it), with the ``glob`` given to :meth:`open`.
+    manifest : dict
+        Rows of ``manifest.csv``: file -> (pressure [Pa], velocity [m/s], other columns);
+        empty without a manifest.
+    runs : tuple of RunInfo
+        Every run (sorted by name; those of the manifest when there is one), with its
+        nominal metadata (:func:`discover_runs`).
+    unlisted : tuple of str
+        Files matching the glob that ``manifest.csv`` does not list (not read;
+        :func:`unlisted_files`).
+    """
+
+    folder: Path
+    config: CampaignConfig
+    manifest: Mapping[str, tuple[float, float, dict]]
+    runs: tuple[RunInfo, ...]
+    unlisted: tuple[str, ...]
+
+    @classmethod
+    def open(
+        cls,
+        folder: str | os.PathLike[str],
+        glob: str | None = None,
+        *,
+        config: CampaignConfig | None = None,
+    ) -> Campaign:
+        """Read the campaign in ``folder``: ``campaign.toml`` (unless ``config`` is given)
+        and ``manifest.csv`` once each, and list its runs.
+
+        ``glob`` (e.g. a ``--glob``) replaces ``campaign.toml [files] glob``; a glob that
+        reaches outside the folder is refused (:func:`check_glob`). Raises BenchFileError
+        for a missing folder, a campaign without run files, or a bad campaign.toml or
+        manifest.csv (naming the file and line).
+        """
+        path = _campaign_folder(folder)
+        config = config or load_config(path)
+        if glob is not None:
+            config = replace(config, glob=glob)
+        check_glob(config.glob, path, key="glob")
+        manifest = _read_manifest(path)
+        runs = _discover(path, config, manifest)
+        return cls(path, config, manifest, tuple(runs), tuple(_unlisted(path, config, manifest)))
+
+    @property
+    def dynamic_runs(self) -> tuple[RunInfo, ...]:
+        """Runs that ``manifest.csv`` marks as presliding or breakaway tests
+        (:data:`DYNAMIC_TESTS`): for :mod:`cylfric.identify.dynamic`."""
+        return tuple(info for info in self.runs if _is_dynamic(info))
+
+    @property
+    def steady_runs(self) -> tuple[RunInfo, ...]:
+        """The constant-velocity runs (every run but the :attr:`dynamic_runs`)."""
+        return tuple(info for info in self.runs if not _is_dynamic(info))
 
 
 def _read_mat_run(path: Path, config: CampaignConfig):
