@@ -158,7 +158,7 @@ def html_text(text) -> str:
     return html.escape(printable(text), quote=True)
 
 
-_MARKDOWN_SPECIAL = "\\`*_{}[]()<>#+-.!|~"
+_MARKDOWN_SPECIAL = "\\`*_{}[]()#+-.!|~"  # < > & become entities below
 
 
 def markdown_text(text, *, limit: int = COMMENT_LIMIT) -> str:

@@ -276,9 +276,10 @@ def fit_many(
             f"{root}: no campaign folder found (a folder with manifest.csv, campaign.toml or "
             "run files)"
         )
-    target = out.resolve()
+    target, top = out.resolve(), root.resolve()
     for folder in campaigns:
-        if folder.resolve() == target or folder.resolve() in target.parents:
+        real = folder.resolve()
+        if (real == target or real in target.parents) and (real == top or top in real.parents):
             raise ValueError(f"--out {out} is inside the campaign folder {folder}")
     if workers is not None and workers < 1:
         raise ValueError(f"workers = {workers}; expected at least 1")
@@ -293,10 +294,19 @@ def fit_many(
         # fits side by side: each on one core (a fit alone reads files on two)
         options = replace(options, workers=1)
     t0, started = time.perf_counter(), time.time()
-    jobs = [  # OUT/<campaign's path under root>, never outside OUT
-        (f, inside(out, _name(f, root), "campaign"), _name(f, root), options, started)
-        for f in campaigns
-    ]
+    jobs, refused = [], {}
+    for folder in campaigns:  # one campaign that cannot be fitted is a failed row, not fatal
+        name = _name(folder, root)
+        try:
+            real = folder.resolve()  # a link to a campaign elsewhere is followed, a loop is not
+            if real == top or real in top.parents or real == target or real in target.parents:
+                raise ValueError(
+                    f"{folder} leads to {real}, which holds {root} or --out {out}: not fitted"
+                )
+            jobs.append((folder, inside(out, name, "campaign"), name, options, started))
+        except ValueError as exc:
+            refused[name] = {"campaign": name, "status": "failed", "reason": str(exc)}
+            refused[name].update({"out": "", "catalog": "", "runs [-]": None})
     # largest first: a long fit started last would leave the other workers idle at the end
     order = sorted(range(len(jobs)), key=lambda i: -_size(campaigns[i]))
     rows = {}
@@ -330,7 +340,10 @@ def fit_many(
                 "catalog": "",
             },
         )
-    ordered = [rows[job[2]] for job in jobs]
+    ordered = [refused.get(_name(f, root)) or rows[_name(f, root)] for f in campaigns]
+    for row in refused.values():
+        if progress is not None:
+            progress(row)
     atomic_write_text(out / "fit_many.csv", _summary_csv(ordered))
     return ManyResult(ordered, out, used, time.perf_counter() - t0)
 

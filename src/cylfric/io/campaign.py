@@ -14,6 +14,7 @@ from __future__ import annotations
 import codecs
 import csv
 import fnmatch
+import io
 import math
 import os
 import re
@@ -194,6 +195,8 @@ def load_config(folder) -> CampaignConfig:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise BenchFileError(path, f"invalid TOML ({exc})") from None
+    except RecursionError:
+        raise BenchFileError(path, "invalid TOML (arrays or tables nested too deeply)") from None
     _validate_config(doc, path)
     files, cols = doc.get("files", {}), doc.get("columns", {})
     cyl, fb = doc.get("cylinder", {}), doc.get("force_balance", {})
@@ -202,6 +205,14 @@ def load_config(folder) -> CampaignConfig:
         bore = _quantity(cyl.get("bore", "0 mm"), "length", "mm", path)
         rod = _quantity(cyl.get("rod", "0 mm"), "length", "mm", path)
         kind = cyl.get("kind", "double-rod")
+        for key, value in (("bore", bore), ("rod", rod)):
+            if not (math.isfinite(value) and abs(value) <= MAX_DIAMETER):
+                raise BenchFileError(
+                    path,
+                    f"cylinder.{key} = {value:g} m is not a cylinder's diameter; expected at "
+                    f"most {MAX_DIAMETER:g} m, e.g. {key} = \"40 mm\"",
+                    line=_line_of(path, key),
+                )
         piston = math.pi / 4 * bore**2
         annulus = piston - math.pi / 4 * rod**2
         kinds = {
@@ -440,6 +451,13 @@ def _validate_config(doc, path):
         compile_name_pattern(pattern, path)
 
 
+PATTERN_LIMIT = 500
+"""Longest ``name_pattern`` [characters]: RE2's time is linear in the file name but grows
+with the pattern (10,000 groups took 36 s and 4.6 GB for one file name)."""
+PATTERN_GROUPS = 30
+"""Most groups a ``name_pattern`` may have."""
+
+
 def compile_name_pattern(pattern: str, path=None):
     """``[files] name_pattern`` compiled by RE2, whose matching time is linear in the name.
 
@@ -462,8 +480,20 @@ def compile_name_pattern(pattern: str, path=None):
     """
     import re2
 
+    where = path if path is not None else "campaign.toml"
+    line = _line_of(path, "name_pattern") if path is not None else None
+    groups = pattern.count("(") - pattern.count(r"\(") - pattern.count("(?:")
+    if len(pattern) > PATTERN_LIMIT or groups > PATTERN_GROUPS:
+        raise BenchFileError(
+            where,
+            f"files.name_pattern is {len(pattern)} characters with {groups} groups; at most "
+            f"{PATTERN_LIMIT} characters and {PATTERN_GROUPS} groups (a file name is short: "
+            "name the few groups it carries, e.g. '^(?P<seal>.+)_(?P<pressure_bar>[0-9.]+)bar')",
+            line=line,
+        )
     options = re2.Options()
     options.log_errors = False  # the error is raised below, not printed by RE2 on stderr
+    options.max_mem = 8 << 20  # RE2's own default: a larger program is refused, not built
     try:
         return re2.compile(pattern, options=options)
     except re2.error as exc:
@@ -471,20 +501,48 @@ def compile_name_pattern(pattern: str, path=None):
         if isinstance(reason, bytes):
             reason = reason.decode("utf-8", "replace")
         raise BenchFileError(
-            path if path is not None else "campaign.toml",
+            where,
             f"files.name_pattern is not a regular expression RE2 accepts ({reason}); "
             "cylfric matches file names in linear time with RE2, which has no "
             "back-references (\\1) and no look-around ((?=...), (?<=...)): write the "
             "pattern without them",
-            line=_line_of(path, "name_pattern") if path is not None else None,
+            line=line,
         ) from None
+
+
+MAX_DIAMETER = 10.0
+"""Largest bore or rod diameter [m] campaign.toml may give (the largest presses' cylinders
+are about 3 m)."""
+
+GLOB_LIMIT = 200
+"""Longest ``glob`` [characters] a campaign may give."""
 
 
 def check_glob(glob: str, where, line=None, key="files.glob") -> str:
     """Refuse a glob that would reach outside the campaign folder: absolute (``/data/*.txt``,
-    ``C:/...``) or with a ``..`` part. BenchFileError naming ``where`` (campaign.toml,
-    with the line of the key, or the campaign folder for ``--glob``) and what to write."""
+    ``C:/...``) or with a ``..`` part; and one that could not end in time or names no files:
+    more than one ``**`` (pathlib's search is combinatorial in them on deep folders: five took
+    two minutes on a 40-level chain), ``**`` inside a component, longer than
+    :data:`GLOB_LIMIT`, empty or ``.``. BenchFileError naming ``where`` (campaign.toml, with
+    the line of the key, or the campaign folder for ``--glob``) and what to write."""
     text = glob.replace("\\", "/")
+    parts = [p for p in text.split("/") if p]
+    problem = None
+    if len(glob) > GLOB_LIMIT:
+        problem = f"is {len(glob)} characters long (at most {GLOB_LIMIT})"
+    elif not parts or all(p == "." for p in parts):
+        problem = "names no files"
+    elif sum(p == "**" for p in parts) > 1:
+        problem = "has more than one '**' (any depth is one '**')"
+    elif any("**" in p and p != "**" for p in parts):
+        problem = "has '**' inside a name ('**' stands alone between slashes)"
+    if problem:
+        raise BenchFileError(
+            where,
+            f"{key} = {glob[:80]!r}{'...' if len(glob) > 80 else ''} {problem}; write a "
+            'pattern such as glob = "*.txt", "runs/*.txt" or "**/*.txt"',
+            line=line,
+        )
     absolute = text.startswith("/") or re.match(r"^[A-Za-z]:", text) is not None  # or C:
     if absolute or ".." in text.split("/"):
         problem = "is absolute" if absolute else "climbs out of the campaign folder with '..'"
@@ -624,8 +682,8 @@ def _read_manifest(folder: Path) -> dict:
         return rows
     text = _manifest_text(path)
     delimiter = _manifest_delimiter(path, text.split("\n", 1)[0])
-    reader = csv.DictReader(
-        text.splitlines(keepends=True), delimiter=delimiter, skipinitialspace=True
+    reader = csv.DictReader(  # lines end at \n, \r\n or \r only (not at U+2028, \x0c, ...)
+        io.StringIO(text, newline=""), delimiter=delimiter, skipinitialspace=True
     )
     if reader.fieldnames:  # 'file, pressure_bar' or 'File' are the same columns
         reader.fieldnames = [name.strip().lower() for name in reader.fieldnames]
@@ -749,6 +807,19 @@ def _campaign_folder(folder) -> Path:
     return folder
 
 
+def _check_encodable(path: Path) -> None:
+    """Refuse a file or folder name that is not valid UTF-8 (bytes the file system holds but
+    no table or report can write), naming it with its bytes escaped."""
+    try:
+        str(path).encode("utf-8")
+    except UnicodeEncodeError:
+        raise BenchFileError(
+            path,
+            "the name is not valid UTF-8 (shown with its bytes escaped); the tables and the "
+            "report cannot hold it: rename the file or folder",
+        ) from None
+
+
 def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[RunInfo]:
     """The runs of ``folder`` (its glob already checked) with their nominal metadata."""
     pattern = (
@@ -765,6 +836,7 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     if manifest:  # a row for a missing file stops its run in read_run (skippable)
         candidates = [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
     for path in candidates:
+        _check_encodable(path)
         pressure = velocity = math.nan
         extra, source = {}, {}
         nominal = {"pressure": {}, "velocity": {}}
@@ -891,6 +963,7 @@ class Campaign:
         manifest.csv (naming the file and line).
         """
         path = _campaign_folder(folder)
+        _check_encodable(path)
         config = config or load_config(path)
         if glob is not None:
             config = replace(config, glob=glob)

@@ -211,6 +211,8 @@ def load_motion_config(path) -> MotionConfig:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise BenchFileError(path, f"invalid TOML ({exc})") from None
+    except RecursionError:
+        raise BenchFileError(path, "invalid TOML (arrays or tables nested too deeply)") from None
     except OSError as exc:
         raise BenchFileError(path, f"cannot read the file ({exc.strerror})") from None
     _validate(doc, path)
