@@ -15,6 +15,10 @@ from __future__ import annotations
 
 import os
 from pathlib import Path, PurePosixPath, PureWindowsPath
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
 
 __all__ = [
     "OutputPathError",
@@ -31,7 +35,7 @@ class OutputPathError(ValueError):
     the output folder (exit code 2 on the command line)."""
 
 
-def refuse_link(path, option: str = "--out") -> Path:
+def refuse_link(path: StrPath, option: str = "--out") -> Path:
     """``path`` as a Path; OutputPathError when it is a symbolic link (even a dangling one).
 
     Parameters

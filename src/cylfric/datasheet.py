@@ -13,11 +13,17 @@ import hashlib
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import __version__
 from .io.writers import atomic_write_text
 from .model import SCHEMA, SCHEMA_ID, DatasheetError, FrictionModel, read_datasheet, validate
 from .model.serialize import clean
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "DatasheetError",
@@ -47,10 +53,10 @@ def build_datasheet(
     identification,
     *,
     extraction=None,
-    files=None,
-    campaign=None,
-    name=None,
-    pressure_reference=None,
+    files: Sequence[StrPath] | None = None,
+    campaign: str | None = None,
+    name: str | None = None,
+    pressure_reference: str | None = None,
 ) -> dict:
     """Datasheet dict from an :class:`~cylfric.identify.Identification`.
 
@@ -126,7 +132,7 @@ def write_datasheet(path, sheet: dict) -> Path:
     return atomic_write_text(path, json.dumps(sheet, indent=2, allow_nan=False) + "\n")
 
 
-def evaluate(sheet: dict, velocity, pressure, *, strict=False):
+def evaluate(sheet: dict, velocity, pressure, *, strict: bool = False):
     """Friction force [N] of a datasheet at ``velocity`` [m/s] and operating ``pressure`` [Pa].
 
     The datasheet's model (:meth:`FrictionModel.from_datasheet`) evaluated; warns outside the

@@ -29,8 +29,18 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+
+    from cylfric._typing import StrPath
+
+    from .model import FrictionModel
 
 __all__ = [
     "drift",
@@ -75,7 +85,15 @@ def _z(change, se_a, se_b):
     return se, z
 
 
-def drift(a, b, *, pressures=None, velocities=None, n=5, level=0.95):
+def drift(
+    a: StrPath | Mapping[str, Any] | FrictionModel,
+    b: StrPath | Mapping[str, Any] | FrictionModel,
+    *,
+    pressures: Sequence[float] | None = None,
+    velocities: Sequence[float] | None = None,
+    n: int = 5,
+    level: float = 0.95,
+) -> pd.DataFrame:
     """Change of friction between two fits of the same cylinder, with z-scores.
 
     Parameters
@@ -314,7 +332,13 @@ def _ols_slope(x, y):
     return slope, math.sqrt(float(np.sum(resid**2)) / (x.size - 2) / sxx)
 
 
-def run_order_trend(points, model, *, order="run", campaign=None) -> RunOrderTrend:
+def run_order_trend(
+    points: pd.DataFrame,
+    model: FrictionModel,
+    *,
+    order: Literal["run", "mtime"] = "run",
+    campaign: StrPath | None = None,
+) -> RunOrderTrend:
     """Residual friction against run order, between and within runs.
 
     Parameters
@@ -392,7 +416,7 @@ def run_order_trend(points, model, *, order="run", campaign=None) -> RunOrderTre
     )
 
 
-def figure_run_order(trend: RunOrderTrend, title=""):
+def figure_run_order(trend: RunOrderTrend, title: str = ""):
     """Residual friction [N] against run order (points, run means, between-run trend)."""
     from matplotlib.figure import Figure
 

@@ -62,7 +62,7 @@ def _escape_char(c: str) -> str:
     return f"\\U{code:08x}"
 
 
-def printable(text, *, limit: int | None = None, ascii_only: bool = False) -> str:
+def printable(text: object, *, limit: int | None = None, ascii_only: bool = False) -> str:
     """``text`` as one line of printable characters.
 
     Parameters
@@ -178,7 +178,7 @@ def xml_attr(text) -> str:
     return quoteattr(printable(text))
 
 
-def terminal(text, *, markup: bool = True, multiline: bool = False) -> str:
+def terminal(text: object, *, markup: bool = True, multiline: bool = False) -> str:
     """Text for a rich console: control codes (ANSI ESC) and, by default, markup escaped.
 
     Parameters

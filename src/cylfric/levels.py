@@ -11,7 +11,7 @@ import numpy as np
 __all__ = ["pressure_levels"]
 
 
-def pressure_levels(pressure, *, gap=0.5e5, relative=0.02):
+def pressure_levels(pressure, *, gap: float = 0.5e5, relative: float = 0.02):
     """Group measured pressures [Pa] into levels; returns (level index per point, level means).
 
     A new level starts where sorted pressures jump by more than max(``gap`` [Pa],

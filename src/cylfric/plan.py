@@ -33,12 +33,18 @@ import math
 import tempfile
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from .io.writers import atomic_write_bytes, atomic_write_text
 from .model import STEADY_PARAMETERS, FrictionModel, engineering_unit
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from .simulate.bench import BenchSettings
 
 __all__ = [
     "WindowNoise",
@@ -91,7 +97,7 @@ class WindowNoise:
     sem: tuple
     source: str = "given"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         v, s = np.asarray(self.speeds, float), np.asarray(self.sem, float)
         if v.ndim != 1 or v.shape != s.shape or v.size < 1:
             raise ValueError("WindowNoise needs equally long, non-empty speeds [m/s] and sem [N]")
@@ -110,7 +116,9 @@ class WindowNoise:
         return self(speed) / math.sqrt(2.0)
 
     @classmethod
-    def from_points(cls, points: pd.DataFrame, *, source="points table", relative=0.1):
+    def from_points(
+        cls, points: pd.DataFrame, *, source: str = "points table", relative: float = 0.1
+    ):
         """Calibrate from a points table (``points.csv`` of a fit, or an extraction).
 
         Uses the ``ok`` windows: ``friction_std [N] / sqrt(n [-])`` grouped by speed
@@ -139,7 +147,9 @@ class WindowNoise:
         return cls(tuple(speeds), tuple(rms), source)
 
     @classmethod
-    def from_bench(cls, settings=None, *, speeds=None, pressure_bar=80.0, seeds=2, progress=None):
+    def from_bench(
+        cls, settings=None, *, speeds=None, pressure_bar: float = 80.0, seeds=2, progress=None
+    ):
         """Calibrate on the virtual bench: pilot runs through the extraction.
 
         Runs the bench (``settings``: force noise, sampling, stroke) at ``speeds`` [m/s] and
@@ -484,18 +494,18 @@ def _html_table(frame: pd.DataFrame) -> str:
 
 
 def make_plan(
-    pressure_range,
-    speed_range,
-    runs,
+    pressure_range: tuple[float, float],
+    speed_range: tuple[float, float],
+    runs: int,
     *,
-    model=None,
-    noise=None,
-    settings=None,
-    fixed=(),
-    n_pressures=9,
-    n_speeds=25,
-    max_repeats=1,
-    seed=0,
+    model: FrictionModel | None = None,
+    noise: WindowNoise | None = None,
+    settings: BenchSettings | None = None,
+    fixed: Iterable[str] = (),
+    n_pressures: int = 9,
+    n_speeds: int = 25,
+    max_repeats: int = 1,
+    seed: int = 0,
 ) -> TestPlan:
     """Design a D-optimal test plan of ``runs`` runs.
 

@@ -17,6 +17,10 @@ Examples
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "UNITS",
@@ -222,7 +226,7 @@ def _factor(unit: str, dimension: str | None) -> float:
     return _lookup(unit)[1]
 
 
-def to_si(value, unit: str, dimension: str | None = None):
+def to_si(value: ArrayLike, unit: str, dimension: str | None = None):
     """Convert ``value`` given in ``unit`` to SI (scalar or ndarray).
 
     Parameters
@@ -281,7 +285,7 @@ ZERO_CELSIUS = 273.15
 _TEMPERATURE_UNITS = {"k": 0.0, "degc": ZERO_CELSIUS, "°c": ZERO_CELSIUS, "c": ZERO_CELSIUS}
 
 
-def parse_temperature(text, default_unit: str = "degC") -> float:
+def parse_temperature(text: str | float, default_unit: str = "degC") -> float:
     """Parse ``"40 degC"``, ``"40°C"`` or ``"313.15 K"`` into kelvin [K].
 
     Temperatures are affine (0 degC = 273.15 K), so they are not in :data:`UNITS`.

@@ -14,8 +14,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "walther_viscosity",
@@ -26,7 +33,7 @@ __all__ = [
 ]
 
 
-def walther_viscosity(temperature, oil):
+def walther_viscosity(temperature: ArrayLike, oil: tuple[tuple[float, float], tuple[float, float]]):
     """Kinematic viscosity [m^2/s] of a mineral oil by the Walther equation (ASTM D341).
 
     ``log10(log10(nu + 0.7)) = A - B log10(T)`` with ``nu`` in mm^2/s (cSt) and ``T`` in K;
@@ -70,7 +77,9 @@ def walther_viscosity(temperature, oil):
     return nu * 1e-6 if np.ndim(nu) else float(nu) * 1e-6
 
 
-def viscosity_corrected(points, *, oil, reference_temperature, temperature=None):
+def viscosity_corrected(
+    points: pd.DataFrame, *, oil, reference_temperature: float, temperature: float | None = None
+) -> pd.DataFrame:
     """Points with their speeds mapped to a reference oil temperature (same Hersey number).
 
     The lubrication regime of a seal, and so the Stribeck curve, depends on the Hersey
@@ -165,7 +174,9 @@ def _celsius(kelvin) -> str:
     return f"{kelvin - 273.15:.4g} degC"
 
 
-def correct_campaign(points, runs, oil, *, enabled=None) -> ViscosityCorrection:
+def correct_campaign(
+    points: pd.DataFrame, runs: Sequence[Mapping[str, Any]], oil, *, enabled: bool | None = None
+) -> ViscosityCorrection:
     """Map a campaign's points to the oil's reference temperature, or say why not.
 
     Parameters

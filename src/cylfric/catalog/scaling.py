@@ -37,8 +37,12 @@ from __future__ import annotations
 
 import json
 import math
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..model import FrictionModel
 
 __all__ = ["predict_datasheet", "contact_ratio", "scale_model", "RULE_RELATIVE_STDERR"]
 
@@ -53,7 +57,13 @@ _SCALED = ("F_c", "F_s", "sigma_2")
 
 
 def contact_ratio(
-    source_bore, bore, *, source_rod=None, rod=None, contact="piston", rod_seals=1
+    source_bore: float | None,
+    bore: float | None,
+    *,
+    source_rod: float | None = None,
+    rod: float | None = None,
+    contact: Literal["piston", "rod", "total"] = "piston",
+    rod_seals: int = 1,
 ) -> tuple[float, str]:
     """Contact-length ratio ``k`` [-] and the rule as text.
 
@@ -119,7 +129,9 @@ def _factor(name, ratio):
     return ratio if _scales(name) else 1.0
 
 
-def scale_model(model, ratio, rule_stderr=RULE_RELATIVE_STDERR):
+def scale_model(
+    model: FrictionModel, ratio: float, rule_stderr: float = RULE_RELATIVE_STDERR
+) -> FrictionModel:
     """``model`` with its forces scaled by ``ratio`` and the rule's uncertainty added.
 
     Parameters
@@ -189,13 +201,13 @@ def predict_datasheet(
     sheet: dict,
     *,
     source_name: str,
-    source_bore,
-    bore,
-    source_rod=None,
-    rod=None,
-    contact=None,
-    rod_seals=1,
-    rule_stderr=RULE_RELATIVE_STDERR,
+    source_bore: float | None,
+    bore: float | None,
+    source_rod: float | None = None,
+    rod: float | None = None,
+    contact: Literal["piston", "rod", "total"] | None = None,
+    rod_seals: int = 1,
+    rule_stderr: float = RULE_RELATIVE_STDERR,
 ) -> dict:
     """A validated datasheet for the same seal on a cylinder of another size.
 

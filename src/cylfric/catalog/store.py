@@ -22,6 +22,14 @@ import sqlite3
 import sys
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "Catalog",
@@ -172,7 +180,7 @@ class Catalog:
     111.26
     """
 
-    def __init__(self, path=None):
+    def __init__(self, path=None) -> None:
         self.path = Path(path).expanduser() if path is not None else default_path()
         if self.path.is_dir():
             raise CatalogError(f"{self.path}: is a folder; expected a catalogue file (.sqlite)")
@@ -215,7 +223,7 @@ class Catalog:
                 raise
             db.execute("COMMIT")
 
-    def _migrate(self, db):
+    def _migrate(self, db) -> None:
         version = db.execute("PRAGMA user_version").fetchone()[0]
         if version > SCHEMA_VERSION:
             raise CatalogError(
@@ -256,16 +264,16 @@ class Catalog:
     # ------------------------------------------------------------------ entries
     def add(
         self,
-        datasheet,
-        name,
+        datasheet: StrPath | Mapping[str, Any],
+        name: str,
         *,
-        seal=None,
-        manufacturer=None,
-        bore=None,
-        rod=None,
-        fluid=None,
-        temperature=None,
-        replace=False,
+        seal: str | None = None,
+        manufacturer: str | None = None,
+        bore: float | None = None,
+        rod: float | None = None,
+        fluid: str | None = None,
+        temperature: float | None = None,
+        replace: bool = False,
     ) -> None:
         """Add a datasheet under ``name`` (validated first; SI metadata).
 
@@ -298,7 +306,7 @@ class Catalog:
         sheet = _load_datasheet(datasheet, where=f"datasheet of {name!r}")
         self._insert([(name, sheet, metadata, _now())], replace=replace)
 
-    def _insert(self, rows, *, replace):
+    def _insert(self, rows, *, replace) -> None:
         columns = ("name", "datasheet", "added", *METADATA)
         verb = "INSERT OR REPLACE" if replace else "INSERT"
         sql = f"{verb} INTO seals ({', '.join(columns)}) VALUES ({', '.join('?' * len(columns))})"
@@ -360,7 +368,7 @@ class Catalog:
             if not db.execute("DELETE FROM seals WHERE name = ?", (name,)).rowcount:
                 raise CatalogError(f"{name!r} is not in the catalogue {self.path}")
 
-    def list(self):
+    def list(self) -> pd.DataFrame:
         """One row per entry: metadata (SI, units in the column names) and model summary.
 
         Returns
@@ -407,7 +415,15 @@ class Catalog:
         return pd.DataFrame.from_records(records, columns=columns)
 
     # ------------------------------------------------------------------ use
-    def select(self, pressure, velocity, max_friction=None, *, names=None, level=0.95):
+    def select(
+        self,
+        pressure: float,
+        velocity: float,
+        max_friction: float | None = None,
+        *,
+        names: Sequence[str] | None = None,
+        level: float = 0.95,
+    ) -> pd.DataFrame:
         """Entries ranked by friction at an operating point, lowest first, with the band.
 
         Parameters
@@ -475,7 +491,7 @@ class Catalog:
         table.insert(0, "rank", range(1, len(table) + 1))
         return table
 
-    def compare(self, names, out, pressures, velocities, *, level=0.95) -> dict:
+    def compare(self, names, out, pressures, velocities, *, level: float = 0.95) -> dict:
         """Figures and a table comparing entries; see :func:`cylfric.catalog.compare.compare`."""
         from .compare import compare
 
@@ -484,7 +500,7 @@ class Catalog:
         models = {name: self.model(name) for name in names}
         return compare(models, out, pressures, velocities, level=level)
 
-    def predict(self, name, bore, rod=None, **options) -> dict:
+    def predict(self, name: str, bore: float, rod: float | None = None, **options) -> dict:
         """Datasheet of ``name``'s seal on another cylinder size, scaled by contact length.
 
         See :func:`cylfric.catalog.scaling.predict_datasheet` for the rule, its
@@ -537,7 +553,7 @@ class Catalog:
         }
         return atomic_write_text(path, json.dumps(document, indent=1) + "\n")
 
-    def import_json(self, path, *, replace=False) -> int:
+    def import_json(self, path, *, replace: bool = False) -> int:
         """Add every entry of an :meth:`export_json` file (all or none); returns the count.
 
         Every datasheet is validated and every name checked before anything is written;

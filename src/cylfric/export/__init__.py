@@ -17,8 +17,14 @@ import shutil
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from .result import ExportResult
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
+
+    from ..model import FrictionModel
 
 __all__ = [
     "export",
@@ -96,7 +102,12 @@ def _model(source):
     )
 
 
-def export(model_or_datasheet, to: str, out, **options) -> ExportResult:
+def export(
+    model_or_datasheet: FrictionModel | Mapping[str, Any] | StrPath,
+    to: str,
+    out: StrPath,
+    **options,
+) -> ExportResult:
     """Export a friction model to a simulator.
 
     Parameters

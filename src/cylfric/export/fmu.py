@@ -47,9 +47,17 @@ import warnings
 import zipfile
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 from ..escape import c_comment
 from ..escape import xml_attr as quoteattr
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from cylfric._typing import StrPath
+
+    from ..model import FrictionModel
 
 __all__ = ["export_fmu", "ELEMENTS", "FMU_INPUTS", "FMU_OUTPUTS", "compiler", "fmi_platform"]
 
@@ -623,7 +631,13 @@ def _zip(entries: dict) -> bytes:
     return buffer.getvalue()
 
 
-def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
+def export_fmu(
+    model: FrictionModel | StrPath | Mapping[str, Any],
+    out: StrPath,
+    *,
+    element: Literal["friction", "cylinder"] = "friction",
+    name: str | None = None,
+) -> list[Path]:
     """Write an FMI 2.0 FMU (model exchange and co-simulation) of the friction element.
 
     Parameters

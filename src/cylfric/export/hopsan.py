@@ -28,6 +28,7 @@ from __future__ import annotations
 import io
 from pathlib import Path
 from string import Template
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,6 +38,11 @@ from ..io.writers import atomic_write_text
 from .loss import loss_grid, loss_report
 from .result import ExportResult
 from .simscape import _identifier, _num
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "export_hopsan",
@@ -64,7 +70,9 @@ PARAMETERS = {
 """Hopsan parameter -> (component, SI unit, Hopsan's description)."""
 
 
-def hopsan_friction(velocity, *, f_k, B_p, b=0.0, f_s=None):
+def hopsan_friction(
+    velocity: ArrayLike, *, f_k: float, B_p: float, b: float = 0.0, f_s: float | None = None
+):
     """Steady sliding friction of a Hopsan cylinder + Coulomb-friction mass [N].
 
     ``f_k sign(v) + (B_p + b) v`` (``f_s`` acts only at rest and does not enter).
@@ -145,13 +153,13 @@ def fit_hopsan_pressure_signal(model, speeds, pressures) -> dict:
 
 def export_hopsan(
     model,
-    out,
+    out: StrPath,
     *,
-    name=None,
-    velocity_range=None,
-    pressure_range=None,
-    n_velocity=None,
-    n_pressure=None,
+    name: str | None = None,
+    velocity_range: tuple[float, float] | None = None,
+    pressure_range: tuple[float, float] | None = None,
+    n_velocity: int | None = None,
+    n_pressure: int | None = None,
 ) -> ExportResult:
     """Fit Hopsan's cylinder friction to the model; write HCOM script, table, note, loss report.
 

@@ -17,10 +17,16 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..io.writers import atomic_write_bytes, atomic_write_text
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping, Sequence
+
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "LossReport",
@@ -71,11 +77,11 @@ def _range(model, given, low, high, what, unit):
 def loss_grid(
     model,
     *,
-    velocity_range=None,
-    pressure_range=None,
-    n_velocity=N_VELOCITY,
-    n_pressure=N_PRESSURE,
-):
+    velocity_range: tuple[float, float] | None = None,
+    pressure_range: tuple[float, float] | None = None,
+    n_velocity: int = N_VELOCITY,
+    n_pressure: int = N_PRESSURE,
+) -> tuple[np.ndarray, np.ndarray]:
     """Speeds [m/s] and chamber pressures [Pa] of the loss grid over the validity range.
 
     Parameters
@@ -293,14 +299,14 @@ class LossReport:
 
 def loss_report(
     model,
-    block_force,
+    block_force: Callable[..., Any],
     *,
-    target,
-    title,
-    speeds,
-    pressures,
-    parameters=None,
-    notes=(),
+    target: str,
+    title: str,
+    speeds: ArrayLike,
+    pressures: ArrayLike,
+    parameters: Mapping[str, Any] | None = None,
+    notes: Sequence[str] = (),
 ) -> LossReport:
     """Evaluate a target block and the cylfric model over a grid, both directions.
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from pathlib import Path
 from string import Template
+from typing import TYPE_CHECKING
 
 from ..escape import html_text, modelica_string
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
@@ -26,6 +27,9 @@ from ..io.writers import atomic_write_text
 from ..model.core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 from .result import ExportResult
 from .simscape import _identifier
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
 
 __all__ = ["export_modelica", "modelica_package", "OPERATING_PRESSURE"]
 
@@ -163,7 +167,7 @@ def modelica_package(model, *, name=None) -> tuple[str, str]:
     return package, text
 
 
-def export_modelica(model, out, *, name=None) -> ExportResult:
+def export_modelica(model, out: StrPath, *, name: str | None = None) -> ExportResult:
     """Write the model's Modelica package ``<Name>.mo`` into ``out`` (lossless).
 
     Parameters

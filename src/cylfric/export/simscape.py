@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 from string import Template
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -50,6 +51,13 @@ from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import chamber_pressure, loss_grid, loss_report
 from .result import ExportResult
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "translational_friction",
@@ -82,7 +90,12 @@ zero velocity); the loss grid starts above it unless the data reach below 0.1 mm
 
 
 def translational_friction(
-    velocity, *, breakaway_force, coulomb_force, viscous_coefficient, breakaway_velocity
+    velocity: ArrayLike,
+    *,
+    breakaway_force: ArrayLike,
+    coulomb_force: ArrayLike,
+    viscous_coefficient: ArrayLike,
+    breakaway_velocity: ArrayLike,
 ):
     """Friction force of Simscape's Translational Friction block [N] (documented equations).
 
@@ -112,15 +125,15 @@ def translational_friction(
 
 
 def cylinder_friction_il(
-    velocity,
-    pressure_a,
-    pressure_b,
+    velocity: ArrayLike,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
     *,
-    preload_force,
-    coulomb_friction_coefficient,
-    breakaway_ratio,
-    breakaway_velocity,
-    viscous_coefficient,
+    preload_force: float,
+    coulomb_friction_coefficient: float,
+    breakaway_ratio: float,
+    breakaway_velocity: float,
+    viscous_coefficient: float,
 ):
     """Friction force of Simscape Fluids' Cylinder Friction (IL) block [N].
 
@@ -224,7 +237,7 @@ def _model_levels(model, pressures):
     return model.params_at(model.operating_pressure(pressures, pressures))
 
 
-def fit_cylinder_friction_il(model, speeds, pressures) -> dict:
+def fit_cylinder_friction_il(model, speeds: ArrayLike, pressures: ArrayLike) -> dict:
     """Best-fit Cylinder Friction (IL) parameters over a grid (least squares) [SI].
 
     Parameters
@@ -419,14 +432,14 @@ def _levels(model, pressure_range, levels):
 
 def export_simscape(
     model,
-    out,
+    out: StrPath,
     *,
-    name=None,
-    velocity_range=None,
-    pressure_range=None,
-    levels=None,
-    n_velocity=None,
-    n_pressure=None,
+    name: str | None = None,
+    velocity_range: tuple[float, float] | None = None,
+    pressure_range: tuple[float, float] | None = None,
+    levels: Sequence[float] | None = None,
+    n_velocity: int | None = None,
+    n_pressure: int | None = None,
 ) -> ExportResult:
     """Fit Simscape's friction blocks to the model and write a MATLAB script and loss reports.
 

@@ -15,10 +15,14 @@ linear law (eq. 2.10, 4.1-4.3). Which chamber pressure a law sees is the explici
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from ._checks import check_signal
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "PRESSURE_LAWS",
@@ -34,7 +38,7 @@ __all__ = [
 ]
 
 
-def constant(pressure, intercept):
+def constant(pressure: ArrayLike, intercept: float):
     """Pressure-independent value ``a`` (broadcast to the shape of ``pressure``).
 
     Parameters
@@ -47,7 +51,7 @@ def constant(pressure, intercept):
     return intercept + 0.0 * np.asarray(pressure, dtype=float)
 
 
-def linear(pressure, intercept, slope):
+def linear(pressure: ArrayLike, intercept: float, slope: float):
     """Linear pressure law ``a + b p`` (thesis eq. 2.10 and 4.1-4.3).
 
     Parameters
@@ -121,7 +125,12 @@ PRESSURE_REFERENCES = {
 """How two chamber pressures combine into the pressure a law sees."""
 
 
-def operating_pressure(pressure_a, pressure_b=None, *, reference="mean"):
+def operating_pressure(
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike | None = None,
+    *,
+    reference: Literal["a", "b", "sum", "mean", "max"] = "mean",
+):
     """Combine chamber pressures into the pressure a pressure law uses [Pa].
 
     Parameters
@@ -144,7 +153,12 @@ def operating_pressure(pressure_a, pressure_b=None, *, reference="mean"):
     return PRESSURE_REFERENCES[reference](pa, pb)
 
 
-def params_at_pressure(pressure, coefficients, *, law="linear"):
+def params_at_pressure(
+    pressure: ArrayLike,
+    coefficients: Mapping[str, Any],
+    *,
+    law: Literal["constant", "linear", "quadratic", "exponential"] = "linear",
+) -> dict[str, Any]:
     """Evaluate a coefficient set at an operating pressure -> friction parameter dict.
 
     Parameters
@@ -198,15 +212,15 @@ def params_at_pressure(pressure, coefficients, *, law="linear"):
 
 
 def simscape_cylinder_friction(
-    pressure_a,
-    pressure_b,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
     *,
-    preload_force,
-    coulomb_friction_coefficient,
-    breakaway_ratio,
-    viscous_coefficient,
-    transition_coefficient,
-):
+    preload_force: float,
+    coulomb_friction_coefficient: float,
+    breakaway_ratio: float,
+    viscous_coefficient: float,
+    transition_coefficient: float,
+) -> dict[str, Any]:
     """Parameters of Simscape's "Cylinder Friction" block as a Stribeck parameter dict.
 
     Simscape Fluids models ``F_C = F_pr + f_cfr (p_A + p_B)`` (reference fixed to the *sum*

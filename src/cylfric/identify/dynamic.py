@@ -34,12 +34,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
 from ..io.campaign import DYNAMIC_TESTS
 from ..model import FrictionModel
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping
 
 __all__ = [
     "DYNAMIC_TESTS",
@@ -201,15 +205,15 @@ def lowpass(signal, interval, cutoff=FORCE_CUTOFF):
 
 
 def dynamic_record(
-    data,
-    metadata,
+    data: Mapping[str, Any],
+    metadata: Mapping[str, Any],
     *,
-    test=None,
-    mass=None,
-    position_sign=1.0,
-    force_sign=1.0,
-    hold=HOLD,
-    cutoff=FORCE_CUTOFF,
+    test: str | None = None,
+    mass: float | None = None,
+    position_sign: float = 1.0,
+    force_sign: float = 1.0,
+    hold: float = HOLD,
+    cutoff: float | None = FORCE_CUTOFF,
 ) -> DynamicRecord:
     """A :class:`DynamicRecord` from a read run (``cylfric.io.campaign.read_run`` output).
 
@@ -356,7 +360,7 @@ class PreslidingFit:
     message: str = ""
 
 
-def initial_slope(record: DynamicRecord, *, fraction=0.5) -> float:
+def initial_slope(record: DynamicRecord, *, fraction: float = 0.5) -> float:
     """Slope of force against displacement [N/m] on the first loading from rest.
 
     Fits displacement against force (the force is the accurate signal) over the samples of
@@ -703,7 +707,11 @@ def _pressure_law(pressure, value, stderr, name):
 
 
 def identify_dynamic(
-    records, model: FrictionModel, *, progress=None, travel=BREAKAWAY_TRAVEL
+    records,
+    model: FrictionModel,
+    *,
+    progress: Callable[..., Any] | None = None,
+    travel: float = BREAKAWAY_TRAVEL,
 ) -> DynamicIdentification:
     """Identify sigma_0 [N/m] and sigma_1 [N*s/m] from presliding records; validate on ramps.
 

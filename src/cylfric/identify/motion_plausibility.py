@@ -37,8 +37,12 @@ not told apart from a genuine small motion by its magnitudes and is not flagged.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["PlausibilityFlag", "LIMITS", "CHECKS", "check_plausibility", "record_evidence"]
 
@@ -224,7 +228,7 @@ CHECKS = {
 """Check name -> ``check(fit, evidence, limits) -> list of PlausibilityFlag``."""
 
 
-def check_plausibility(fit, position, **limits) -> tuple:
+def check_plausibility(fit, position: ArrayLike, **limits) -> tuple:
     """Flags of the implausible magnitudes of a motion fit.
 
     Parameters

@@ -21,8 +21,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
 
 __all__ = ["ServoReplay", "controller_output", "replay_closed_loop", "relative_error"]
 
@@ -33,7 +39,15 @@ def relative_error(measured, simulated) -> float:
     return float(np.linalg.norm(measured - np.asarray(simulated)) / np.linalg.norm(measured))
 
 
-def controller_output(reference, position, *, kp, kv, sample_time, saturation=math.inf):
+def controller_output(
+    reference: ArrayLike,
+    position: ArrayLike,
+    *,
+    kp: float,
+    kv: float,
+    sample_time: float,
+    saturation: float = math.inf,
+) -> np.ndarray:
     """The cascade P-P controller's output from recorded signals (no plant).
 
     Parameters
@@ -113,21 +127,21 @@ def _step_parameters(fit):
 
 def replay_closed_loop(
     fit,
-    time,
-    reference,
-    measured_position,
-    measured_force,
+    time: ArrayLike,
+    reference: ArrayLike,
+    measured_position: ArrayLike,
+    measured_force: ArrayLike,
     *,
-    kp,
-    kv,
-    force_scale,
-    saturation=math.inf,
-    disturbance=None,
-    substeps=10,
-    border=50,
-    cutoff=100.0,
-    order=4,
-):
+    kp: float,
+    kv: float,
+    force_scale: float,
+    saturation: float = math.inf,
+    disturbance: ArrayLike | None = None,
+    substeps: int = 10,
+    border: int = 50,
+    cutoff: float | int = 100.0,
+    order: float | int = 4,
+) -> ServoReplay:
     """Simulate an identified axis in its recorded servo loop and compare with the record.
 
     Parameters
@@ -215,7 +229,7 @@ def replay_closed_loop(
     )
 
 
-def validate_on_record(fit, path, config) -> ServoReplay:
+def validate_on_record(fit, path: StrPath, config) -> ServoReplay:
     """Closed-loop replay of ``fit`` on a second record, as ``config.validation`` describes.
 
     Parameters

@@ -40,7 +40,7 @@ def rmse_at(velocity, pressure, friction, v_r, alpha):
     return float(np.sqrt(np.mean((a @ coef - force) ** 2)))
 
 
-def refit_at(velocity, pressure, friction, v_r, alpha, *, reference="mean"):
+def refit_at(velocity, pressure, friction, v_r, alpha, *, reference: str = "mean"):
     """The linear-law model refit with ``v_r`` [m/s] and ``alpha`` [-] held: (model, RMSE [N]).
 
     The six pressure-law coefficients of F_c, F_s and sigma_2 come from one linear
@@ -66,7 +66,7 @@ def refit_at(velocity, pressure, friction, v_r, alpha, *, reference="mean"):
     return model, rmse
 
 
-def sensitivity_refits(velocity, pressure, friction, *, reference="mean"):
+def sensitivity_refits(velocity, pressure, friction, *, reference: str = "mean"):
     """The refits of thesis Figs. 4.4-4.12: a list of dicts ``panel``, ``alpha [-]``,
     ``v_r [m/s]``, ``rmse [N]``, ``model`` (:class:`~cylfric.model.FrictionModel`).
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -41,6 +42,9 @@ from .stribeck_fit import (
     StribeckFit,
     fit_stribeck,
 )
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
 
 __all__ = [
     "identify",
@@ -73,7 +77,7 @@ fixed sigma_2 adds a known viscous term ``sigma_2 |v|``. F_s, v_r and alpha shap
 Stribeck dip, which such data cannot show: holding them is refused."""
 
 
-def _distinct_speeds(speed, relative=0.1):
+def _distinct_speeds(speed, relative: float = 0.1):
     s = np.sort(np.abs(speed))
     return 1 + int(np.sum(np.diff(s) > relative * s[1:])) if s.size else 0
 
@@ -223,7 +227,7 @@ def _per_pressure(points, levels, fixed):
     return pd.DataFrame(rows), fits
 
 
-def _check_per_pressure(per_pressure, fits):
+def _check_per_pressure(per_pressure, fits) -> None:
     """Warn about failed fits and parameters that fall significantly as pressure rises."""
     for fit, (_, row) in zip(fits, per_pressure.iterrows(), strict=True):
         if not fit.success:
@@ -434,10 +438,10 @@ def _core(points, levels, *, pressure_law, fixed, notes, validity):
 def identify(
     points: pd.DataFrame,
     *,
-    fixed=None,
-    pressure_law="linear",
-    per_direction=False,
-    sensitivity=True,
+    fixed: Mapping[str, Any] | None = None,
+    pressure_law: Literal["linear", "quadratic", "exponential"] = "linear",
+    per_direction: bool = False,
+    sensitivity: bool = True,
 ) -> Identification:
     """Identify the pressure-dependent friction model from a points table.
 

@@ -19,10 +19,16 @@ import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from ..units import UnitError, to_si, unit_dimension
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "BenchFileError",
@@ -49,7 +55,7 @@ def escape_control(text: str) -> str:
 class BenchFileError(ValueError):
     """A bench file cannot be read; the message names the file, the line and what was expected."""
 
-    def __init__(self, path, message, line=None):
+    def __init__(self, path, message, line=None) -> None:
         self.path = str(path)
         self.line = line
         self.message = message
@@ -184,8 +190,8 @@ def read_bench_text(
     *,
     columns=None,
     units=None,
-    delimiter="auto",
-    decimal="auto",
+    delimiter: str = "auto",
+    decimal: str = "auto",
     encoding=None,
     roles=None,
 ):
@@ -210,14 +216,14 @@ def read_bench_text(
 
 
 def read_bench_arrays(
-    path,
+    path: StrPath,
     *,
-    columns=None,
-    units=None,
-    delimiter="auto",
-    decimal="auto",
-    encoding=None,
-    roles=None,
+    columns: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+    delimiter: Literal["auto", "tab", "semicolon", "comma", "whitespace"] = "auto",
+    decimal: Literal["auto", ".", ","] = "auto",
+    encoding: str | None = None,
+    roles: Mapping[str, Any] | None = None,
 ):
     """Read a bench text file into SI arrays.
 
@@ -570,7 +576,7 @@ def si_columns(path, names, units, values, roles=None):
     return _assemble([(0, hdr, np.asarray(values, dtype=float), 1)], Path(path), roles or {})
 
 
-def _assemble(frames, path, roles, own=False):
+def _assemble(frames, path, roles, own: bool = False):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column.
 
     ``own``: the blocks are the reader's own arrays, converted in place (no copy); else the

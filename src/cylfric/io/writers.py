@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._atomic import atomic_write_bytes, atomic_write_text
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "write_mts_text", "write_manifest"]
 
@@ -29,7 +33,7 @@ def _block(columns: dict, decimals: dict) -> bytes:
 
 
 def write_mts_text(
-    path,
+    path: StrPath,
     segments: list[dict],
     *,
     header: dict,

@@ -28,6 +28,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -55,6 +56,9 @@ from .names import (
     _si_unit,
     engineering_unit,
 )
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
 
 __all__ = [
     "FrictionModel",
@@ -206,13 +210,13 @@ class FrictionModel:
         self,
         coefficients=None,
         *,
-        pressure_law="linear",
-        friction_law="stribeck",
+        pressure_law: str = "linear",
+        friction_law: str = "stribeck",
         sigma_0=None,
         sigma_1=None,
         dynamic_status=None,
-        reference="mean",
-        simulation_law="lugre",
+        reference: str = "mean",
+        simulation_law: str = "lugre",
         stderr=None,
         fixed=(),
         bounds=None,
@@ -223,7 +227,7 @@ class FrictionModel:
         not_identified=None,
         record=None,
         influence=None,
-    ):
+    ) -> None:
         if coefficients is None:
             coefficients = THESIS_2016.coefficients
         if pressure_law not in PRESSURE_LAWS:
@@ -404,7 +408,7 @@ class FrictionModel:
         return model
 
     # ------------------------------------------------------------------ views
-    def coefficients(self, *, include_dynamic=True) -> dict:
+    def coefficients(self, *, include_dynamic: bool = True) -> dict:
         """The coefficient set (SI) for :func:`cylfric.friction.params_at_pressure`.
 
         Constants are floats, pressure laws dicts (with ``"law"`` when it differs from
@@ -476,7 +480,7 @@ class FrictionModel:
         params.setdefault("alpha", 1.0)
         return clamp_roundoff(params)  # a value fitted onto a bound, off by rounding only
 
-    def friction(self, velocity, pressure, *, strict=False):
+    def friction(self, velocity, pressure, *, strict: bool = False):
         """Steady-state friction force [N] at ``velocity`` [m/s] and operating ``pressure`` [Pa].
 
         Vectorised (velocity and pressure broadcast). Warns with :class:`ValidityWarning`
@@ -493,7 +497,7 @@ class FrictionModel:
     """Constructor arguments :meth:`replace` changed since the model was read from
     :attr:`source` (sorted names; empty for the file's own model)."""
 
-    def _friction(self, velocity, pressure, coefficients, *, checked=True):
+    def _friction(self, velocity, pressure, coefficients, *, checked: bool = True):
         params = self._params(pressure, coefficients)
         if not checked:
             return stribeck_unchecked(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
@@ -517,7 +521,7 @@ class FrictionModel:
         except ValueError as exc:
             raise self._named(exc) from None
 
-    def check(self, velocity, pressure, *, strict=False):
+    def check(self, velocity, pressure, *, strict: bool = False):
         """Where (velocity [m/s], pressure [Pa]) lie inside the validity ranges.
 
         ``velocity=None`` checks the pressures only (a simulation passes through every
@@ -686,7 +690,7 @@ class FrictionModel:
         var = np.einsum("...i,ij,...j->...", jac, self.covariance[1], jac)
         return np.sqrt(np.clip(var, 0.0, None))
 
-    def band(self, velocity, pressure, level=0.95, *, strict=False):
+    def band(self, velocity, pressure, level: float = 0.95, *, strict: bool = False):
         """Confidence band (lower, upper) [N] of the mean friction at ``level``.
 
         The model's friction plus and minus the Student-t quantile (each point's
@@ -701,7 +705,7 @@ class FrictionModel:
         half = self._quantile(level, dof) * self.standard_error(velocity, pressure)
         return f - half, f + half
 
-    def prediction_band(self, velocity, pressure, level=0.95, *, strict=False):
+    def prediction_band(self, velocity, pressure, level: float = 0.95, *, strict: bool = False):
         """Band (lower, upper) [N] for a new measured point: the mean's band plus the scatter.
 
         Adds the fit's residual standard deviation (``statistics["residual_std"]``) to the
@@ -737,7 +741,7 @@ class FrictionModel:
         return names, corr
 
     # ------------------------------------------------------------------ reports
-    def fit_report(self, *, min_correlation=0.1) -> str:
+    def fit_report(self, *, min_correlation: float = 0.1) -> str:
         """A text report like lmfit's ``fit_report``, in engineering units (N, bar, mm/s)."""
         from .text import fit_report
 
@@ -762,7 +766,14 @@ class FrictionModel:
 
         return html_summary(self)
 
-    def plot(self, pressures=None, *, velocities=None, level=0.95, ax=None):
+    def plot(
+        self,
+        pressures: Sequence[float] | None = None,
+        *,
+        velocities: Sequence[float] | None = None,
+        level: float = 0.95,
+        ax=None,
+    ):
         """Friction against speed at a few pressures with the band of the mean (if any).
 
         Delegates to :func:`cylfric.report.figures.figure_model` (the report's style).

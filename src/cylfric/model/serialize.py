@@ -235,7 +235,7 @@ def _coefficient_names(parameters, default_law):
     return names
 
 
-def _numbers(value, path=""):
+def _numbers(value, path: str = ""):
     """(path, number) of every number in a nested JSON value."""
     if isinstance(value, dict):
         for k, v in value.items():
@@ -286,7 +286,7 @@ def _physical(sheet):
     return None
 
 
-def validate(sheet: dict, *, source="datasheet") -> dict:
+def validate(sheet: dict, *, source: str = "datasheet") -> dict:
     """Raise :class:`DatasheetError` naming the first problem; return ``sheet``.
 
     Checks the schema, that every number is finite (no NaN, no infinity), and the physics

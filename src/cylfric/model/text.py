@@ -68,7 +68,7 @@ def law_lines(model) -> list[str]:
     return lines
 
 
-def fit_report(model, *, min_correlation=0.1) -> str:
+def fit_report(model, *, min_correlation: float = 0.1) -> str:
     """lmfit-style report: model, fit statistics, variables ± stderr, correlations, dynamics."""
     stats = model.statistics
     lines = ["[[Model]]"]
@@ -201,7 +201,7 @@ def parameter_table(model):
     return frame
 
 
-def html_summary(model, title="FrictionModel") -> str:
+def html_summary(model, title: str = "FrictionModel") -> str:
     """HTML for a notebook: the laws, a table of coefficients with units and standard
     errors in engineering units, the operating-pressure rule and the validity ranges."""
     import html

@@ -48,7 +48,7 @@ def render_report(
     extraction,
     figures,
     *,
-    title="cylfric friction report",
+    title: str = "cylfric friction report",
     excluded=None,
     exports=None,
     dynamic_section=None,
@@ -179,7 +179,7 @@ def _engineering_per_pressure(table):
     return out
 
 
-def offset_by_pressure(extraction, t_limit=4.0, smallest=0.5) -> str:
+def offset_by_pressure(extraction, t_limit: float = 4.0, smallest: float = 0.5) -> str:
     """HTML: the load-cell offset per pressure level, and whether it changes with pressure.
 
     Each run with windows in both directions has its own offset (F_up + F_down) / 2 [N]. A

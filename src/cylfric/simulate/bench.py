@@ -19,6 +19,7 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -27,6 +28,11 @@ from ..io.campaign import DYNAMIC_TESTS
 from ..io.writers import write_manifest, write_mts_text
 from . import kernels
 from .plant import THESIS_CYLINDER, Cylinder, FrictionModel
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "BenchSettings",
@@ -244,7 +250,7 @@ def _stroke_plan(settings: BenchSettings, speed: float, interval: float):
     return length, n
 
 
-def run_plan(speed: float, settings: BenchSettings | None = None, *, slow=False):
+def run_plan(speed: float, settings: BenchSettings | None = None, *, slow: bool = False):
     """Stroke length [m], sample interval [s] and sample count of a run at ``speed`` [m/s].
 
     ``slow`` selects ``slow_interval``. Raises ValueError when the speed does not fit the
@@ -337,7 +343,7 @@ def run_file_name(index: int, pressure_bar: float, speed_mm_s: float) -> str:
 _FORCE_SCALE = {"N": 1.0, "kN": 1e-3}
 
 
-def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int):
+def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int) -> None:
     scale = _FORCE_SCALE[s.force_unit]
     units = {"Time": "s", "Axial Displacement": "mm", "Axial Force": s.force_unit}
     decimals = {"Time": 3, "Axial Displacement": 4, "Axial Force": 5 if s.force_unit == "kN" else 2}
@@ -375,12 +381,12 @@ def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int):
 
 
 def generate_campaign(
-    out_dir,
+    out_dir: StrPath,
     settings: BenchSettings | None = None,
     *,
-    progress=None,
+    progress: Callable[..., Any] | None = None,
     workers: int | None = None,
-    tests=("constant-velocity",),
+    tests: Iterable[str] = ("constant-velocity",),
     dynamic: DynamicTestSettings | None = None,
 ) -> dict:
     """Write a virtual campaign: one file per pressure x speed, plus ``manifest.csv``.
@@ -515,7 +521,7 @@ class DynamicTestSettings:
     breakaway_rates: tuple = (50.0, 200.0, 1000.0)  # [N/s]
     breakaway_stop: float = 1.0e-3  # [m] travel at which the machine ends a ramp
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if len(self.presliding_frequencies) != len(self.presliding_periods):
             raise ValueError(
                 "presliding_frequencies and presliding_periods need the same length; got "
@@ -595,7 +601,7 @@ def run_dynamic_test(
     *,
     force_rate: float | None = None,
     dynamic: DynamicTestSettings | None = None,
-    rng=None,
+    rng: np.random.Generator | None = None,
 ) -> DynamicRun:
     """Simulate one force-controlled test of the virtual bench.
 
@@ -698,7 +704,7 @@ def dynamic_file_name(index: int, test: str, pressure_bar: float, force_rate=Non
     return f"dyn_{index:03d}_p{pressure_bar:g}bar_{test}{rate}.txt"
 
 
-def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int):
+def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int) -> None:
     scale = _FORCE_SCALE[s.force_unit]
     units = {"Time": "s", "Axial Displacement": "mm", "Axial Force": s.force_unit}
     decimals = {

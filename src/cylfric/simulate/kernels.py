@@ -325,7 +325,9 @@ def _outputs(x, v, z, e, xr, vr, fe, fc, fs, s2, k, c, ki, params, offset):
 
 
 @njit(cache=True, inline="always")
-def _write(out, j, tj, i_grid, mode, sig, inv_dt_s, ramp, x, v, z, e, k, c, ki, params, offset):
+def _write(
+    out, j, tj, i_grid, mode, sig, inv_dt_s, ramp, x, v, z, e, k, c, ki, params, offset
+) -> None:
     """Output point j: position, velocity, z, friction force (eq. 2.5) [N] and the force of
     the drive on the rod [N] (``offset`` added) into ``out[:, j]``."""
     s0, s1, inv_v_r, alpha = params

@@ -23,8 +23,8 @@ def solve_reference(
     v0,
     z0,
     *,
-    rtol=1e-9,
-    method="Radau",
+    rtol: float = 1e-9,
+    method: str = "Radau",
 ):
     """Integrate the plant of :mod:`cylfric.simulate.kernels` with scipy.
 
@@ -114,7 +114,7 @@ def params_const(params, name):
     return float(value.flat[0])
 
 
-def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
+def solve_prescribed_reference(time, velocity, z0, params, *, rtol: float = 1e-10):
     """Radau solution of the LuGre bristle equation along a prescribed velocity record."""
     v_r, alpha = params_const(params, "v_r"), params_const(params, "alpha")
     # every pressure-dependent parameter may vary along the record (a pressure signal)
