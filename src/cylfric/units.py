@@ -17,10 +17,13 @@ Examples
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 if TYPE_CHECKING:
-    from numpy.typing import ArrayLike
+    import numpy as np
+
+    _Value = TypeVar("_Value", float, np.ndarray)
+    """A value converted as it is: a float gives a float, an array an array."""
 
 __all__ = [
     "UNITS",
@@ -226,7 +229,7 @@ def _factor(unit: str, dimension: str | None) -> float:
     return _lookup(unit)[1]
 
 
-def to_si(value: ArrayLike, unit: str, dimension: str | None = None):
+def to_si(value: _Value, unit: str, dimension: str | None = None) -> _Value:
     """Convert ``value`` given in ``unit`` to SI (scalar or ndarray).
 
     Parameters
@@ -241,7 +244,7 @@ def to_si(value: ArrayLike, unit: str, dimension: str | None = None):
     return value * _factor(unit, dimension)
 
 
-def from_si(value, unit: str, dimension: str | None = None):
+def from_si(value: _Value, unit: str, dimension: str | None = None) -> _Value:
     """Convert an SI ``value`` to ``unit`` (inverse of :func:`to_si`)."""
     return value / _factor(unit, dimension)
 

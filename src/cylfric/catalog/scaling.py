@@ -95,14 +95,18 @@ def contact_ratio(
             if not (math.isfinite(value) and 0 < value <= 2.0):
                 raise ValueError(f"{what} = {value} m: expected a diameter in m, 0 < d <= 2 m")
     if contact == "piston":
+        assert bore is not None and source_bore is not None  # checked above
         ratio = bore / source_bore
         text = f"piston seal: L = pi D, k = {bore * 1e3:g} mm / {source_bore * 1e3:g} mm"
     elif contact == "rod":
+        assert rod is not None and source_rod is not None  # checked above
         ratio = rod / source_rod
         text = f"rod seal: L = pi d, k = {rod * 1e3:g} mm / {source_rod * 1e3:g} mm"
     else:
         if not (isinstance(rod_seals, int) and rod_seals >= 1):
             raise ValueError(f"rod_seals = {rod_seals!r}: expected a whole number >= 1")
+        assert bore is not None and source_bore is not None  # checked above
+        assert rod is not None and source_rod is not None
         new = bore + rod_seals * rod
         old = source_bore + rod_seals * source_rod
         ratio = new / old

@@ -90,13 +90,13 @@ zero velocity); the loss grid starts above it unless the data reach below 0.1 mm
 
 
 def translational_friction(
-    velocity: ArrayLike,
+    velocity: float | np.ndarray,
     *,
-    breakaway_force: ArrayLike,
-    coulomb_force: ArrayLike,
-    viscous_coefficient: ArrayLike,
-    breakaway_velocity: ArrayLike,
-):
+    breakaway_force: float | np.ndarray,
+    coulomb_force: float | np.ndarray,
+    viscous_coefficient: float | np.ndarray,
+    breakaway_velocity: float | np.ndarray,
+) -> float | np.ndarray:
     """Friction force of Simscape's Translational Friction block [N] (documented equations).
 
     ``F = sqrt(2e) (F_brk - F_C) x exp(-x^2) + F_C tanh(v/v_Coul) + f v``, ``x = v/v_st``, with
@@ -125,7 +125,7 @@ def translational_friction(
 
 
 def cylinder_friction_il(
-    velocity: ArrayLike,
+    velocity: float | np.ndarray,
     pressure_a: ArrayLike,
     pressure_b: ArrayLike,
     *,

@@ -191,7 +191,7 @@ def stribeck_shape(speed, v_r, alpha: float = 1.0):
     return np.exp(-((np.abs(speed) / v_r) ** alpha))
 
 
-def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha: float = 1.0):
+def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     """Eq. 2.7 as :func:`stribeck`, without parameter checks and always as an array.
 
     For optimisers, whose trial steps may leave the physical range (F_c < 0, ...); every
@@ -271,7 +271,7 @@ def dahl_derivative(
     return as_output(slope * v, velocity, force, F_c, sigma, exponent)
 
 
-def lugre_g(velocity, F_c, F_s, v_r, *, alpha: float = 1.0):
+def lugre_g(velocity, F_c, F_s, v_r, *, alpha=1.0):
     """LuGre velocity function ``g(v) = F_c + (F_s - F_c) exp(-(|v|/v_r)^alpha)``, eq. 2.5.
 
     Returns the (even) bristle saturation level [N] at ``velocity`` [m/s].
@@ -402,7 +402,7 @@ def lugre_z_update(
     z: ArrayLike,
     velocity: ArrayLike,
     step: ArrayLike,
-    sigma_0: ArrayLike,
+    sigma_0: float | np.ndarray,
     F_c: ArrayLike,
     F_s: ArrayLike,
     v_r: ArrayLike,
