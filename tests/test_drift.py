@@ -190,8 +190,8 @@ def test_viscosity_correction_lets_runs_at_two_temperatures_be_identified_as_one
     """Points at 30 and 50 degC of a seal whose Stribeck curve follows the Hersey number:
     friction(v, T) = friction_ref(v nu(T) / nu(T_ref)). Identified raw, the two
     temperatures disagree; mapped to 40 degC they give back the reference model."""
-    from cylfric.viscosity import viscosity_corrected, walther_viscosity
     from cylfric.identify import identify
+    from cylfric.viscosity import viscosity_corrected, walther_viscosity
 
     truth = FrictionModel()  # the thesis law (eq. 4.1-4.3) at the reference 40 degC
     t_ref = 313.15

@@ -22,12 +22,12 @@ from numpy.testing import assert_allclose
 from typer.testing import CliRunner
 
 from cylfric.cli import app
-from cylfric.viscosity import walther_viscosity
 from cylfric.io import BenchFileError, load_config
 from cylfric.model import FrictionModel
 from cylfric.pipeline import fit_campaign
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.simulate.plant import Cylinder
+from cylfric.viscosity import walther_viscosity
 
 OIL_VG46 = ((313.15, 46e-6), (373.15, 6.8e-6))
 """ISO VG 46 mineral oil, viscosity index about 100: 46 and 6.8 mm^2/s at 40 and 100 degC
