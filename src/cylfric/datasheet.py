@@ -21,7 +21,11 @@ from .model import SCHEMA, SCHEMA_ID, DatasheetError, FrictionModel, read_datash
 from .model.serialize import clean
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
+    from collections.abc import Mapping, Sequence
+    from typing import Any
+
+    import numpy as np
+    from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
 
@@ -40,7 +44,7 @@ __all__ = [
 _PARAM_UNITS = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
 
 
-def file_digest(path) -> str:
+def file_digest(path: StrPath) -> str:
     """SHA-256 of a file's bytes (hex)."""
     digest = hashlib.sha256()
     with open(path, "rb") as handle:
@@ -126,13 +130,15 @@ def build_datasheet(
     return model.replace(**changes).to_datasheet()
 
 
-def write_datasheet(path, sheet: dict) -> Path:
+def write_datasheet(path: StrPath, sheet: dict[str, Any]) -> Path:
     """Validate ``sheet`` and write it as JSON, atomically."""
     validate(sheet, source=str(path))
     return atomic_write_text(path, json.dumps(sheet, indent=2, allow_nan=False) + "\n")
 
 
-def evaluate(sheet: dict, velocity, pressure, *, strict: bool = False):
+def evaluate(
+    sheet: Mapping[str, Any], velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
+) -> np.ndarray | float:
     """Friction force [N] of a datasheet at ``velocity`` [m/s] and operating ``pressure`` [Pa].
 
     The datasheet's model (:meth:`FrictionModel.from_datasheet`) evaluated; warns outside the

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 
     import pandas as pd
     from numpy.typing import ArrayLike
+
+    from ._typing import OilPoints
+    from .io.campaign import OilSettings
 
 __all__ = [
     "walther_viscosity",
@@ -33,7 +36,19 @@ __all__ = [
 ]
 
 
-def walther_viscosity(temperature: ArrayLike, oil: tuple[tuple[float, float], tuple[float, float]]):
+@overload
+def walther_viscosity(temperature: float, oil: OilPoints) -> float: ...
+
+
+@overload
+def walther_viscosity(temperature: np.ndarray, oil: OilPoints) -> np.ndarray: ...
+
+
+@overload
+def walther_viscosity(temperature: ArrayLike, oil: OilPoints) -> np.ndarray | float: ...
+
+
+def walther_viscosity(temperature: ArrayLike, oil: OilPoints) -> np.ndarray | float:
     """Kinematic viscosity [m^2/s] of a mineral oil by the Walther equation (ASTM D341).
 
     ``log10(log10(nu + 0.7)) = A - B log10(T)`` with ``nu`` in mm^2/s (cSt) and ``T`` in K;
@@ -78,7 +93,11 @@ def walther_viscosity(temperature: ArrayLike, oil: tuple[tuple[float, float], tu
 
 
 def viscosity_corrected(
-    points: pd.DataFrame, *, oil, reference_temperature: float, temperature: float | None = None
+    points: pd.DataFrame,
+    *,
+    oil: OilPoints,
+    reference_temperature: float,
+    temperature: float | None = None,
 ) -> pd.DataFrame:
     """Points with their speeds mapped to a reference oil temperature (same Hersey number).
 
@@ -175,7 +194,11 @@ def _celsius(kelvin) -> str:
 
 
 def correct_campaign(
-    points: pd.DataFrame, runs: Sequence[Mapping[str, Any]], oil, *, enabled: bool | None = None
+    points: pd.DataFrame,
+    runs: Sequence[Mapping[str, Any]],
+    oil: OilSettings | None,
+    *,
+    enabled: bool | None = None,
 ) -> ViscosityCorrection:
     """Map a campaign's points to the oil's reference temperature, or say why not.
 
@@ -224,6 +247,7 @@ def correct_campaign(
             )
         if not has_listed:
             return unchanged
+        assert listed is not None  # has_listed
         t = listed[np.isfinite(listed)]
         return replace(
             unchanged,

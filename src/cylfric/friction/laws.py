@@ -46,7 +46,7 @@ __all__ = [
 ]
 
 
-def coulomb(velocity: ArrayLike, F_c: ArrayLike) -> np.ndarray | float:
+def coulomb(velocity: ArrayLike, F_c: float | np.ndarray) -> np.ndarray | float:
     """Coulomb (dry) friction, thesis eq. 2.1.
 
     Parameters
@@ -71,7 +71,7 @@ def coulomb(velocity: ArrayLike, F_c: ArrayLike) -> np.ndarray | float:
     return as_output(np.sign(v) * F_c, velocity, F_c)  # eq. 2.1
 
 
-def viscous(velocity: ArrayLike, sigma_2: ArrayLike) -> np.ndarray | float:
+def viscous(velocity: ArrayLike, sigma_2: float | np.ndarray) -> np.ndarray | float:
     """Viscous friction, thesis eq. 2.2 (``gamma`` there, ``sigma_2`` in LuGre).
 
     Parameters
@@ -93,8 +93,8 @@ def viscous(velocity: ArrayLike, sigma_2: ArrayLike) -> np.ndarray | float:
 
 def stiction(
     velocity: ArrayLike,
-    F_c: ArrayLike,
-    F_s: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
     *,
     external_force: ArrayLike = 0.0,
     velocity_tolerance: float = 1e-4,
@@ -136,12 +136,12 @@ def stiction(
 
 def stribeck(
     velocity: ArrayLike,
-    F_c: ArrayLike,
-    F_s: ArrayLike,
-    v_r: ArrayLike,
-    sigma_2: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
     *,
-    alpha: ArrayLike = 1.0,
+    alpha: float | np.ndarray = 1.0,
 ) -> np.ndarray | float:
     """Steady-state friction of the LuGre model with Stribeck effect, thesis eq. 2.7.
 
@@ -183,7 +183,9 @@ def stribeck(
     return as_output(force, velocity, F_c, F_s, v_r, sigma_2, alpha)
 
 
-def stribeck_shape(speed, v_r, alpha: float = 1.0):
+def stribeck_shape(
+    speed: float | np.ndarray, v_r: float | np.ndarray, alpha: float | np.ndarray = 1.0
+) -> np.ndarray | float:
     """The Stribeck decay ``exp(-(|v|/v_r)^alpha)`` of g(v), thesis eq. 2.5 [-].
 
     ``g(v) = F_c + (F_s - F_c) * stribeck_shape(v)``; no parameter checks (callers check).
@@ -191,7 +193,15 @@ def stribeck_shape(speed, v_r, alpha: float = 1.0):
     return np.exp(-((np.abs(speed) / v_r) ** alpha))
 
 
-def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+def stribeck_unchecked(
+    velocity: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Eq. 2.7 as :func:`stribeck`, without parameter checks and always as an array.
 
     For optimisers, whose trial steps may leave the physical range (F_c < 0, ...); every
@@ -204,7 +214,15 @@ def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     return np.sign(v) * (g + sigma_2 * speed)  # eq. 2.7
 
 
-def stribeck_jacobian(speed, F_c, F_s, v_r, sigma_2, *, alpha: float = 1.0):
+def stribeck_jacobian(
+    speed: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> dict[str, np.ndarray]:
     """Partial derivatives of the friction magnitude of eq. 2.7 at ``speed`` >= 0 [m/s].
 
     Returns a dict of arrays d|F|/d(parameter): ``F_c`` and ``F_s`` [-], ``v_r`` [N*s/m],
@@ -224,7 +242,7 @@ def stribeck_jacobian(speed, F_c, F_s, v_r, sigma_2, *, alpha: float = 1.0):
         "F_c": 1.0 - e,
         "F_s": e,
         "v_r": amplitude * alpha / v_r,
-        "sigma_2": speed,
+        "sigma_2": np.asarray(speed),  # already an array: for the type checker
         "alpha": -amplitude * log_ratio,
     }
 
@@ -233,7 +251,7 @@ def dahl_derivative(
     velocity: ArrayLike,
     force: ArrayLike,
     F_c: ArrayLike,
-    sigma: ArrayLike,
+    sigma: float | np.ndarray,
     *,
     exponent: float = 1.0,
 ) -> np.ndarray | float:
@@ -271,7 +289,14 @@ def dahl_derivative(
     return as_output(slope * v, velocity, force, F_c, sigma, exponent)
 
 
-def lugre_g(velocity, F_c, F_s, v_r, *, alpha=1.0):
+def lugre_g(
+    velocity: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """LuGre velocity function ``g(v) = F_c + (F_s - F_c) exp(-(|v|/v_r)^alpha)``, eq. 2.5.
 
     Returns the (even) bristle saturation level [N] at ``velocity`` [m/s].
@@ -293,12 +318,12 @@ def _check_g_positive(F_c, F_s) -> None:
 def lugre_state_derivative(
     velocity: ArrayLike,
     z: ArrayLike,
-    sigma_0: ArrayLike,
-    F_c: ArrayLike,
-    F_s: ArrayLike,
-    v_r: ArrayLike,
+    sigma_0: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
     *,
-    alpha: float = 1.0,
+    alpha: float | np.ndarray = 1.0,
 ) -> np.ndarray | float:
     """Bristle-state derivative of the LuGre model, thesis eq. 2.5.
 
@@ -330,7 +355,17 @@ def lugre_state_derivative(
     return as_output(dz, velocity, z, sigma_0, F_c, F_s, v_r, alpha)
 
 
-def lugre_unchecked(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha: float = 1.0):
+def lugre_unchecked(
+    velocity: float | np.ndarray,
+    z: float | np.ndarray,
+    sigma_0: float | np.ndarray,
+    sigma_1: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    alpha: float | np.ndarray = 1.0,
+) -> tuple[np.ndarray | float, np.ndarray | float]:
     """LuGre force and bristle rate (eq. 2.5) without parameter checks: (force [N], dz/dt [m/s]).
 
     For integrators that call it at every step after checking the parameters once; every
@@ -338,21 +373,21 @@ def lugre_unchecked(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha
     scalars (Python floats) and arrays alike.
     """
     g = F_c + (F_s - F_c) * stribeck_shape(velocity, v_r, alpha)  # eq. 2.5, g(v)
-    dz = velocity - sigma_0 * abs(velocity) * z / g  # eq. 2.5
+    dz = velocity - sigma_0 * abs(velocity) * z / g  # type: ignore[operator]  # eq. 2.5
     return sigma_0 * z + sigma_1 * dz + sigma_2 * velocity, dz
 
 
 def lugre_force(
     velocity: ArrayLike,
     z: ArrayLike,
-    sigma_0: ArrayLike,
-    sigma_1: ArrayLike,
-    sigma_2: ArrayLike,
-    F_c: ArrayLike,
-    F_s: ArrayLike,
-    v_r: ArrayLike,
+    sigma_0: float | np.ndarray,
+    sigma_1: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
     *,
-    alpha: float = 1.0,
+    alpha: float | np.ndarray = 1.0,
 ) -> np.ndarray | float:
     """LuGre friction force ``sigma_0 z + sigma_1 dz/dt + sigma_2 v``, thesis eq. 2.5.
 
@@ -389,7 +424,15 @@ def lugre_force(
     return as_output(force, velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha)
 
 
-def lugre_steady_state(velocity, F_c, F_s, v_r, sigma_2, *, alpha: float = 1.0):
+def lugre_steady_state(
+    velocity: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Steady-state LuGre force, thesis eq. 2.6/2.7 (identical to :func:`stribeck`).
 
     At constant velocity ``dz/dt = 0`` gives ``z_ss = sign(v) g(v) / sigma_0`` and the
@@ -401,13 +444,13 @@ def lugre_steady_state(velocity, F_c, F_s, v_r, sigma_2, *, alpha: float = 1.0):
 def lugre_z_update(
     z: ArrayLike,
     velocity: ArrayLike,
-    step: ArrayLike,
+    step: float | np.ndarray,
     sigma_0: float | np.ndarray,
-    F_c: ArrayLike,
-    F_s: ArrayLike,
-    v_r: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
     *,
-    alpha: float = 1.0,
+    alpha: float | np.ndarray = 1.0,
 ) -> np.ndarray | float:
     """Exact LuGre bristle update over a step at constant velocity.
 
@@ -480,7 +523,7 @@ def barus_viscosity(
 
 
 def hersey_number(
-    velocity: ArrayLike, viscosity: ArrayLike, load_per_length: ArrayLike
+    velocity: ArrayLike, viscosity: float | np.ndarray, load_per_length: float | np.ndarray
 ) -> np.ndarray | float:
     """Hersey number ``|v| mu / (F_N / L)``, thesis eq. 2.8 (dimensionless).
 

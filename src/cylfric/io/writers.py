@@ -15,7 +15,7 @@ import numpy as np
 from .._atomic import atomic_write_bytes, atomic_write_text
 
 if TYPE_CHECKING:
-    from cylfric._typing import StrPath
+    from .._typing import StrPath
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "write_mts_text", "write_manifest"]
 
@@ -84,7 +84,7 @@ def write_mts_text(
     return atomic_write_bytes(path, out.getvalue())
 
 
-def write_manifest(path, rows: list[tuple[str, float, float]]) -> Path:
+def write_manifest(path: StrPath, rows: list[tuple[str, float, float]]) -> Path:
     """Write ``manifest.csv`` with columns ``file,pressure_bar,velocity_mm_s``."""
     text = "file,pressure_bar,velocity_mm_s\n" + "".join(
         f"{name},{p:g},{v:g}\n" for name, p, v in rows

@@ -6,9 +6,14 @@ tests can check them and ``docs/make_figures.py`` can draw them.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .plant import AppliedForce, Cylinder, FrictionModel, PrescribedMotion, SpringPull, simulate
+
+if TYPE_CHECKING:
+    from .result import SimulationResult
 
 __all__ = ["stick_slip", "friction_lag", "presliding", "breakaway_force"]
 
@@ -20,8 +25,13 @@ def _model(sigma_0: float = 1e6, mass=_MASS):
 
 
 def stick_slip(
-    pressure, *, stiffness: float = 2e4, speed: float = 5e-3, duration: float = 10.0, mass=_MASS
-):
+    pressure: float,
+    *,
+    stiffness: float = 2e4,
+    speed: float = 5e-3,
+    duration: float = 10.0,
+    mass: float = _MASS,
+) -> tuple[SimulationResult, float]:
     """Spring pulled at constant ``speed`` [m/s] through ``stiffness`` [N/m] at ``pressure`` [Pa].
 
     Returns the result and the peak-to-peak spring force over the second half [N] (the
@@ -40,13 +50,13 @@ def stick_slip(
 
 
 def friction_lag(
-    pressure,
+    pressure: float,
     *,
     mean_speed: float = 0.010,
     amplitude: float = 0.008,
     frequency: float = 5.0,
-    periods=6,
-):
+    periods: int = 6,
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Friction against a sinusoidal velocity ``mean + amplitude sin(2 pi f t)`` [m/s].
 
     Returns (velocity, friction) over the last period and the mean friction difference
@@ -77,13 +87,13 @@ def friction_lag(
 
 
 def presliding(
-    pressure,
+    pressure: float,
     *,
     fraction: float = 0.5,
     ramp_time: float = 0.5,
     hold: float = 0.5,
     sigma_0: float = 1e6,
-):
+) -> tuple[SimulationResult, float, float]:
     """Ramp a force to ``fraction * F_c`` [-], hold, release: the spring-like presliding regime.
 
     Returns the result, the displacement at the peak force [m] and ``F_peak / sigma_0`` [m],
@@ -103,7 +113,7 @@ def presliding(
     return result, float(at_peak), peak / sigma_0
 
 
-def breakaway_force(pressure, rate, *, sigma_0: float = 1e6):
+def breakaway_force(pressure: float, rate: float, *, sigma_0: float = 1e6) -> float:
     """Breakaway force [N] under an applied force ramp of ``rate`` [N/s].
 
     The breakaway force is the first peak of the friction force: friction rises with the

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..friction import get_law, law_params, lugre_force, lugre_unchecked
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from typing import Any
 
 
 def solve_reference(
@@ -109,7 +115,7 @@ def solve_reference(
     )
 
 
-def params_const(params, name):
+def params_const(params: Mapping[str, Any], name: str) -> float | np.ndarray:
     value = np.asarray(params[name], dtype=float)
     return float(value.flat[0])
 
