@@ -35,7 +35,9 @@ The datasheet validation, the identification's check and the model all use
 :func:`roundoff_tolerance`, so what one accepts the others evaluate."""
 
 
-def roundoff_tolerance(F_c, F_s=None, sigma_2=None):
+def roundoff_tolerance(
+    F_c: ArrayLike, F_s: ArrayLike | None = None, sigma_2: ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Per-point tolerances (force [N], sigma_2 [N*s/m]) of the physical constraints.
 
     ``ROUNDOFF`` times the larger of 1 and the magnitudes of F_c and F_s [N] (for F_c >= 0

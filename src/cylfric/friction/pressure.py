@@ -15,7 +15,7 @@ linear law (eq. 2.10, 4.1-4.3). Which chamber pressure a law sees is the explici
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -159,7 +159,7 @@ def params_at_pressure(
     pressure: ArrayLike,
     coefficients: Mapping[str, Any],
     *,
-    law: Literal["constant", "linear", "quadratic", "exponential"] = "linear",
+    law: str = "linear",
 ) -> dict[str, Any]:
     """Evaluate a coefficient set at an operating pressure -> friction parameter dict.
 
