@@ -34,9 +34,10 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping, Sequence
+    from collections.abc import Sequence
 
     import pandas as pd
+    from matplotlib.figure import Figure
 
     from cylfric._typing import StrPath
 
@@ -53,7 +54,9 @@ __all__ = [
 _ORDERS = ("run", "mtime")
 
 
-def load_fit(source):
+def load_fit(
+    source: FrictionModel | dict[str, Any] | StrPath,
+) -> tuple[FrictionModel, pd.DataFrame | None, str]:
     """(model, points or None, label) of a datasheet path, a fit output folder, a dict or a
     :class:`~cylfric.model.FrictionModel`. ``points`` is ``points.csv`` beside the datasheet."""
     import pandas as pd
@@ -86,8 +89,8 @@ def _z(change, se_a, se_b):
 
 
 def drift(
-    a: StrPath | Mapping[str, Any] | FrictionModel,
-    b: StrPath | Mapping[str, Any] | FrictionModel,
+    a: StrPath | dict[str, Any] | FrictionModel,
+    b: StrPath | dict[str, Any] | FrictionModel,
     *,
     pressures: Sequence[float] | None = None,
     velocities: Sequence[float] | None = None,
@@ -416,7 +419,7 @@ def run_order_trend(
     )
 
 
-def figure_run_order(trend: RunOrderTrend, title: str = ""):
+def figure_run_order(trend: RunOrderTrend, title: str = "") -> Figure:
     """Residual friction [N] against run order (points, run means, between-run trend)."""
     from matplotlib.figure import Figure
 
@@ -457,7 +460,7 @@ def _normal_quantile(q):
     return NormalDist().inv_cdf(q)
 
 
-def write_drift(table, out) -> Path:
+def write_drift(table: pd.DataFrame, out: StrPath) -> Path:
     """Write ``drift.csv`` into ``out`` (atomically) and a JSON summary; returns the CSV path."""
     from ._paths import make_folder
     from .io.writers import atomic_write_text

@@ -20,11 +20,14 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = ["friction_with_band", "compare", "comparison_table"]
 
 
-def friction_with_band(model, velocity: ArrayLike, pressure: ArrayLike, level: float = 0.95):
+def friction_with_band(
+    model: FrictionModel, velocity: ArrayLike, pressure: ArrayLike, level: float = 0.95
+) -> tuple[np.ndarray | float, np.ndarray, np.ndarray, np.ndarray]:
     """Friction [N], band limits [N] and whether inside the validity ranges, quietly.
 
     Parameters

@@ -134,7 +134,7 @@ _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,62}$")
 _CFLAGS = ("-shared", "-fPIC", "-O2", "-ffp-contract=off", "-std=c99")
 
 
-def _as_model(model):
+def _as_model(model: object) -> FrictionModel:
     """A FrictionModel from a model, a datasheet path or a datasheet dict."""
     from ..model import FrictionModel
 
@@ -148,7 +148,7 @@ def _as_model(model):
     )
 
 
-def datasheet_text(model) -> str:
+def datasheet_text(model: FrictionModel) -> str:
     """The model's datasheet as JSON text, without a creation date the model does not carry.
 
     ``to_datasheet`` stamps the current time when the model has none (a model built in Python

@@ -32,6 +32,7 @@ from .fmu import FRICTION_PARAMETERS, REFERENCE_TEXT, _as_model, _check_name
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = ["export_matlab", "MATLAB_FUNCTIONS"]
 
@@ -221,7 +222,7 @@ def _lugre_file(model, name) -> str:
     )
 
 
-def export_matlab(model, out: StrPath, *, name: str | None = None) -> list[Path]:
+def export_matlab(model: FrictionModel, out: StrPath, *, name: str | None = None) -> list[Path]:
     """Write the model as MATLAB/Octave functions and a parameter struct (lossless).
 
     Parameters

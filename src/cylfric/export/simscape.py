@@ -58,6 +58,7 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = [
     "translational_friction",
@@ -134,7 +135,7 @@ def cylinder_friction_il(
     breakaway_ratio: float,
     breakaway_velocity: float,
     viscous_coefficient: float,
-):
+) -> np.ndarray | float:
     """Friction force of Simscape Fluids' Cylinder Friction (IL) block [N].
 
     The Translational Friction equations (:func:`translational_friction`) with the Coulomb
@@ -170,17 +171,17 @@ def cylinder_friction_il(
 
 
 def cylinder_friction(
-    velocity,
-    pressure_a,
-    pressure_b,
+    velocity: float | np.ndarray,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
     *,
-    preload_force,
-    coulomb_friction_coefficient,
-    breakaway_ratio,
-    transition_coefficient,
-    viscous_coefficient,
-    velocity_threshold=LEGACY_VELOCITY_THRESHOLD,
-):
+    preload_force: float,
+    coulomb_friction_coefficient: float,
+    breakaway_ratio: float,
+    transition_coefficient: float,
+    viscous_coefficient: float,
+    velocity_threshold: float = LEGACY_VELOCITY_THRESHOLD,
+) -> np.ndarray | float:
     """Friction force of the legacy Simscape Fluids Cylinder Friction block [N].
 
     :func:`cylfric.friction.simscape_cylinder_friction` (the block as a Stribeck parameter
@@ -237,7 +238,9 @@ def _model_levels(model, pressures):
     return model.params_at(model.operating_pressure(pressures, pressures))
 
 
-def fit_cylinder_friction_il(model, speeds: ArrayLike, pressures: ArrayLike) -> dict:
+def fit_cylinder_friction_il(
+    model: FrictionModel, speeds: ArrayLike, pressures: ArrayLike
+) -> dict[str, float]:
     """Best-fit Cylinder Friction (IL) parameters over a grid (least squares) [SI].
 
     Parameters
@@ -279,7 +282,13 @@ def fit_cylinder_friction_il(model, speeds: ArrayLike, pressures: ArrayLike) -> 
     return {k: float(v) for k, v in unpack(_least_squares(residual, starts, lower, upper)).items()}
 
 
-def fit_cylinder_friction(model, speeds, pressures, *, velocity_threshold=None) -> dict:
+def fit_cylinder_friction(
+    model: FrictionModel,
+    speeds: ArrayLike,
+    pressures: ArrayLike,
+    *,
+    velocity_threshold: float | None = None,
+) -> dict[str, float]:
     """Best-fit legacy Cylinder Friction parameters over a grid (least squares) [SI].
 
     As :func:`fit_cylinder_friction_il`; returns ``preload_force`` [N],
@@ -315,7 +324,9 @@ def fit_cylinder_friction(model, speeds, pressures, *, velocity_threshold=None) 
     return out
 
 
-def fit_translational_friction(model, speeds, pressure) -> dict:
+def fit_translational_friction(
+    model: FrictionModel, speeds: ArrayLike, pressure: float
+) -> dict[str, float]:
     """Best-fit Translational Friction parameters at one chamber pressure [Pa] (SI).
 
     Returns ``breakaway_force`` [N], ``coulomb_force`` [N], ``viscous_coefficient``
@@ -431,7 +442,7 @@ def _levels(model, pressure_range, levels):
 
 
 def export_simscape(
-    model,
+    model: FrictionModel,
     out: StrPath,
     *,
     name: str | None = None,

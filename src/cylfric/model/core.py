@@ -28,7 +28,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, cast, overload
 
 import numpy as np
 
@@ -490,6 +490,20 @@ class FrictionModel:
         params.setdefault("alpha", 1.0)
         return clamp_roundoff(params)  # a value fitted onto a bound, off by rounding only
 
+    @overload
+    def friction(self, velocity: float, pressure: float, *, strict: bool = False) -> float: ...
+    @overload
+    def friction(
+        self, velocity: np.ndarray, pressure: ArrayLike, *, strict: bool = False
+    ) -> np.ndarray: ...
+    @overload
+    def friction(
+        self, velocity: ArrayLike, pressure: np.ndarray, *, strict: bool = False
+    ) -> np.ndarray: ...
+    @overload
+    def friction(
+        self, velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
+    ) -> np.ndarray | float: ...
     def friction(
         self, velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
     ) -> np.ndarray | float:
