@@ -59,13 +59,14 @@ from .names import (
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Sequence
-    from pathlib import Path
     from typing import Any
 
     import pandas as pd
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
     from numpy.typing import ArrayLike
+
+    from .._typing import StrPath
 
 
 __all__ = [
@@ -841,7 +842,7 @@ class FrictionModel:
         return to_datasheet(self)
 
     @classmethod
-    def from_datasheet(cls, source: str | Path | Mapping[str, Any]) -> FrictionModel:
+    def from_datasheet(cls, source: StrPath | Mapping[str, Any]) -> FrictionModel:
         """The model of a datasheet (a path to a JSON file, or the dict); validated."""
         from .serialize import from_datasheet
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from datetime import UTC, datetime
 from importlib import resources
 from pathlib import Path
@@ -175,10 +176,10 @@ def to_datasheet(model: FrictionModel) -> dict[str, Any]:
     return clean(sheet)
 
 
-def from_datasheet(cls: type[_M], source: str | Path | Mapping[str, Any]) -> _M:
+def from_datasheet(cls: type[_M], source: StrPath | Mapping[str, Any]) -> _M:
     """Build ``cls`` (a FrictionModel) from a datasheet path or dict, after validation."""
-    if isinstance(source, str | Path):
-        sheet, where = read_datasheet(source), str(source)
+    if isinstance(source, str | os.PathLike):
+        sheet, where = read_datasheet(source), os.fspath(source)
     else:
         sheet, where = validate(dict(source)), "datasheet"
     model_part = sheet["model"]
@@ -226,8 +227,8 @@ def from_datasheet(cls: type[_M], source: str | Path | Mapping[str, Any]) -> _M:
         )
     except (ValueError, TypeError) as exc:
         raise DatasheetError(f"{where}: {exc}") from None
-    if isinstance(source, str | Path):
-        model.source = str(source)  # evaluation errors name the file
+    if isinstance(source, str | os.PathLike):
+        model.source = os.fspath(source)  # evaluation errors name the file
     return model
 
 
