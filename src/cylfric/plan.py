@@ -44,6 +44,9 @@ from .model import STEADY_PARAMETERS, FrictionModel, engineering_unit
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
+    from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
+
     from .simulate.bench import BenchSettings
 
 __all__ = [
@@ -106,12 +109,12 @@ class WindowNoise:
         if not (np.all(s > 0) and np.all(np.isfinite(s))):
             raise ValueError(f"WindowNoise sem {self.sem} must be finite and > 0 N")
 
-    def __call__(self, speed):
+    def __call__(self, speed: ArrayLike) -> np.ndarray:
         """Standard error of one window's mean friction [N] at ``speed`` [m/s]."""
         logv = np.log(np.abs(np.asarray(speed, dtype=float)))
         return np.exp(np.interp(logv, np.log(self.speeds), np.log(self.sem)))
 
-    def run_std(self, speed):
+    def run_std(self, speed: ArrayLike) -> np.ndarray:
         """Standard error of a run's friction [N] (mean of the two directions)."""
         return self(speed) / math.sqrt(2.0)
 
@@ -285,7 +288,13 @@ def predicted_uncertainty(
     return Uncertainty(tuple(names), cov, stderr, band, float(logdet + 2 * np.log(scale).sum()))
 
 
-def candidate_grid(pressure_range, speed_range, *, n_pressures=9, n_speeds=25):
+def candidate_grid(
+    pressure_range: tuple[float, float],
+    speed_range: tuple[float, float],
+    *,
+    n_pressures: int = 9,
+    n_speeds: int = 25,
+) -> tuple[np.ndarray, np.ndarray]:
     """Candidate runs: ``n_pressures`` evenly spaced pressures [Pa] x ``n_speeds`` log-spaced
     speeds [m/s] over the ranges (rounded to 0.1 bar and 0.01 mm/s)."""
     p_lo, p_hi = pressure_range
@@ -403,7 +412,7 @@ class TestPlan:
             }
         )
 
-    def figure(self):
+    def figure(self) -> Figure:
         """The design in the (v, p) plane: candidates, chosen runs (repeats by size)."""
         from matplotlib.figure import Figure
 
@@ -595,13 +604,22 @@ def _run_table(pressure, velocity, settings) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def grid_uncertainty(model, pressures, speeds, noise, *, fixed=()) -> Uncertainty:
+def grid_uncertainty(
+    model: FrictionModel,
+    pressures: ArrayLike,
+    speeds: ArrayLike,
+    noise: WindowNoise,
+    *,
+    fixed: Iterable[str] = (),
+) -> Uncertainty:
     """Predicted uncertainty of a full grid: every pressure [Pa] x every speed [m/s]."""
     pp, vv = (a.ravel() for a in np.meshgrid(pressures, speeds, indexing="ij"))
     return predicted_uncertainty(model, vv, pp, noise, fixed=fixed)
 
 
-def compare(first: Uncertainty, second: Uncertainty, labels=("grid", "plan")) -> pd.DataFrame:
+def compare(
+    first: Uncertainty, second: Uncertainty, labels: tuple[str, str] = ("grid", "plan")
+) -> pd.DataFrame:
     """Standard errors of two plans side by side (engineering units) and their ratio."""
     a, b = first.table(), second.table()
     out = a.rename(columns={"stderr": labels[0]})

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = [
     "Catalog",
@@ -180,7 +181,7 @@ class Catalog:
     111.26
     """
 
-    def __init__(self, path=None) -> None:
+    def __init__(self, path: StrPath | None = None) -> None:
         self.path = Path(path).expanduser() if path is not None else default_path()
         if self.path.is_dir():
             raise CatalogError(f"{self.path}: is a folder; expected a catalogue file (.sqlite)")
@@ -188,7 +189,7 @@ class Catalog:
         with self._connect() as db:
             self._migrate(db)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"Catalog({str(self.path)!r})"
 
     # ------------------------------------------------------------------ connection
@@ -326,7 +327,7 @@ class Catalog:
         with self._connect() as db:
             return [row[0] for row in db.execute("SELECT name FROM seals ORDER BY name")]
 
-    def __contains__(self, name) -> bool:
+    def __contains__(self, name: object) -> bool:
         with self._connect() as db:
             return db.execute("SELECT 1 FROM seals WHERE name = ?", (name,)).fetchone() is not None
 
@@ -347,22 +348,22 @@ class Catalog:
             )
         return row
 
-    def get(self, name) -> dict:
+    def get(self, name: str) -> dict[str, Any]:
         """The datasheet dict of ``name`` (as it was added)."""
         return json.loads(self._row(name)["datasheet"])
 
-    def metadata(self, name) -> dict:
+    def metadata(self, name: str) -> dict[str, Any]:
         """The metadata of ``name`` (SI: bore and rod [m], temperature [K]; None if unknown)."""
         row = self._row(name)
         return {key: row[key] for key in METADATA} | {"added": row["added"]}
 
-    def model(self, name):
+    def model(self, name: str) -> FrictionModel:
         """The :class:`~cylfric.model.FrictionModel` of ``name``."""
         from ..model import FrictionModel
 
         return FrictionModel.from_datasheet(self.get(name))
 
-    def remove(self, name) -> None:
+    def remove(self, name: str) -> None:
         """Remove ``name`` (an unknown name raises :class:`CatalogError`)."""
         with self._write() as db:
             if not db.execute("DELETE FROM seals WHERE name = ?", (name,)).rowcount:
@@ -529,7 +530,7 @@ class Catalog:
         )
 
     # ------------------------------------------------------------------ exchange
-    def export_json(self, path) -> Path:
+    def export_json(self, path: StrPath) -> Path:
         """Write the whole catalogue as one JSON file (atomically); returns the path."""
         from ..io.writers import atomic_write_text
 
@@ -553,7 +554,7 @@ class Catalog:
         }
         return atomic_write_text(path, json.dumps(document, indent=1) + "\n")
 
-    def import_json(self, path, *, replace: bool = False) -> int:
+    def import_json(self, path: StrPath, *, replace: bool = False) -> int:
         """Add every entry of an :meth:`export_json` file (all or none); returns the count.
 
         Every datasheet is validated and every name checked before anything is written;

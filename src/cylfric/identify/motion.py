@@ -95,7 +95,9 @@ def central_difference(values: ArrayLike, step: float) -> np.ndarray:
     return out
 
 
-def motion_signals(time: ArrayLike, position: ArrayLike, *, cutoff: float = 100.0, order: int = 4):
+def motion_signals(
+    time: ArrayLike, position: ArrayLike, *, cutoff: float = 100.0, order: int = 4
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Filtered position, velocity and acceleration of a uniformly sampled record.
 
     Parameters
@@ -217,7 +219,7 @@ class MotionFit:
     joint: dict | None = None
     flags: tuple = field(default=())
 
-    def predict(self, velocity, acceleration):
+    def predict(self, velocity: ArrayLike, acceleration: ArrayLike) -> np.ndarray:
         """Force [N] of the identified IDIM at velocity [m/s] and acceleration [m/s^2]."""
         v = np.asarray(velocity, dtype=float)
         W = _regressors(v, np.asarray(acceleration, dtype=float), self.per_direction)

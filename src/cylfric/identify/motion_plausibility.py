@@ -42,6 +42,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from numpy.typing import ArrayLike
 
 __all__ = ["PlausibilityFlag", "LIMITS", "CHECKS", "check_plausibility", "record_evidence"]
@@ -94,7 +96,7 @@ class PlausibilityFlag:
         return asdict(self)
 
 
-def record_evidence(signals: dict, position) -> dict:
+def record_evidence(signals: Mapping[str, np.ndarray], position: ArrayLike) -> dict[str, float]:
     """What the record shows: stroke [m], fastest speed [m/s], largest |acceleration|
     [m/s^2] and largest |force| [N] (the regression signals of a fit; the stroke of the
     full-rate position)."""

@@ -29,11 +29,13 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
+    from cylfric.identify.motion import MotionFit
+    from cylfric.io.motion_config import MotionConfig
 
 __all__ = ["ServoReplay", "controller_output", "replay_closed_loop", "relative_error"]
 
 
-def relative_error(measured, simulated) -> float:
+def relative_error(measured: ArrayLike, simulated: ArrayLike) -> float:
     """Relative error norm ||measured - simulated|| / ||measured|| [-] (the benchmark's)."""
     measured = np.asarray(measured, dtype=float)
     return float(np.linalg.norm(measured - np.asarray(simulated)) / np.linalg.norm(measured))
@@ -229,7 +231,7 @@ def replay_closed_loop(
     )
 
 
-def validate_on_record(fit, path: StrPath, config) -> ServoReplay:
+def validate_on_record(fit: MotionFit, path: StrPath, config: MotionConfig) -> ServoReplay:
     """Closed-loop replay of ``fit`` on a second record, as ``config.validation`` describes.
 
     Parameters

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.optimize import curve_fit
@@ -65,7 +65,7 @@ def _rate(c):
     return c if abs(c) >= _MIN_RATE else math.copysign(_MIN_RATE, c)
 
 
-def information_criteria(rss, n, k):
+def information_criteria(rss: float, n: int, k: int) -> tuple[float, float]:
     """Gaussian AIC and BIC from the residual sum of squares ``rss`` [N^2]."""
     n = max(n, 1)
     rss = max(rss, 1e-300)
@@ -217,7 +217,7 @@ def fit_surface(
     pressure: ArrayLike,
     friction: ArrayLike,
     *,
-    pressure_law: Literal["linear", "quadratic", "exponential"] = "linear",
+    pressure_law: str = "linear",
     fixed: Mapping[str, Any] | None = None,
     loss: str = "soft_l1",
     start: FrictionModel | None = None,

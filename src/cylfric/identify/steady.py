@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -45,6 +45,8 @@ from .stribeck_fit import (
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
+
+    from matplotlib.figure import Figure
 
 __all__ = [
     "identify",
@@ -82,7 +84,7 @@ def _distinct_speeds(speed, relative: float = 0.1):
     return 1 + int(np.sum(np.diff(s) > relative * s[1:])) if s.size else 0
 
 
-def validity_of(points) -> dict:
+def validity_of(points: pd.DataFrame) -> dict[str, float]:
     """The ranges a points table covers: ``pressure_min/max`` [Pa], ``velocity_min/max`` [m/s].
 
     The pressure range starts at 0 Pa at the lowest: the mean of a noisy pressure channel at
@@ -196,7 +198,7 @@ class Identification:
         )
         return html_summary(self.model, title="Identification") + fit
 
-    def plot(self):
+    def plot(self) -> Figure:
         """Thesis Fig. 4.1: the points per pressure, the model and its 95 % band of the mean
         (:func:`cylfric.report.figures.figure_fit`). Returns the matplotlib Figure."""
         from ..report.figures import figure_fit  # the plotting module; it imports no identify
@@ -254,7 +256,7 @@ def _check_per_pressure(per_pressure, fits) -> None:
             )
 
 
-def point_errors(points):
+def point_errors(points: pd.DataFrame) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(sigma [N], groups) of a points table for the weighted, run-clustered surface fit.
 
     ``sigma`` is each window's standard error ``friction_std / sqrt(n)`` (floored at a tenth
@@ -278,7 +280,9 @@ STRONG_EVIDENCE_BIC = 10.0
 evidence on the scale of Kass & Raftery 1995)."""
 
 
-def unphysical(model, validity, *, points=41):
+def unphysical(
+    model: FrictionModel, validity: Mapping[str, float], *, points: int = 41
+) -> str | None:
     """Why a model is unphysical within the validity pressures, or None.
 
     Checks F_c >= 0, F_s >= F_c and sigma_2 >= 0 at ``points`` pressures over the range.
@@ -439,7 +443,7 @@ def identify(
     points: pd.DataFrame,
     *,
     fixed: Mapping[str, Any] | None = None,
-    pressure_law: Literal["linear", "quadratic", "exponential"] = "linear",
+    pressure_law: str = "linear",
     per_direction: bool = False,
     sensitivity: bool = True,
 ) -> Identification:

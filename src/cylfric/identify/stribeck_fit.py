@@ -26,7 +26,7 @@ from ..friction import (
 from ..model import PARAMETER_BOUNDS, STEADY_PARAMETERS
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Callable, Mapping
 
     from numpy.typing import ArrayLike
 
@@ -53,7 +53,7 @@ class IdentificationWarning(UserWarning):
     """The data cannot support part of the model; the result says what was done instead."""
 
 
-def design_columns(speed, pressure, v_r, alpha):
+def design_columns(speed: np.ndarray, pressure: np.ndarray, v_r: float, alpha: float) -> np.ndarray:
     """Columns of the model linear in the other coefficients at fixed ``v_r``, ``alpha``.
 
     Eq. 2.7 with linear pressure laws is linear in (a_c, b_c, a_s, b_s, a_2, b_2):
@@ -65,7 +65,13 @@ def design_columns(speed, pressure, v_r, alpha):
     return np.column_stack([1 - e, pressure * (1 - e), e, pressure * e, speed, pressure * speed])
 
 
-def robust_least_squares(residuals, x0, bounds, loss: str = "soft_l1", jac: str = "2-point"):
+def robust_least_squares(
+    residuals: Callable[[np.ndarray], np.ndarray],
+    x0: ArrayLike,
+    bounds: tuple[ArrayLike, ArrayLike],
+    loss: str = "soft_l1",
+    jac: str | Callable[[np.ndarray], np.ndarray] = "2-point",
+) -> Any:
     """Bounded least squares; a robust ``loss`` refit scaled by the first fit's residual spread.
 
     A plain fit finds the residual spread (1.4826 MAD); the robust refit from there uses it
@@ -87,7 +93,7 @@ def robust_least_squares(residuals, x0, bounds, loss: str = "soft_l1", jac: str 
     )
 
 
-def solve_linear(a, y):
+def solve_linear(a: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Least-squares coefficients of ``a @ c ~ y`` by column-scaled normal equations.
 
     About five times faster than ``numpy.linalg.lstsq`` for the tall, narrow design matrices

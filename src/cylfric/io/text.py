@@ -19,7 +19,7 @@ import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +27,8 @@ from ..units import UnitError, to_si, unit_dimension
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
+
+    import pandas as pd
 
     from cylfric._typing import StrPath
 
@@ -55,14 +57,18 @@ def escape_control(text: str) -> str:
 class BenchFileError(ValueError):
     """A bench file cannot be read; the message names the file, the line and what was expected."""
 
-    def __init__(self, path, message, line=None) -> None:
+    def __init__(self, path: StrPath, message: str, line: int | None = None) -> None:
         self.path = str(path)
         self.line = line
         self.message = message
         where = f"{self.path}" + (f", line {line}" if line is not None else "")
         super().__init__(escape_control(f"{where}: {message}"))
 
-    def __reduce__(self):  # pickled whole (extraction sends errors between processes)
+    def __reduce__(
+        self,
+    ) -> tuple[
+        type[BenchFileError], tuple[str, str, int | None]
+    ]:  # pickled whole (extraction sends errors between processes)
         return (type(self), (self.path, self.message, self.line))
 
 
@@ -186,15 +192,15 @@ def _decode(raw: bytes, path, encoding=None, line=None) -> str:
 
 
 def read_bench_text(
-    path,
+    path: StrPath,
     *,
-    columns=None,
-    units=None,
+    columns: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
     delimiter: str = "auto",
     decimal: str = "auto",
-    encoding=None,
-    roles=None,
-):
+    encoding: str | None = None,
+    roles: Mapping[str, str] | None = None,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a bench text file into a DataFrame in SI; see :func:`read_bench_arrays`.
 
     Returns ``(data, metadata)`` with ``data`` a pandas DataFrame whose column names carry
@@ -220,8 +226,8 @@ def read_bench_arrays(
     *,
     columns: Sequence[str] | None = None,
     units: Sequence[str] | None = None,
-    delimiter: Literal["auto", "tab", "semicolon", "comma", "whitespace"] = "auto",
-    decimal: Literal["auto", ".", ","] = "auto",
+    delimiter: str = "auto",
+    decimal: str = "auto",
     encoding: str | None = None,
     roles: Mapping[str, Any] | None = None,
 ):
@@ -443,7 +449,7 @@ def read_bench_arrays(
     return data, metadata
 
 
-def data_row_line(path, row: int) -> int | None:
+def data_row_line(path: StrPath, row: int) -> int | None:
     """1-based line of the file holding data row ``row`` (0-based, over all segments).
 
     The rows of :func:`read_bench_arrays` are the file's numeric lines in order; this maps a
@@ -642,11 +648,16 @@ def _assemble(frames, path, roles, own: bool = False):
     return {k: np.concatenate([p[k] for p in parts]) for k in keys}, col_units
 
 
-def read_mts_text(path, **kwargs):
+def read_mts_text(path: StrPath, **kwargs: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a testing-machine text export (MTS-like). See :func:`read_bench_text`."""
     return read_bench_text(path, **kwargs)
 
 
-def read_delimited(path, columns=None, units=None, **kwargs):
+def read_delimited(
+    path: StrPath,
+    columns: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+    **kwargs: Any,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a plain delimited file, with or without a header row. See :func:`read_bench_text`."""
     return read_bench_text(path, columns=columns, units=units, **kwargs)

@@ -30,7 +30,9 @@ from . import kernels
 from .plant import THESIS_CYLINDER, Cylinder, FrictionModel
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable
+    from collections.abc import Callable, Iterable, Mapping
+
+    from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
 
@@ -250,7 +252,9 @@ def _stroke_plan(settings: BenchSettings, speed: float, interval: float):
     return length, n
 
 
-def run_plan(speed: float, settings: BenchSettings | None = None, *, slow: bool = False):
+def run_plan(
+    speed: float, settings: BenchSettings | None = None, *, slow: bool = False
+) -> tuple[float, float, int]:
     """Stroke length [m], sample interval [s] and sample count of a run at ``speed`` [m/s].
 
     ``slow`` selects ``slow_interval``. Raises ValueError when the speed does not fit the
@@ -570,7 +574,9 @@ class DynamicRun:
     sample_interval: float
 
 
-def presliding_force(time, amplitude, settings: DynamicTestSettings):
+def presliding_force(
+    time: ArrayLike, amplitude: float, settings: DynamicTestSettings
+) -> np.ndarray:
     """Net force [N] of the presliding test at ``time`` [s] (zero during the hold)."""
     time = np.asarray(time, dtype=float)
     force = np.zeros_like(time)
@@ -698,7 +704,9 @@ def run_dynamic_test(
     )
 
 
-def dynamic_file_name(index: int, test: str, pressure_bar: float, force_rate=None) -> str:
+def dynamic_file_name(
+    index: int, test: str, pressure_bar: float, force_rate: float | None = None
+) -> str:
     """``dyn_004_p55bar_breakaway_r200Ns.txt``: the test kind and pressure in the name."""
     rate = "" if force_rate is None or math.isnan(force_rate) else f"_r{force_rate:g}Ns"
     return f"dyn_{index:03d}_p{pressure_bar:g}bar_{test}{rate}.txt"
@@ -788,7 +796,7 @@ def generate_dynamic_tests(
     return rows
 
 
-def write_test_manifest(path, rows) -> Path:
+def write_test_manifest(path: StrPath, rows: Iterable[Mapping[str, Any]]) -> Path:
     """``manifest.csv`` with the test kind: ``file,pressure_bar,velocity_mm_s,test,force_rate_N_s``.
 
     ``rows`` are dicts with ``file``, ``pressure_bar`` [bar], and ``velocity_mm_s`` [mm/s]

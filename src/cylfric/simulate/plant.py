@@ -30,6 +30,9 @@ from . import kernels
 from .result import SimulationResult
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from typing import Any
+
     from numpy.typing import ArrayLike
 
 __all__ = [
@@ -218,7 +221,9 @@ ROSENBROCK_RTOL = 1e-6
 MAX_STEPS = 50_000_000
 
 
-def rosenbrock_tolerances(rtol, params):
+def rosenbrock_tolerances(
+    rtol: float, params: Mapping[str, Any]
+) -> tuple[float, float, float, float]:
     """Absolute tolerances of the Rosenbrock integrator from its ``rtol`` and the friction.
 
     Position 1 mm, velocity ``v_r``, bristle deflection ``F_c / sigma_0`` (the slip deflection)
@@ -762,7 +767,7 @@ class BatchResult:
     drive_force: np.ndarray | None = None
     info: dict = field(default_factory=dict)
 
-    def __len__(self):
+    def __len__(self) -> int:
         return self.position.shape[0]
 
     def __getitem__(self, i) -> SimulationResult:
