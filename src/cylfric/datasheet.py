@@ -28,6 +28,8 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
+    from cylfric.identify.steady import Identification
+    from cylfric.steady_state import Extraction
 
 __all__ = [
     "DatasheetError",
@@ -54,14 +56,14 @@ def file_digest(path: StrPath) -> str:
 
 
 def build_datasheet(
-    identification,
+    identification: Identification,
     *,
-    extraction=None,
+    extraction: Extraction | None = None,
     files: Sequence[StrPath] | None = None,
     campaign: str | None = None,
     name: str | None = None,
     pressure_reference: str | None = None,
-) -> dict:
+) -> dict[str, Any]:
     """Datasheet dict from an :class:`~cylfric.identify.Identification`.
 
     Parameters

@@ -42,10 +42,14 @@ from .io.writers import atomic_write_bytes, atomic_write_text
 from .model import STEADY_PARAMETERS, FrictionModel, engineering_unit
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
+    from collections.abc import Callable, Iterable, Sequence
+    from pathlib import Path
+    from typing import Any
 
     from matplotlib.figure import Figure
     from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
 
     from .simulate.bench import BenchSettings
 
@@ -121,7 +125,7 @@ class WindowNoise:
     @classmethod
     def from_points(
         cls, points: pd.DataFrame, *, source: str = "points table", relative: float = 0.1
-    ):
+    ) -> WindowNoise:
         """Calibrate from a points table (``points.csv`` of a fit, or an extraction).
 
         Uses the ``ok`` windows: ``friction_std [N] / sqrt(n [-])`` grouped by speed
@@ -151,8 +155,14 @@ class WindowNoise:
 
     @classmethod
     def from_bench(
-        cls, settings=None, *, speeds=None, pressure_bar: float = 80.0, seeds=2, progress=None
-    ):
+        cls,
+        settings: BenchSettings | None = None,
+        *,
+        speeds: ArrayLike | None = None,
+        pressure_bar: float = 80.0,
+        seeds: int = 2,
+        progress: Callable[..., Any] | None = None,
+    ) -> WindowNoise:
         """Calibrate on the virtual bench: pilot runs through the extraction.
 
         Runs the bench (``settings``: force noise, sampling, stroke) at ``speeds`` [m/s] and
@@ -244,7 +254,13 @@ class Uncertainty:
 
 
 def predicted_uncertainty(
-    model, velocity, pressure, noise: WindowNoise, *, fixed=(), operating_points=OPERATING_POINTS
+    model: FrictionModel,
+    velocity: ArrayLike,
+    pressure: ArrayLike,
+    noise: WindowNoise,
+    *,
+    fixed: Iterable[str] = (),
+    operating_points: Sequence[tuple[float, float]] = OPERATING_POINTS,
 ) -> Uncertainty:
     """Covariance of the coefficients that runs at (velocity [m/s], pressure [Pa]) would give.
 
@@ -308,7 +324,14 @@ def candidate_grid(
     return pressures, speeds
 
 
-def d_optimal(rows, runs, *, max_repeats=1, start=None, max_sweeps=200):
+def d_optimal(
+    rows: np.ndarray,
+    runs: int,
+    *,
+    max_repeats: int = 1,
+    start: Sequence[int] | None = None,
+    max_sweeps: int = 200,
+) -> np.ndarray:
     """Indices of ``runs`` rows (with repeats) maximising ``det(sum r r^T)`` (D-optimal).
 
     ``rows`` is the (candidates, k) matrix of information rows ``j / s``. A greedy start
@@ -437,7 +460,7 @@ class TestPlan:
         ax.legend(loc="upper left", bbox_to_anchor=(1, 1))
         return fig
 
-    def write(self, out) -> dict:
+    def write(self, out: StrPath) -> dict[str, Path]:
         """Write ``plan.csv``, ``uncertainty.csv``, ``plan.png``/``.svg`` and ``plan.html``
         into the folder ``out`` (created; a symbolic link is refused, see
         :func:`cylfric._paths.refuse_link`)."""

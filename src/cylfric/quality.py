@@ -40,11 +40,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from .levels import pressure_levels
+
+if TYPE_CHECKING:
+    from cylfric.steady_state import Extraction
 
 __all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
@@ -368,7 +372,7 @@ def _refuse_most(frame, n_runs, max_fraction, extraction) -> None:
 
 
 def assess(
-    extraction,
+    extraction: Extraction,
     *,
     speed_tolerance: float = 0.20,
     scale_factor: float = 30.0,

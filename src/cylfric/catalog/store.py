@@ -492,7 +492,15 @@ class Catalog:
         table.insert(0, "rank", range(1, len(table) + 1))
         return table
 
-    def compare(self, names, out, pressures, velocities, *, level: float = 0.95) -> dict:
+    def compare(
+        self,
+        names: Sequence[str],
+        out: StrPath,
+        pressures: Sequence[float],
+        velocities: Sequence[float],
+        *,
+        level: float = 0.95,
+    ) -> dict[str, Any]:
         """Figures and a table comparing entries; see :func:`cylfric.catalog.compare.compare`."""
         from .compare import compare
 
@@ -501,7 +509,9 @@ class Catalog:
         models = {name: self.model(name) for name in names}
         return compare(models, out, pressures, velocities, level=level)
 
-    def predict(self, name: str, bore: float, rod: float | None = None, **options) -> dict:
+    def predict(
+        self, name: str, bore: float, rod: float | None = None, **options: Any
+    ) -> dict[str, Any]:
         """Datasheet of ``name``'s seal on another cylinder size, scaled by contact length.
 
         See :func:`cylfric.catalog.scaling.predict_datasheet` for the rule, its

@@ -303,7 +303,7 @@ class LossReport:
 
 
 def loss_report(
-    model,
+    model: FrictionModel,
     block_force: Callable[..., Any],
     *,
     target: str,

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -39,6 +39,9 @@ if TYPE_CHECKING:
     from collections.abc import Mapping
 
     from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.io.motion_config import MotionRecord
 
     from ..io.motion_config import MotionConfig
 
@@ -306,7 +309,7 @@ def _names(per_direction):
 
 
 def fit_motion(
-    record,
+    record: MotionRecord | StrPath,
     config: MotionConfig | None = None,
     *,
     per_direction: bool = False,
@@ -355,6 +358,7 @@ def fit_motion(
                 "the signals"
             )
         record = read_motion_record(record, config)
+    record = cast("MotionRecord", record)  # a record (or an object with its signals)
     if config is None:
         config = MotionConfig(signals={})
     _check_finite(record)

@@ -46,6 +46,8 @@ if TYPE_CHECKING:
 
     from numpy.typing import ArrayLike
 
+    from cylfric.identify.motion import MotionFit
+
 __all__ = ["PlausibilityFlag", "LIMITS", "CHECKS", "check_plausibility", "record_evidence"]
 
 LIMITS = {
@@ -230,7 +232,9 @@ CHECKS = {
 """Check name -> ``check(fit, evidence, limits) -> list of PlausibilityFlag``."""
 
 
-def check_plausibility(fit, position: ArrayLike, **limits) -> tuple:
+def check_plausibility(
+    fit: MotionFit, position: ArrayLike, **limits: float
+) -> tuple[PlausibilityFlag, ...]:
     """Flags of the implausible magnitudes of a motion fit.
 
     Parameters

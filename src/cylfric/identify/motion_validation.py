@@ -128,7 +128,7 @@ def _step_parameters(fit):
 
 
 def replay_closed_loop(
-    fit,
+    fit: MotionFit,
     time: ArrayLike,
     reference: ArrayLike,
     measured_position: ArrayLike,

@@ -122,7 +122,7 @@ def regress_parameters(
     *,
     parameter: str = "",
     laws: Iterable[str] = ("linear",),
-):
+) -> dict[str, PressureLawFit]:
     """Weighted regression of one parameter on pressure with each law in ``laws``.
 
     Parameters

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
     import pandas as pd
+    from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
 
@@ -230,7 +231,7 @@ def read_bench_arrays(
     decimal: str = "auto",
     encoding: str | None = None,
     roles: Mapping[str, Any] | None = None,
-):
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Read a bench text file into SI arrays.
 
     Parameters
@@ -570,7 +571,13 @@ def _column_labels(names):
     return labels
 
 
-def si_columns(path, names, units, values, roles=None):
+def si_columns(
+    path: StrPath,
+    names: Sequence[str],
+    units: Sequence[str],
+    values: ArrayLike,
+    roles: Mapping[str, Any] | None = None,
+) -> tuple[dict[str, np.ndarray], list[str]]:
     """Named columns with their units as the readers' SI dict (``"time [s]"``, ...).
 
     ``values`` is an (n, len(names)) array; quantities are recognised by name (or chosen by

@@ -30,7 +30,7 @@ from . import kernels
 from .plant import THESIS_CYLINDER, Cylinder, FrictionModel
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Mapping
+    from collections.abc import Callable, Iterable, Mapping, Sequence
 
     from numpy.typing import ArrayLike
 
@@ -271,7 +271,7 @@ def run_virtual_test(
     speed_mm_s: float,
     settings: BenchSettings | None = None,
     *,
-    rng=None,
+    rng: np.random.Generator | None = None,
     slow: bool | None = None,
 ) -> VirtualRun:
     """Simulate one run of the virtual bench at ``pressure_bar`` [bar] and ``speed_mm_s`` [mm/s].
@@ -752,14 +752,14 @@ def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int
 
 
 def generate_dynamic_tests(
-    out_dir,
+    out_dir: StrPath,
     settings: BenchSettings | None = None,
     *,
-    tests=DYNAMIC_TESTS,
+    tests: Sequence[str] = DYNAMIC_TESTS,
     dynamic: DynamicTestSettings | None = None,
     start_index: int = 0,
-    progress=None,
-) -> list[dict]:
+    progress: Callable[..., Any] | None = None,
+) -> list[dict[str, Any]]:
     """Write presliding and breakaway runs at each pressure of ``settings``.
 
     Returns the manifest rows: ``file``, ``pressure_bar``, ``test``, ``force_rate_N_s``

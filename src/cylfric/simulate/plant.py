@@ -30,7 +30,7 @@ from . import kernels
 from .result import SimulationResult
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Mapping, Sequence
     from typing import Any
 
     from numpy.typing import ArrayLike
@@ -92,7 +92,15 @@ class Cylinder:
             raise ValueError("Cylinder areas must be >= 0 m^2")
 
     @classmethod
-    def from_diameters(cls, bore, rod, mass, *, double_rod: bool = False, stroke=math.inf):
+    def from_diameters(
+        cls,
+        bore: float,
+        rod: float,
+        mass: float,
+        *,
+        double_rod: bool = False,
+        stroke: float = math.inf,
+    ) -> Cylinder:
         """Build from bore and rod diameters [m]; ``double_rod`` for a symmetric cylinder."""
         if not 0 <= rod < bore:
             raise ValueError(
@@ -770,7 +778,7 @@ class BatchResult:
     def __len__(self) -> int:
         return self.position.shape[0]
 
-    def __getitem__(self, i) -> SimulationResult:
+    def __getitem__(self, i: int) -> SimulationResult:
         """Set ``i`` as the :class:`SimulationResult` that :func:`simulate` returns."""
         p = np.full(self.time.shape, self.pressure[i])
         return SimulationResult(
@@ -802,9 +810,12 @@ def _per_set(value, n_sets, name):
 
 
 def simulate_batch(
-    cylinder,
-    models,
-    drive,
+    cylinder: Cylinder | Sequence[Cylinder],
+    models: FrictionModel | Sequence[FrictionModel],
+    drive: AppliedForce
+    | SpringPull
+    | PositionServo
+    | Sequence[AppliedForce | SpringPull | PositionServo],
     duration: float,
     *,
     pressures: ArrayLike | None = None,
