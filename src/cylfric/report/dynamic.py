@@ -19,13 +19,13 @@ from .figures import STYLE, log_axis
 
 if TYPE_CHECKING:
     from collections.abc import Callable
+    from typing import Any as _Results  # identification results, duck-typed: never imported here
 
-    from cylfric.identify.dynamic import DynamicIdentification
 
 __all__ = ["figure_dynamic", "dynamic_tables", "dynamic_html"]
 
 
-def figure_dynamic(dynamic: DynamicIdentification) -> Figure:
+def figure_dynamic(dynamic: _Results) -> Figure:
     """Left: net force [N] against displacement [um] of each presliding record's first slow
     cycle, the fitted model's curve and the line of slope sigma_0 (presliding stiffness).
     Right: breakaway force [N] against force rate [N/s], measured and simulated."""
@@ -91,7 +91,7 @@ def _first_cycle(record):
     return slice(max(start - 1, 0), stop)
 
 
-def dynamic_tables(dynamic: DynamicIdentification) -> tuple[pd.DataFrame, pd.DataFrame]:
+def dynamic_tables(dynamic: _Results) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(per-pressure sigma table, breakaway table) in engineering units (bar, N/mm, N*s/mm)."""
     pp = dynamic.per_pressure
     sigma = pd.DataFrame(
@@ -121,7 +121,7 @@ def dynamic_tables(dynamic: DynamicIdentification) -> tuple[pd.DataFrame, pd.Dat
 
 
 def dynamic_html(
-    dynamic: DynamicIdentification, png_base64: str | None, table: Callable[[pd.DataFrame], str]
+    dynamic: _Results, png_base64: str | None, table: Callable[[pd.DataFrame], str]
 ) -> str:
     """The report section (HTML) of the dynamic parameters; ``table`` renders a DataFrame."""
     sigma, breakaway = dynamic_tables(dynamic)

@@ -17,10 +17,9 @@ if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
     from pathlib import Path
     from typing import Any
+    from typing import Any as _Results  # identification results, duck-typed: never imported here
 
     from cylfric._typing import StrPath
-    from cylfric.identify.dynamic import DynamicIdentification
-    from cylfric.identify.steady import Identification
     from cylfric.steady_state import Extraction
 
 __all__ = ["render_report", "write_report", "write_report_folder", "offset_by_pressure"]
@@ -55,7 +54,7 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
 
 def render_report(
     sheet: Mapping[str, Any],
-    ident: Identification,
+    ident: _Results,
     extraction: Extraction,
     figures: Iterable[tuple[str, str, bytes]],
     *,
@@ -285,13 +284,13 @@ def write_report(path: StrPath, text: str) -> Path:
 def write_report_folder(
     out: Path,
     sheet: Mapping[str, Any],
-    ident: Identification,
+    ident: _Results,
     extraction: Extraction,
     excluded: pd.DataFrame | None = None,
     *,
     workers: int = 2,
     exports: Sequence[Mapping[str, Any]] | None = None,
-    dynamic: DynamicIdentification | None = None,
+    dynamic: _Results | None = None,
 ) -> dict[str, Path]:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
