@@ -383,3 +383,18 @@ def test_simulate_warns_outside_the_validity_pressures(fitted):
         simulate(Cylinder(10.0), FrictionModel(), SpringPull(2e4, 5e-3), 0.01, pressure_a=50.0)
     with pytest.raises(ValueError, match="outside the validity ranges"):
         simulate(Cylinder(10.0), model, SpringPull(2e4, 5e-3), 0.01, pressure_a=300e5, strict=True)
+
+
+def test_a_datasheet_is_read_from_any_path_like(tmp_path):
+    """``from_datasheet`` takes what its type says (str, Path or any os.PathLike), as the
+    FMU export and ``export()`` pass it on; a path-like object was taken for a dict."""
+    path = tmp_path / "datasheet.json"
+    path.write_text(json.dumps(FrictionModel().to_datasheet()))
+
+    class Where:
+        def __fspath__(self):
+            return str(path)
+
+    model = FrictionModel.from_datasheet(Where())
+    assert model.source == str(path)
+    assert model.friction(0.01, 1e5) == FrictionModel.from_datasheet(path).friction(0.01, 1e5)

@@ -9,12 +9,19 @@ function (:mod:`cylfric.pipeline`) and the command line (:mod:`cylfric.cli`). SI
 engineering units at the edges (:mod:`cylfric.units`).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ._version import __version__
+
+if TYPE_CHECKING:
+    from types import ModuleType
 
 __all__ = ["friction", "units", "__version__"]
 
 
-def __getattr__(name):
+def __getattr__(name: str) -> ModuleType:
     """Subpackages on first use (``import cylfric`` stays quick for ``cylfric --version``)."""
     if name in ("friction", "units"):
         import importlib

@@ -13,8 +13,12 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ._paths import OutputPathError, failed, os_error_message, refuse_link
+
+if TYPE_CHECKING:
+    from ._typing import StrPath
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "failed", "os_error_message"]
 
@@ -22,7 +26,7 @@ _UMASK = os.umask(0o022)
 os.umask(_UMASK)  # read once at import: mkstemp makes 0600 files, outputs get 0666 & ~umask
 
 
-def atomic_write_bytes(path, data: bytes) -> Path:
+def atomic_write_bytes(path: StrPath, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file and a rename.
 
     Raises OutputPathError (a ValueError) when ``path`` is a symbolic link, and OSError
@@ -58,6 +62,6 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     return path
 
 
-def atomic_write_text(path, text: str, encoding: str = "utf-8") -> Path:
+def atomic_write_text(path: StrPath, text: str, encoding: str = "utf-8") -> Path:
     """Write ``text`` to ``path`` atomically."""
     return atomic_write_bytes(path, text.encode(encoding))

@@ -8,8 +8,13 @@ extraction can start: scipy is imported while the second extraction worker reads
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numba
 import numpy as np
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["convolve_nearest", "rolling_median", "rolling_mean"]
 
@@ -19,13 +24,13 @@ def _padded(x, before, after):
     return np.concatenate((np.full(before, x[0]), x, np.full(after, x[-1])))
 
 
-def convolve_nearest(x, kernel):
+def convolve_nearest(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     """Convolution of ``x`` with an odd-length ``kernel``, centred, edges repeated."""
     m = len(kernel) // 2
     return np.convolve(_padded(x, m, len(kernel) - 1 - m), kernel, mode="valid")
 
 
-def rolling_mean(x, size):
+def rolling_mean(x: np.ndarray, size: int) -> np.ndarray:
     """Mean of ``size`` samples around each sample (for even sizes, one more before)."""
     padded = _padded(x, size // 2, size - 1 - size // 2)
     base = padded[0]  # summing differences from one value keeps the rounding small
@@ -54,7 +59,7 @@ def _rolling_median(padded, size, out):
     return out
 
 
-def rolling_median(x, size):
+def rolling_median(x: np.ndarray, size: int) -> np.ndarray:
     """Median of ``size`` (odd) samples around each sample, edges repeated."""
     if size % 2 == 0:
         raise ValueError(f"rolling_median needs an odd size; got {size}")

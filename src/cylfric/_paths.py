@@ -15,6 +15,10 @@ from __future__ import annotations
 
 import os
 from pathlib import Path, PurePosixPath, PureWindowsPath
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ._typing import StrPath
 
 __all__ = [
     "OutputPathError",
@@ -31,7 +35,7 @@ class OutputPathError(ValueError):
     the output folder (exit code 2 on the command line)."""
 
 
-def refuse_link(path, option: str = "--out") -> Path:
+def refuse_link(path: StrPath, option: str = "--out") -> Path:
     """``path`` as a Path; OutputPathError when it is a symbolic link (even a dangling one).
 
     Parameters
@@ -59,7 +63,7 @@ def refuse_link(path, option: str = "--out") -> Path:
     )
 
 
-def inside(out, relative, what: str = "name") -> Path:
+def inside(out: Path, relative: StrPath, what: str = "name") -> Path:
     """``out / relative``, refused (OutputPathError) unless it stays inside ``out``.
 
     ``relative`` is a name or a relative path made of names that came from outside cylfric
@@ -93,11 +97,11 @@ def inside(out, relative, what: str = "name") -> Path:
     return path
 
 
-def failed(exc: OSError, action: str, path) -> OSError:
+def failed(exc: OSError, action: str, path: StrPath) -> OSError:
     """``exc`` made again for the user: same class and errno, ``filename`` = ``path`` and an
     ``action`` attribute (``"writing"``, ``"creating the folder"``); chain it ``from exc``."""
     again = type(exc)(exc.errno, exc.strerror or str(exc), str(path))
-    again.action = action
+    again.action = action  # type: ignore[attr-defined]  # read by os_error_message
     return again
 
 
@@ -113,7 +117,7 @@ def os_error_message(exc: OSError) -> str:
     return f"{action} {where}: {reason}" if action else f"{where}: {reason}"
 
 
-def make_folder(path, option: str = "--out") -> Path:
+def make_folder(path: StrPath, option: str = "--out") -> Path:
     """Create the output folder ``path`` (and its parents) after :func:`refuse_link`; an
     OSError names the folder and the action (``creating the folder OUT: Not a directory``)."""
     path = refuse_link(path, option)

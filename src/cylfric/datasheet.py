@@ -13,11 +13,23 @@ import hashlib
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import __version__
 from .io.writers import atomic_write_text
 from .model import SCHEMA, SCHEMA_ID, DatasheetError, FrictionModel, read_datasheet, validate
 from .model.serialize import clean
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+    from typing import Any
+
+    import numpy as np
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.identify.steady import Identification
+    from cylfric.steady_state import Extraction
 
 __all__ = [
     "DatasheetError",
@@ -35,7 +47,7 @@ __all__ = [
 _PARAM_UNITS = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
 
 
-def file_digest(path) -> str:
+def file_digest(path: StrPath) -> str:
     """SHA-256 of a file's bytes (hex)."""
     digest = hashlib.sha256()
     with open(path, "rb") as handle:
@@ -45,14 +57,14 @@ def file_digest(path) -> str:
 
 
 def build_datasheet(
-    identification,
+    identification: Identification,
     *,
-    extraction=None,
-    files=None,
-    campaign=None,
-    name=None,
-    pressure_reference=None,
-) -> dict:
+    extraction: Extraction | None = None,
+    files: Sequence[StrPath] | None = None,
+    campaign: str | None = None,
+    name: str | None = None,
+    pressure_reference: str | None = None,
+) -> dict[str, Any]:
     """Datasheet dict from an :class:`~cylfric.identify.Identification`.
 
     The datasheet of :func:`datasheet_model` (same parameters).
@@ -147,13 +159,15 @@ def datasheet_model(
     return model.replace(**changes)
 
 
-def write_datasheet(path, sheet: dict) -> Path:
+def write_datasheet(path: StrPath, sheet: dict[str, Any]) -> Path:
     """Validate ``sheet`` and write it as JSON, atomically."""
     validate(sheet, source=str(path))
     return atomic_write_text(path, json.dumps(sheet, indent=2, allow_nan=False) + "\n")
 
 
-def evaluate(sheet: dict, velocity, pressure, *, strict=False):
+def evaluate(
+    sheet: Mapping[str, Any], velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
+) -> np.ndarray | float:
     """Friction force [N] of a datasheet at ``velocity`` [m/s] and operating ``pressure`` [Pa].
 
     The datasheet's model (:meth:`FrictionModel.from_datasheet`) evaluated; warns outside the

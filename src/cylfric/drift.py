@@ -29,8 +29,19 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from cylfric._typing import StrPath
+
+    from .model import FrictionModel
 
 __all__ = [
     "drift",
@@ -43,7 +54,9 @@ __all__ = [
 _ORDERS = ("run", "mtime")
 
 
-def load_fit(source):
+def load_fit(
+    source: FrictionModel | dict[str, Any] | StrPath,
+) -> tuple[FrictionModel, pd.DataFrame | None, str]:
     """(model, points or None, label) of a datasheet path, a fit output folder, a dict or a
     :class:`~cylfric.model.FrictionModel`. ``points`` is ``points.csv`` beside the datasheet."""
     import pandas as pd
@@ -75,7 +88,15 @@ def _z(change, se_a, se_b):
     return se, z
 
 
-def drift(a, b, *, pressures=None, velocities=None, n=5, level=0.95):
+def drift(
+    a: StrPath | dict[str, Any] | FrictionModel,
+    b: StrPath | dict[str, Any] | FrictionModel,
+    *,
+    pressures: Sequence[float] | None = None,
+    velocities: Sequence[float] | None = None,
+    n: int = 5,
+    level: float = 0.95,
+) -> pd.DataFrame:
     """Change of friction between two fits of the same cylinder, with z-scores.
 
     Parameters
@@ -314,7 +335,13 @@ def _ols_slope(x, y):
     return slope, math.sqrt(float(np.sum(resid**2)) / (x.size - 2) / sxx)
 
 
-def run_order_trend(points, model, *, order="run", campaign=None) -> RunOrderTrend:
+def run_order_trend(
+    points: pd.DataFrame,
+    model: FrictionModel,
+    *,
+    order: Literal["run", "mtime"] = "run",
+    campaign: StrPath | None = None,
+) -> RunOrderTrend:
     """Residual friction against run order, between and within runs.
 
     Parameters
@@ -392,7 +419,7 @@ def run_order_trend(points, model, *, order="run", campaign=None) -> RunOrderTre
     )
 
 
-def figure_run_order(trend: RunOrderTrend, title=""):
+def figure_run_order(trend: RunOrderTrend, title: str = "") -> Figure:
     """Residual friction [N] against run order (points, run means, between-run trend)."""
     from matplotlib.figure import Figure
 
@@ -433,7 +460,7 @@ def _normal_quantile(q):
     return NormalDist().inv_cdf(q)
 
 
-def write_drift(table, out) -> Path:
+def write_drift(table: pd.DataFrame, out: StrPath) -> Path:
     """Write ``drift.csv`` into ``out`` (atomically) and a JSON summary; returns the CSV path."""
     from ._paths import make_folder
     from .io.writers import atomic_write_text

@@ -62,7 +62,7 @@ def _escape_char(c: str) -> str:
     return f"\\U{code:08x}"
 
 
-def printable(text, *, limit: int | None = None, ascii_only: bool = False) -> str:
+def printable(text: object, *, limit: int | None = None, ascii_only: bool = False) -> str:
     """``text`` as one line of printable characters.
 
     Parameters
@@ -105,12 +105,12 @@ def _break(text: str, *pairs: tuple[str, str]) -> str:
     return text
 
 
-def c_comment(text, *, limit: int = COMMENT_LIMIT) -> str:
+def c_comment(text: object, *, limit: int | None = COMMENT_LIMIT) -> str:
     """Text to place between ``/* `` and `` */`` in C: ASCII, one line, no ``*/`` or ``/*``."""
     return _break(printable(text, limit=limit, ascii_only=True), ("*/", "* /"), ("/*", "/ *"))
 
 
-def c_string(text) -> str:
+def c_string(text: object) -> str:
     """A C string literal (with its quotes) holding ``text``'s UTF-8 bytes.
 
     Printable ASCII stays as it is except ``\\``, ``"`` and ``?`` (trigraphs), which are
@@ -129,17 +129,17 @@ def c_string(text) -> str:
     return "".join(out)
 
 
-def matlab_comment(text, *, limit: int = COMMENT_LIMIT) -> str:
+def matlab_comment(text: object, *, limit: int | None = COMMENT_LIMIT) -> str:
     """Text to place after ``%`` on one MATLAB/Octave line (no line break can end it)."""
     return printable(text, limit=limit)
 
 
-def matlab_string(text) -> str:
+def matlab_string(text: object) -> str:
     """A MATLAB/Octave character-vector literal ``'...'`` (quotes doubled, one line)."""
     return "'" + printable(text).replace("'", "''") + "'"
 
 
-def modelica_string(text, *, quotes: bool = True) -> str:
+def modelica_string(text: object, *, quotes: bool = True) -> str:
     """A Modelica string literal ``"..."`` (backslash and quote escaped, one line).
 
     ``quotes=False`` gives the inside only, to place within a literal of the template.
@@ -148,12 +148,12 @@ def modelica_string(text, *, quotes: bool = True) -> str:
     return f'"{inner}"' if quotes else inner
 
 
-def hcom_comment(text, *, limit: int = COMMENT_LIMIT) -> str:
+def hcom_comment(text: object, *, limit: int | None = COMMENT_LIMIT) -> str:
     """Text to place after ``#`` on one line of a Hopsan HCOM script."""
     return printable(text, limit=limit)
 
 
-def html_text(text) -> str:
+def html_text(text: object) -> str:
     """HTML text or attribute value (``& < > " '`` as entities, one line)."""
     return html.escape(printable(text), quote=True)
 
@@ -161,24 +161,24 @@ def html_text(text) -> str:
 _MARKDOWN_SPECIAL = "\\`*_{}[]()#+-.!|~"  # < > & become entities below
 
 
-def markdown_text(text, *, limit: int = COMMENT_LIMIT) -> str:
+def markdown_text(text: object, *, limit: int | None = COMMENT_LIMIT) -> str:
     """Text for Markdown: one line, every Markdown punctuation escaped with a backslash."""
     line = printable(text, limit=limit)
     line = "".join("\\" + c if c in _MARKDOWN_SPECIAL else c for c in line)
     return html.escape(line, quote=False)
 
 
-def plot_text(text, *, limit: int = 80) -> str:
+def plot_text(text: object, *, limit: int | None = 80) -> str:
     """Text for a matplotlib label or title: one line, ``$`` escaped (no mathtext parsing)."""
     return printable(text, limit=limit).replace("$", r"\$")
 
 
-def xml_attr(text) -> str:
+def xml_attr(text: object) -> str:
     """An XML attribute value with its quotes (only characters XML 1.0 allows, one line)."""
     return quoteattr(printable(text))
 
 
-def terminal(text, *, markup: bool = True, multiline: bool = False) -> str:
+def terminal(text: object, *, markup: bool = True, multiline: bool = False) -> str:
     """Text for a rich console: control codes (ANSI ESC) and, by default, markup escaped.
 
     Parameters
@@ -203,7 +203,7 @@ def terminal(text, *, markup: bool = True, multiline: bool = False) -> str:
     return escape(line)
 
 
-def identifier(name, *, default: str = "cylfric", max_length: int = 48) -> str:
+def identifier(name: object, *, default: str = "cylfric", max_length: int = 48) -> str:
     """An identifier ``[A-Za-z_][A-Za-z0-9_]*`` made of ``name`` (C, MATLAB, Modelica).
 
     Every character that is not an ASCII letter or digit becomes ``_`` and leading and

@@ -6,12 +6,19 @@ Used by the data-quality gate (:mod:`cylfric.quality`) and the identification
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["pressure_levels"]
 
 
-def pressure_levels(pressure, *, gap=0.5e5, relative=0.02):
+def pressure_levels(
+    pressure: ArrayLike, *, gap: float = 0.5e5, relative: float = 0.02
+) -> tuple[np.ndarray, np.ndarray]:
     """Group measured pressures [Pa] into levels; returns (level index per point, level means).
 
     A new level starts where sorted pressures jump by more than max(``gap`` [Pa],

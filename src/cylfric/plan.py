@@ -33,12 +33,25 @@ import math
 import tempfile
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from .io.writers import atomic_write_bytes, atomic_write_text
 from .model import STEADY_PARAMETERS, FrictionModel, engineering_unit
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Sequence
+    from pathlib import Path
+    from typing import Any
+
+    from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+
+    from .simulate.bench import BenchSettings
 
 __all__ = [
     "WindowNoise",
@@ -91,7 +104,7 @@ class WindowNoise:
     sem: tuple
     source: str = "given"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         v, s = np.asarray(self.speeds, float), np.asarray(self.sem, float)
         if v.ndim != 1 or v.shape != s.shape or v.size < 1:
             raise ValueError("WindowNoise needs equally long, non-empty speeds [m/s] and sem [N]")
@@ -100,17 +113,19 @@ class WindowNoise:
         if not (np.all(s > 0) and np.all(np.isfinite(s))):
             raise ValueError(f"WindowNoise sem {self.sem} must be finite and > 0 N")
 
-    def __call__(self, speed):
+    def __call__(self, speed: ArrayLike) -> np.ndarray:
         """Standard error of one window's mean friction [N] at ``speed`` [m/s]."""
         logv = np.log(np.abs(np.asarray(speed, dtype=float)))
         return np.exp(np.interp(logv, np.log(self.speeds), np.log(self.sem)))
 
-    def run_std(self, speed):
+    def run_std(self, speed: ArrayLike) -> np.ndarray:
         """Standard error of a run's friction [N] (mean of the two directions)."""
         return self(speed) / math.sqrt(2.0)
 
     @classmethod
-    def from_points(cls, points: pd.DataFrame, *, source="points table", relative=0.1):
+    def from_points(
+        cls, points: pd.DataFrame, *, source: str = "points table", relative: float = 0.1
+    ) -> WindowNoise:
         """Calibrate from a points table (``points.csv`` of a fit, or an extraction).
 
         Uses the ``ok`` windows: ``friction_std [N] / sqrt(n [-])`` grouped by speed
@@ -139,7 +154,15 @@ class WindowNoise:
         return cls(tuple(speeds), tuple(rms), source)
 
     @classmethod
-    def from_bench(cls, settings=None, *, speeds=None, pressure_bar=80.0, seeds=2, progress=None):
+    def from_bench(
+        cls,
+        settings: BenchSettings | None = None,
+        *,
+        speeds: ArrayLike | None = None,
+        pressure_bar: float = 80.0,
+        seeds: int = 2,
+        progress: Callable[..., Any] | None = None,
+    ) -> WindowNoise:
         """Calibrate on the virtual bench: pilot runs through the extraction.
 
         Runs the bench (``settings``: force noise, sampling, stroke) at ``speeds`` [m/s] and
@@ -231,7 +254,13 @@ class Uncertainty:
 
 
 def predicted_uncertainty(
-    model, velocity, pressure, noise: WindowNoise, *, fixed=(), operating_points=OPERATING_POINTS
+    model: FrictionModel,
+    velocity: ArrayLike,
+    pressure: ArrayLike,
+    noise: WindowNoise,
+    *,
+    fixed: Iterable[str] = (),
+    operating_points: Sequence[tuple[float, float]] = OPERATING_POINTS,
 ) -> Uncertainty:
     """Covariance of the coefficients that runs at (velocity [m/s], pressure [Pa]) would give.
 
@@ -275,7 +304,13 @@ def predicted_uncertainty(
     return Uncertainty(tuple(names), cov, stderr, band, float(logdet + 2 * np.log(scale).sum()))
 
 
-def candidate_grid(pressure_range, speed_range, *, n_pressures=9, n_speeds=25):
+def candidate_grid(
+    pressure_range: tuple[float, float],
+    speed_range: tuple[float, float],
+    *,
+    n_pressures: int = 9,
+    n_speeds: int = 25,
+) -> tuple[np.ndarray, np.ndarray]:
     """Candidate runs: ``n_pressures`` evenly spaced pressures [Pa] x ``n_speeds`` log-spaced
     speeds [m/s] over the ranges (rounded to 0.1 bar and 0.01 mm/s)."""
     p_lo, p_hi = pressure_range
@@ -289,7 +324,14 @@ def candidate_grid(pressure_range, speed_range, *, n_pressures=9, n_speeds=25):
     return pressures, speeds
 
 
-def d_optimal(rows, runs, *, max_repeats=1, start=None, max_sweeps=200):
+def d_optimal(
+    rows: np.ndarray,
+    runs: int,
+    *,
+    max_repeats: int = 1,
+    start: Sequence[int] | None = None,
+    max_sweeps: int = 200,
+) -> np.ndarray:
     """Indices of ``runs`` rows (with repeats) maximising ``det(sum r r^T)`` (D-optimal).
 
     ``rows`` is the (candidates, k) matrix of information rows ``j / s``. A greedy start
@@ -393,7 +435,7 @@ class TestPlan:
             }
         )
 
-    def figure(self):
+    def figure(self) -> Figure:
         """The design in the (v, p) plane: candidates, chosen runs (repeats by size)."""
         from matplotlib.figure import Figure
 
@@ -418,7 +460,7 @@ class TestPlan:
         ax.legend(loc="upper left", bbox_to_anchor=(1, 1))
         return fig
 
-    def write(self, out) -> dict:
+    def write(self, out: StrPath) -> dict[str, Path]:
         """Write ``plan.csv``, ``uncertainty.csv``, ``plan.png``/``.svg`` and ``plan.html``
         into the folder ``out`` (created; a symbolic link is refused, see
         :func:`cylfric._paths.refuse_link`)."""
@@ -484,18 +526,18 @@ def _html_table(frame: pd.DataFrame) -> str:
 
 
 def make_plan(
-    pressure_range,
-    speed_range,
-    runs,
+    pressure_range: tuple[float, float],
+    speed_range: tuple[float, float],
+    runs: int,
     *,
-    model=None,
-    noise=None,
-    settings=None,
-    fixed=(),
-    n_pressures=9,
-    n_speeds=25,
-    max_repeats=1,
-    seed=0,
+    model: FrictionModel | None = None,
+    noise: WindowNoise | None = None,
+    settings: BenchSettings | None = None,
+    fixed: Iterable[str] = (),
+    n_pressures: int = 9,
+    n_speeds: int = 25,
+    max_repeats: int = 1,
+    seed: int = 0,
 ) -> TestPlan:
     """Design a D-optimal test plan of ``runs`` runs.
 
@@ -585,13 +627,22 @@ def _run_table(pressure, velocity, settings) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def grid_uncertainty(model, pressures, speeds, noise, *, fixed=()) -> Uncertainty:
+def grid_uncertainty(
+    model: FrictionModel,
+    pressures: ArrayLike,
+    speeds: ArrayLike,
+    noise: WindowNoise,
+    *,
+    fixed: Iterable[str] = (),
+) -> Uncertainty:
     """Predicted uncertainty of a full grid: every pressure [Pa] x every speed [m/s]."""
     pp, vv = (a.ravel() for a in np.meshgrid(pressures, speeds, indexing="ij"))
     return predicted_uncertainty(model, vv, pp, noise, fixed=fixed)
 
 
-def compare(first: Uncertainty, second: Uncertainty, labels=("grid", "plan")) -> pd.DataFrame:
+def compare(
+    first: Uncertainty, second: Uncertainty, labels: tuple[str, str] = ("grid", "plan")
+) -> pd.DataFrame:
     """Standard errors of two plans side by side (engineering units) and their ratio."""
     a, b = first.table(), second.table()
     out = a.rename(columns={"stderr": labels[0]})

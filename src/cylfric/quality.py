@@ -40,11 +40,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from .levels import pressure_levels
+
+if TYPE_CHECKING:
+    from cylfric.steady_state import Extraction
 
 __all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
@@ -340,7 +344,7 @@ def _folder(extraction):
     return getattr(extraction, "folder", None) or "the campaign"
 
 
-def _refuse_scale(excluded, n_runs, max_fraction, factor, extraction):
+def _refuse_scale(excluded, n_runs, max_fraction, factor, extraction) -> None:
     scale = [e for e in excluded if e["check"] == "scale"]
     if n_runs and len(scale) > max_fraction * n_runs:
         files = ", ".join(e["file"] for e in scale[:4]) + (", ..." if len(scale) > 4 else "")
@@ -354,7 +358,7 @@ def _refuse_scale(excluded, n_runs, max_fraction, factor, extraction):
         )
 
 
-def _refuse_most(frame, n_runs, max_fraction, extraction):
+def _refuse_most(frame, n_runs, max_fraction, extraction) -> None:
     runs = frame[frame["run"] >= 0]
     if n_runs and runs["run"].nunique() > max_fraction * n_runs:
         counts = ", ".join(f"{n} by {check}" for check, n in runs["check"].value_counts().items())
@@ -368,21 +372,21 @@ def _refuse_most(frame, n_runs, max_fraction, extraction):
 
 
 def assess(
-    extraction,
+    extraction: Extraction,
     *,
-    speed_tolerance=0.20,
-    scale_factor=30.0,
-    outlier_sigma=8.0,
-    min_speeds=4,
-    noise_floor=0.005,
-    metadata_tolerance=0.05,
-    pressure_floor=0.2e5,
-    speed_floor=0.05e-3,
-    measured_tolerance=0.20,
-    measured_floor=2e5,
-    zero_level_runs=3,
-    max_scale_fraction=0.25,
-    max_excluded_fraction=0.5,
+    speed_tolerance: float = 0.20,
+    scale_factor: float = 30.0,
+    outlier_sigma: float = 8.0,
+    min_speeds: int = 4,
+    noise_floor: float = 0.005,
+    metadata_tolerance: float = 0.05,
+    pressure_floor: float = 0.2e5,
+    speed_floor: float = 0.05e-3,
+    measured_tolerance: float = 0.20,
+    measured_floor: float = 2e5,
+    zero_level_runs: int = 3,
+    max_scale_fraction: float = 0.25,
+    max_excluded_fraction: float = 0.5,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 

@@ -17,6 +17,13 @@ Examples
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    _Value = TypeVar("_Value", float, np.ndarray)
+    """A value converted as it is: a float gives a float, an array an array."""
 
 __all__ = [
     "UNITS",
@@ -222,7 +229,7 @@ def _factor(unit: str, dimension: str | None) -> float:
     return _lookup(unit)[1]
 
 
-def to_si(value, unit: str, dimension: str | None = None):
+def to_si(value: _Value, unit: str, dimension: str | None = None) -> _Value:
     """Convert ``value`` given in ``unit`` to SI (scalar or ndarray).
 
     Parameters
@@ -237,7 +244,7 @@ def to_si(value, unit: str, dimension: str | None = None):
     return value * _factor(unit, dimension)
 
 
-def from_si(value, unit: str, dimension: str | None = None):
+def from_si(value: _Value, unit: str, dimension: str | None = None) -> _Value:
     """Convert an SI ``value`` to ``unit`` (inverse of :func:`to_si`)."""
     return value / _factor(unit, dimension)
 
@@ -281,7 +288,7 @@ ZERO_CELSIUS = 273.15
 _TEMPERATURE_UNITS = {"k": 0.0, "degc": ZERO_CELSIUS, "°c": ZERO_CELSIUS, "c": ZERO_CELSIUS}
 
 
-def parse_temperature(text, default_unit: str = "degC") -> float:
+def parse_temperature(text: str | float, default_unit: str = "degC") -> float:
     """Parse ``"40 degC"``, ``"40°C"`` or ``"313.15 K"`` into kelvin [K].
 
     Temperatures are affine (0 degC = 273.15 K), so they are not in :data:`UNITS`.

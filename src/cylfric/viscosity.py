@@ -14,8 +14,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+    from numpy.typing import ArrayLike
+
+    from ._typing import OilPoints
+    from .io.campaign import OilSettings
 
 __all__ = [
     "walther_viscosity",
@@ -26,7 +36,19 @@ __all__ = [
 ]
 
 
-def walther_viscosity(temperature, oil):
+@overload
+def walther_viscosity(temperature: float, oil: OilPoints) -> float: ...
+
+
+@overload
+def walther_viscosity(temperature: np.ndarray, oil: OilPoints) -> np.ndarray: ...
+
+
+@overload
+def walther_viscosity(temperature: ArrayLike, oil: OilPoints) -> np.ndarray | float: ...
+
+
+def walther_viscosity(temperature: ArrayLike, oil: OilPoints) -> np.ndarray | float:
     """Kinematic viscosity [m^2/s] of a mineral oil by the Walther equation (ASTM D341).
 
     ``log10(log10(nu + 0.7)) = A - B log10(T)`` with ``nu`` in mm^2/s (cSt) and ``T`` in K;
@@ -70,7 +92,13 @@ def walther_viscosity(temperature, oil):
     return nu * 1e-6 if np.ndim(nu) else float(nu) * 1e-6
 
 
-def viscosity_corrected(points, *, oil, reference_temperature, temperature=None):
+def viscosity_corrected(
+    points: pd.DataFrame,
+    *,
+    oil: OilPoints,
+    reference_temperature: float,
+    temperature: float | None = None,
+) -> pd.DataFrame:
     """Points with their speeds mapped to a reference oil temperature (same Hersey number).
 
     The lubrication regime of a seal, and so the Stribeck curve, depends on the Hersey
@@ -165,7 +193,13 @@ def _celsius(kelvin) -> str:
     return f"{kelvin - 273.15:.4g} degC"
 
 
-def correct_campaign(points, runs, oil, *, enabled=None) -> ViscosityCorrection:
+def correct_campaign(
+    points: pd.DataFrame,
+    runs: Sequence[Mapping[str, Any]],
+    oil: OilSettings | None,
+    *,
+    enabled: bool | None = None,
+) -> ViscosityCorrection:
     """Map a campaign's points to the oil's reference temperature, or say why not.
 
     Parameters
@@ -213,6 +247,7 @@ def correct_campaign(points, runs, oil, *, enabled=None) -> ViscosityCorrection:
             )
         if not has_listed:
             return unchanged
+        assert listed is not None  # has_listed
         t = listed[np.isfinite(listed)]
         return replace(
             unchanged,

@@ -7,15 +7,27 @@ Everything is evaluated through :class:`~cylfric.model.FrictionModel` (``frictio
 from __future__ import annotations
 
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..escape import plot_text
 
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import pandas as pd
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
+
 __all__ = ["friction_with_band", "compare", "comparison_table"]
 
 
-def friction_with_band(model, velocity, pressure, level=0.95):
+def friction_with_band(
+    model: FrictionModel, velocity: ArrayLike, pressure: ArrayLike, level: float = 0.95
+) -> tuple[np.ndarray | float, np.ndarray, np.ndarray, np.ndarray]:
     """Friction [N], band limits [N] and whether inside the validity ranges, quietly.
 
     Parameters
@@ -47,7 +59,9 @@ def friction_with_band(model, velocity, pressure, level=0.95):
     return friction, lower, upper, inside
 
 
-def comparison_table(models: dict, pressures, velocities, level=0.95):
+def comparison_table(
+    models: dict, pressures: Sequence[float], velocities: Sequence[float], level: float = 0.95
+) -> pd.DataFrame:
     """Friction of each model at every (pressure, velocity) pair.
 
     Parameters
@@ -158,7 +172,14 @@ def _figure(models: dict, pressures, velocities, level):
     return fig
 
 
-def compare(models: dict, out, pressures, velocities, *, level=0.95) -> dict:
+def compare(
+    models: dict,
+    out: StrPath,
+    pressures: Sequence[float],
+    velocities: Sequence[float],
+    *,
+    level: float = 0.95,
+) -> dict:
     """Write ``compare.csv`` and ``compare.png`` / ``compare.svg`` into ``out``.
 
     Parameters

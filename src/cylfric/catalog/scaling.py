@@ -37,8 +37,12 @@ from __future__ import annotations
 
 import json
 import math
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..model import FrictionModel
 
 __all__ = ["predict_datasheet", "contact_ratio", "scale_model", "RULE_RELATIVE_STDERR"]
 
@@ -53,7 +57,13 @@ _SCALED = ("F_c", "F_s", "sigma_2")
 
 
 def contact_ratio(
-    source_bore, bore, *, source_rod=None, rod=None, contact="piston", rod_seals=1
+    source_bore: float | None,
+    bore: float | None,
+    *,
+    source_rod: float | None = None,
+    rod: float | None = None,
+    contact: Literal["piston", "rod", "total"] = "piston",
+    rod_seals: int = 1,
 ) -> tuple[float, str]:
     """Contact-length ratio ``k`` [-] and the rule as text.
 
@@ -85,14 +95,18 @@ def contact_ratio(
             if not (math.isfinite(value) and 0 < value <= 2.0):
                 raise ValueError(f"{what} = {value} m: expected a diameter in m, 0 < d <= 2 m")
     if contact == "piston":
+        assert bore is not None and source_bore is not None  # checked above
         ratio = bore / source_bore
         text = f"piston seal: L = pi D, k = {bore * 1e3:g} mm / {source_bore * 1e3:g} mm"
     elif contact == "rod":
+        assert rod is not None and source_rod is not None  # checked above
         ratio = rod / source_rod
         text = f"rod seal: L = pi d, k = {rod * 1e3:g} mm / {source_rod * 1e3:g} mm"
     else:
         if not (isinstance(rod_seals, int) and rod_seals >= 1):
             raise ValueError(f"rod_seals = {rod_seals!r}: expected a whole number >= 1")
+        assert bore is not None and source_bore is not None  # checked above
+        assert rod is not None and source_rod is not None
         new = bore + rod_seals * rod
         old = source_bore + rod_seals * source_rod
         ratio = new / old
@@ -119,7 +133,9 @@ def _factor(name, ratio):
     return ratio if _scales(name) else 1.0
 
 
-def scale_model(model, ratio, rule_stderr=RULE_RELATIVE_STDERR):
+def scale_model(
+    model: FrictionModel, ratio: float, rule_stderr: float = RULE_RELATIVE_STDERR
+) -> FrictionModel:
     """``model`` with its forces scaled by ``ratio`` and the rule's uncertainty added.
 
     Parameters
@@ -189,13 +205,13 @@ def predict_datasheet(
     sheet: dict,
     *,
     source_name: str,
-    source_bore,
-    bore,
-    source_rod=None,
-    rod=None,
-    contact=None,
-    rod_seals=1,
-    rule_stderr=RULE_RELATIVE_STDERR,
+    source_bore: float | None,
+    bore: float | None,
+    source_rod: float | None = None,
+    rod: float | None = None,
+    contact: Literal["piston", "rod", "total"] | None = None,
+    rod_seals: int = 1,
+    rule_stderr: float = RULE_RELATIVE_STDERR,
 ) -> dict:
     """A validated datasheet for the same seal on a cylinder of another size.
 

@@ -22,6 +22,15 @@ import sqlite3
 import sys
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = [
     "Catalog",
@@ -172,7 +181,7 @@ class Catalog:
     111.26
     """
 
-    def __init__(self, path=None):
+    def __init__(self, path: StrPath | None = None) -> None:
         self.path = Path(path).expanduser() if path is not None else default_path()
         if self.path.is_dir():
             raise CatalogError(f"{self.path}: is a folder; expected a catalogue file (.sqlite)")
@@ -180,7 +189,7 @@ class Catalog:
         with self._connect() as db:
             self._migrate(db)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"Catalog({str(self.path)!r})"
 
     # ------------------------------------------------------------------ connection
@@ -215,7 +224,7 @@ class Catalog:
                 raise
             db.execute("COMMIT")
 
-    def _migrate(self, db):
+    def _migrate(self, db) -> None:
         version = db.execute("PRAGMA user_version").fetchone()[0]
         if version > SCHEMA_VERSION:
             raise CatalogError(
@@ -256,16 +265,16 @@ class Catalog:
     # ------------------------------------------------------------------ entries
     def add(
         self,
-        datasheet,
-        name,
+        datasheet: StrPath | Mapping[str, Any],
+        name: str,
         *,
-        seal=None,
-        manufacturer=None,
-        bore=None,
-        rod=None,
-        fluid=None,
-        temperature=None,
-        replace=False,
+        seal: str | None = None,
+        manufacturer: str | None = None,
+        bore: float | None = None,
+        rod: float | None = None,
+        fluid: str | None = None,
+        temperature: float | None = None,
+        replace: bool = False,
     ) -> None:
         """Add a datasheet under ``name`` (validated first; SI metadata).
 
@@ -298,7 +307,7 @@ class Catalog:
         sheet = _load_datasheet(datasheet, where=f"datasheet of {name!r}")
         self._insert([(name, sheet, metadata, _now())], replace=replace)
 
-    def _insert(self, rows, *, replace):
+    def _insert(self, rows, *, replace) -> None:
         columns = ("name", "datasheet", "added", *METADATA)
         verb = "INSERT OR REPLACE" if replace else "INSERT"
         sql = f"{verb} INTO seals ({', '.join(columns)}) VALUES ({', '.join('?' * len(columns))})"
@@ -318,7 +327,7 @@ class Catalog:
         with self._connect() as db:
             return [row[0] for row in db.execute("SELECT name FROM seals ORDER BY name")]
 
-    def __contains__(self, name) -> bool:
+    def __contains__(self, name: object) -> bool:
         with self._connect() as db:
             return db.execute("SELECT 1 FROM seals WHERE name = ?", (name,)).fetchone() is not None
 
@@ -339,28 +348,28 @@ class Catalog:
             )
         return row
 
-    def get(self, name) -> dict:
+    def get(self, name: str) -> dict[str, Any]:
         """The datasheet dict of ``name`` (as it was added)."""
         return json.loads(self._row(name)["datasheet"])
 
-    def metadata(self, name) -> dict:
+    def metadata(self, name: str) -> dict[str, Any]:
         """The metadata of ``name`` (SI: bore and rod [m], temperature [K]; None if unknown)."""
         row = self._row(name)
         return {key: row[key] for key in METADATA} | {"added": row["added"]}
 
-    def model(self, name):
+    def model(self, name: str) -> FrictionModel:
         """The :class:`~cylfric.model.FrictionModel` of ``name``."""
         from ..model import FrictionModel
 
         return FrictionModel.from_datasheet(self.get(name))
 
-    def remove(self, name) -> None:
+    def remove(self, name: str) -> None:
         """Remove ``name`` (an unknown name raises :class:`CatalogError`)."""
         with self._write() as db:
             if not db.execute("DELETE FROM seals WHERE name = ?", (name,)).rowcount:
                 raise CatalogError(f"{name!r} is not in the catalogue {self.path}")
 
-    def list(self):
+    def list(self) -> pd.DataFrame:
         """One row per entry: metadata (SI, units in the column names) and model summary.
 
         Returns
@@ -407,7 +416,15 @@ class Catalog:
         return pd.DataFrame.from_records(records, columns=columns)
 
     # ------------------------------------------------------------------ use
-    def select(self, pressure, velocity, max_friction=None, *, names=None, level=0.95):
+    def select(
+        self,
+        pressure: float,
+        velocity: float,
+        max_friction: float | None = None,
+        *,
+        names: Sequence[str] | None = None,
+        level: float = 0.95,
+    ) -> pd.DataFrame:
         """Entries ranked by friction at an operating point, lowest first, with the band.
 
         Parameters
@@ -475,7 +492,15 @@ class Catalog:
         table.insert(0, "rank", range(1, len(table) + 1))
         return table
 
-    def compare(self, names, out, pressures, velocities, *, level=0.95) -> dict:
+    def compare(
+        self,
+        names: Sequence[str],
+        out: StrPath,
+        pressures: Sequence[float],
+        velocities: Sequence[float],
+        *,
+        level: float = 0.95,
+    ) -> dict[str, Any]:
         """Figures and a table comparing entries; see :func:`cylfric.catalog.compare.compare`."""
         from .compare import compare
 
@@ -484,7 +509,9 @@ class Catalog:
         models = {name: self.model(name) for name in names}
         return compare(models, out, pressures, velocities, level=level)
 
-    def predict(self, name, bore, rod=None, **options) -> dict:
+    def predict(
+        self, name: str, bore: float, rod: float | None = None, **options: Any
+    ) -> dict[str, Any]:
         """Datasheet of ``name``'s seal on another cylinder size, scaled by contact length.
 
         See :func:`cylfric.catalog.scaling.predict_datasheet` for the rule, its
@@ -513,7 +540,7 @@ class Catalog:
         )
 
     # ------------------------------------------------------------------ exchange
-    def export_json(self, path) -> Path:
+    def export_json(self, path: StrPath) -> Path:
         """Write the whole catalogue as one JSON file (atomically); returns the path."""
         from ..io.writers import atomic_write_text
 
@@ -537,7 +564,7 @@ class Catalog:
         }
         return atomic_write_text(path, json.dumps(document, indent=1) + "\n")
 
-    def import_json(self, path, *, replace=False) -> int:
+    def import_json(self, path: StrPath, *, replace: bool = False) -> int:
         """Add every entry of an :meth:`export_json` file (all or none); returns the count.
 
         Every datasheet is validated and every name checked before anything is written;

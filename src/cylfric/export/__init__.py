@@ -17,8 +17,16 @@ import shutil
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from .result import ExportResult
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+    from cylfric._typing import StrPath
+
+    from ..model import FrictionModel
 
 __all__ = [
     "export",
@@ -49,7 +57,7 @@ folder) is that file (:func:`export`). The others write several files into a fol
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")  # a model name valid in C and Modelica
 
 
-def resolve(target: str):
+def resolve(target: str) -> Callable[..., Any]:
     """The export function of ``target`` (imported on first use)."""
     if target not in TARGETS:
         raise ValueError(f"unknown export target {target!r}; valid: {sorted(TARGETS)}")
@@ -66,7 +74,7 @@ def resolve(target: str):
     return getattr(module, function)
 
 
-def parse_targets(text) -> list[str]:
+def parse_targets(text: str | Iterable[str]) -> list[str]:
     """``"fmu,simscape"`` (or a list) -> checked target names, in order, without repeats."""
     items = text.split(",") if isinstance(text, str) else list(text)
     names = []
@@ -96,7 +104,12 @@ def _model(source):
     )
 
 
-def export(model_or_datasheet, to: str, out, **options) -> ExportResult:
+def export(
+    model_or_datasheet: FrictionModel | Mapping[str, Any] | StrPath,
+    to: str,
+    out: StrPath,
+    **options: Any,
+) -> ExportResult:
     """Export a friction model to a simulator.
 
     Parameters

@@ -47,9 +47,17 @@ import warnings
 import zipfile
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 from ..escape import c_comment, c_string
 from ..escape import xml_attr as quoteattr
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from cylfric._typing import StrPath
+
+    from ..model import FrictionModel
 
 __all__ = ["export_fmu", "ELEMENTS", "FMU_INPUTS", "FMU_OUTPUTS", "compiler", "fmi_platform"]
 
@@ -126,7 +134,7 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")  # with fullmatch: no t
 _CFLAGS = ("-shared", "-fPIC", "-O2", "-ffp-contract=off", "-std=c99")
 
 
-def _as_model(model):
+def _as_model(model: object) -> FrictionModel:
     """A FrictionModel from a model, a datasheet path or a datasheet dict."""
     from ..model import FrictionModel
 
@@ -140,7 +148,7 @@ def _as_model(model):
     )
 
 
-def datasheet_text(model) -> str:
+def datasheet_text(model: FrictionModel) -> str:
     """The model's datasheet as JSON text, without a creation date the model does not carry.
 
     ``to_datasheet`` stamps the current time when the model has none (a model built in Python
@@ -623,7 +631,13 @@ def _zip(entries: dict) -> bytes:
     return buffer.getvalue()
 
 
-def export_fmu(model, out, *, element="friction", name=None) -> list[Path]:
+def export_fmu(
+    model: FrictionModel | StrPath | Mapping[str, Any],
+    out: StrPath,
+    *,
+    element: Literal["friction", "cylinder"] = "friction",
+    name: str | None = None,
+) -> list[Path]:
     """Write an FMI 2.0 FMU (model exchange and co-simulation) of the friction element.
 
     Parameters

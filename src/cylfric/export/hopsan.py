@@ -28,6 +28,7 @@ from __future__ import annotations
 import io
 from pathlib import Path
 from string import Template
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,6 +38,12 @@ from ..io.writers import atomic_write_text
 from .loss import loss_grid, loss_report
 from .result import ExportResult
 from .simscape import _identifier, _num
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = [
     "export_hopsan",
@@ -64,7 +71,14 @@ PARAMETERS = {
 """Hopsan parameter -> (component, SI unit, Hopsan's description)."""
 
 
-def hopsan_friction(velocity, *, f_k, B_p, b=0.0, f_s=None):
+def hopsan_friction(
+    velocity: ArrayLike,
+    *,
+    f_k: float | np.ndarray,
+    B_p: float,
+    b: float = 0.0,
+    f_s: float | None = None,
+) -> np.ndarray:
     """Steady sliding friction of a Hopsan cylinder + Coulomb-friction mass [N].
 
     ``f_k sign(v) + (B_p + b) v`` (``f_s`` acts only at rest and does not enter).
@@ -84,7 +98,7 @@ def hopsan_friction(velocity, *, f_k, B_p, b=0.0, f_s=None):
     return f_k * np.sign(v) + (B_p + b) * v
 
 
-def fit_hopsan(model, speeds, pressures) -> dict:
+def fit_hopsan(model: FrictionModel, speeds: ArrayLike, pressures: ArrayLike) -> dict[str, float]:
     """Best-fit Hopsan friction parameters over a grid [SI].
 
     ``f_k`` [N] and ``B_p`` [N*s/m] by bounded linear least squares of
@@ -110,8 +124,14 @@ def fit_hopsan(model, speeds, pressures) -> dict:
 
 
 def hopsan_friction_pressure_signal(
-    velocity, pressure_a, pressure_b, *, f_k0, f_k_pressure_coefficient, B_p
-):
+    velocity: ArrayLike,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
+    *,
+    f_k0: float,
+    f_k_pressure_coefficient: float,
+    B_p: float,
+) -> np.ndarray:
     """Steady sliding friction [N] with ``f_k`` driven by a pressure signal.
 
     ``f_k`` is an input variable of MechanicTranslationalMassWithCoulombFriction, so a Hopsan
@@ -126,7 +146,9 @@ def hopsan_friction_pressure_signal(
     return hopsan_friction(velocity, f_k=kinetic, B_p=B_p)
 
 
-def fit_hopsan_pressure_signal(model, speeds, pressures) -> dict:
+def fit_hopsan_pressure_signal(
+    model: FrictionModel, speeds: ArrayLike, pressures: ArrayLike
+) -> dict[str, float]:
     """Best-fit ``f_k0`` [N], ``f_k_pressure_coefficient`` [N/Pa], ``B_p`` [N*s/m] (bounded
     linear least squares over the grid), for :func:`hopsan_friction_pressure_signal`."""
     from scipy.optimize import lsq_linear
@@ -144,14 +166,14 @@ def fit_hopsan_pressure_signal(model, speeds, pressures) -> dict:
 
 
 def export_hopsan(
-    model,
-    out,
+    model: FrictionModel,
+    out: StrPath,
     *,
-    name=None,
-    velocity_range=None,
-    pressure_range=None,
-    n_velocity=None,
-    n_pressure=None,
+    name: str | None = None,
+    velocity_range: tuple[float, float] | None = None,
+    pressure_range: tuple[float, float] | None = None,
+    n_velocity: int | None = None,
+    n_pressure: int | None = None,
 ) -> ExportResult:
     """Fit Hopsan's cylinder friction to the model; write HCOM script, table, note, loss report.
 

@@ -17,10 +17,21 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..io.writers import atomic_write_bytes, atomic_write_text
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping, Sequence
+
+    import pandas as pd
+    from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = [
     "LossReport",
@@ -42,7 +53,7 @@ class ExportRangeError(ValueError):
     """A model without validity ranges was exported without explicit ranges."""
 
 
-def chamber_pressure(model, operating):
+def chamber_pressure(model: FrictionModel, operating: ArrayLike) -> np.ndarray:
     """Chamber pressure [Pa] with ``p_A = p_B`` that gives the operating pressure [Pa].
 
     The operating-pressure rule of the model (``mean``, ``sum``, ...) is applied to equal
@@ -69,13 +80,13 @@ def _range(model, given, low, high, what, unit):
 
 
 def loss_grid(
-    model,
+    model: FrictionModel,
     *,
-    velocity_range=None,
-    pressure_range=None,
-    n_velocity=N_VELOCITY,
-    n_pressure=N_PRESSURE,
-):
+    velocity_range: tuple[float, float] | None = None,
+    pressure_range: tuple[float, float] | None = None,
+    n_velocity: int = N_VELOCITY,
+    n_pressure: int = N_PRESSURE,
+) -> tuple[np.ndarray, np.ndarray]:
     """Speeds [m/s] and chamber pressures [Pa] of the loss grid over the validity range.
 
     Parameters
@@ -167,7 +178,7 @@ class LossReport:
         i = int(np.argmax(np.abs(self.difference)))
         return float(self.velocity[i]), float(self.pressure[i]), float(self.difference[i])
 
-    def table(self):
+    def table(self) -> pd.DataFrame:
         """The grid as a DataFrame in engineering units (mm/s, bar, N)."""
         import pandas as pd
 
@@ -214,7 +225,7 @@ class LossReport:
             lines += ["", "notes:"] + [f"  - {note}" for note in self.notes]
         return "\n".join(lines) + "\n"
 
-    def figure(self):
+    def figure(self) -> Figure:
         """Friction against speed at a few pressures (both models) and the difference map."""
         from matplotlib.figure import Figure
         from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
@@ -273,7 +284,7 @@ class LossReport:
         fig.suptitle(f"{self.title}: RMS {self.rms:.3f} N, max {self.max_abs:.3f} N", fontsize=10)
         return fig
 
-    def write(self, folder, stem=None) -> list[Path]:
+    def write(self, folder: StrPath, stem: str | None = None) -> list[Path]:
         """Write ``<stem>.csv``, ``<stem>.txt`` and ``<stem>.png`` into ``folder`` atomically.
 
         ``stem`` defaults to ``loss_<target>``. Returns the paths.
@@ -292,15 +303,15 @@ class LossReport:
 
 
 def loss_report(
-    model,
-    block_force,
+    model: FrictionModel,
+    block_force: Callable[..., Any],
     *,
-    target,
-    title,
-    speeds,
-    pressures,
-    parameters=None,
-    notes=(),
+    target: str,
+    title: str,
+    speeds: ArrayLike,
+    pressures: ArrayLike,
+    parameters: Mapping[str, Any] | None = None,
+    notes: Sequence[str] = (),
 ) -> LossReport:
     """Evaluate a target block and the cylfric model over a grid, both directions.
 

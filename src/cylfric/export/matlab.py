@@ -25,9 +25,14 @@ nothing is lost. The files are written atomically and are deterministic (no date
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..escape import matlab_comment, matlab_string
 from .fmu import FRICTION_PARAMETERS, REFERENCE_TEXT, _as_model, _check_name
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = ["export_matlab", "MATLAB_FUNCTIONS"]
 
@@ -217,7 +222,7 @@ def _lugre_file(model, name) -> str:
     )
 
 
-def export_matlab(model, out, *, name=None) -> list[Path]:
+def export_matlab(model: FrictionModel, out: StrPath, *, name: str | None = None) -> list[Path]:
     """Write the model as MATLAB/Octave functions and a parameter struct (lossless).
 
     Parameters

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from pathlib import Path
 from string import Template
+from typing import TYPE_CHECKING
 
 from ..escape import html_text, modelica_string
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
@@ -26,6 +27,10 @@ from ..io.writers import atomic_write_text
 from ..model.core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 from .result import ExportResult
 from .simscape import _identifier
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = ["export_modelica", "modelica_package", "OPERATING_PRESSURE"]
 
@@ -103,7 +108,7 @@ def _specs(model):
     return out
 
 
-def modelica_package(model, *, name=None) -> tuple[str, str]:
+def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[str, str]:
     """(package name, Modelica source text) of the model's friction package."""
     package = _identifier(name or model.record.get("name") or "cylfric")
     package = package[0].upper() + package[1:]
@@ -163,7 +168,7 @@ def modelica_package(model, *, name=None) -> tuple[str, str]:
     return package, text
 
 
-def export_modelica(model, out, *, name=None) -> ExportResult:
+def export_modelica(model: FrictionModel, out: StrPath, *, name: str | None = None) -> ExportResult:
     """Write the model's Modelica package ``<Name>.mo`` into ``out`` (lossless).
 
     Parameters

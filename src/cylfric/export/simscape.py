@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 from string import Template
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -50,6 +51,14 @@ from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import chamber_pressure, loss_grid, loss_report
 from .result import ExportResult
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
 
 __all__ = [
     "translational_friction",
@@ -82,8 +91,13 @@ zero velocity); the loss grid starts above it unless the data reach below 0.1 mm
 
 
 def translational_friction(
-    velocity, *, breakaway_force, coulomb_force, viscous_coefficient, breakaway_velocity
-):
+    velocity: float | np.ndarray,
+    *,
+    breakaway_force: float | np.ndarray,
+    coulomb_force: float | np.ndarray,
+    viscous_coefficient: float | np.ndarray,
+    breakaway_velocity: float | np.ndarray,
+) -> float | np.ndarray:
     """Friction force of Simscape's Translational Friction block [N] (documented equations).
 
     ``F = sqrt(2e) (F_brk - F_C) x exp(-x^2) + F_C tanh(v/v_Coul) + f v``, ``x = v/v_st``, with
@@ -112,16 +126,16 @@ def translational_friction(
 
 
 def cylinder_friction_il(
-    velocity,
-    pressure_a,
-    pressure_b,
+    velocity: float | np.ndarray,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
     *,
-    preload_force,
-    coulomb_friction_coefficient,
-    breakaway_ratio,
-    breakaway_velocity,
-    viscous_coefficient,
-):
+    preload_force: float,
+    coulomb_friction_coefficient: float,
+    breakaway_ratio: float,
+    breakaway_velocity: float,
+    viscous_coefficient: float,
+) -> np.ndarray | float:
     """Friction force of Simscape Fluids' Cylinder Friction (IL) block [N].
 
     The Translational Friction equations (:func:`translational_friction`) with the Coulomb
@@ -157,17 +171,17 @@ def cylinder_friction_il(
 
 
 def cylinder_friction(
-    velocity,
-    pressure_a,
-    pressure_b,
+    velocity: float | np.ndarray,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
     *,
-    preload_force,
-    coulomb_friction_coefficient,
-    breakaway_ratio,
-    transition_coefficient,
-    viscous_coefficient,
-    velocity_threshold=LEGACY_VELOCITY_THRESHOLD,
-):
+    preload_force: float,
+    coulomb_friction_coefficient: float,
+    breakaway_ratio: float,
+    transition_coefficient: float,
+    viscous_coefficient: float,
+    velocity_threshold: float = LEGACY_VELOCITY_THRESHOLD,
+) -> np.ndarray | float:
     """Friction force of the legacy Simscape Fluids Cylinder Friction block [N].
 
     :func:`cylfric.friction.simscape_cylinder_friction` (the block as a Stribeck parameter
@@ -224,7 +238,9 @@ def _model_levels(model, pressures):
     return model.params_at(model.operating_pressure(pressures, pressures))
 
 
-def fit_cylinder_friction_il(model, speeds, pressures) -> dict:
+def fit_cylinder_friction_il(
+    model: FrictionModel, speeds: ArrayLike, pressures: ArrayLike
+) -> dict[str, float]:
     """Best-fit Cylinder Friction (IL) parameters over a grid (least squares) [SI].
 
     Parameters
@@ -266,7 +282,13 @@ def fit_cylinder_friction_il(model, speeds, pressures) -> dict:
     return {k: float(v) for k, v in unpack(_least_squares(residual, starts, lower, upper)).items()}
 
 
-def fit_cylinder_friction(model, speeds, pressures, *, velocity_threshold=None) -> dict:
+def fit_cylinder_friction(
+    model: FrictionModel,
+    speeds: ArrayLike,
+    pressures: ArrayLike,
+    *,
+    velocity_threshold: float | None = None,
+) -> dict[str, float]:
     """Best-fit legacy Cylinder Friction parameters over a grid (least squares) [SI].
 
     As :func:`fit_cylinder_friction_il`; returns ``preload_force`` [N],
@@ -302,7 +324,9 @@ def fit_cylinder_friction(model, speeds, pressures, *, velocity_threshold=None) 
     return out
 
 
-def fit_translational_friction(model, speeds, pressure) -> dict:
+def fit_translational_friction(
+    model: FrictionModel, speeds: ArrayLike, pressure: float
+) -> dict[str, float]:
     """Best-fit Translational Friction parameters at one chamber pressure [Pa] (SI).
 
     Returns ``breakaway_force`` [N], ``coulomb_force`` [N], ``viscous_coefficient``
@@ -418,15 +442,15 @@ def _levels(model, pressure_range, levels):
 
 
 def export_simscape(
-    model,
-    out,
+    model: FrictionModel,
+    out: StrPath,
     *,
-    name=None,
-    velocity_range=None,
-    pressure_range=None,
-    levels=None,
-    n_velocity=None,
-    n_pressure=None,
+    name: str | None = None,
+    velocity_range: tuple[float, float] | None = None,
+    pressure_range: tuple[float, float] | None = None,
+    levels: Sequence[float] | None = None,
+    n_velocity: int | None = None,
+    n_pressure: int | None = None,
 ) -> ExportResult:
     """Fit Simscape's friction blocks to the model and write a MATLAB script and loss reports.
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import inspect
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from . import literature, pressure
 from .laws import (
@@ -30,6 +31,10 @@ from .laws import (
 )
 from .pressure import operating_pressure, params_at_pressure, simscape_cylinder_friction
 from .stribeck_velocity import NoStribeckMinimumWarning, stribeck_velocity
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any
 
 __all__ = [
     "LAWS",
@@ -83,10 +88,10 @@ class Law:
     """
 
     name: str
-    function: object
+    function: Callable[..., Any]
     kind: str
     state: str | None
-    example: dict
+    example: dict[str, float]
     equation: str
 
     @property

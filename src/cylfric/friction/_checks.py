@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 # parameter name -> (lower bound, strict?, description of the valid range)
 RANGES: dict[str, tuple[float, bool, str]] = {
@@ -30,7 +35,9 @@ The datasheet validation, the identification's check and the model all use
 :func:`roundoff_tolerance`, so what one accepts the others evaluate."""
 
 
-def roundoff_tolerance(F_c, F_s=None, sigma_2=None):
+def roundoff_tolerance(
+    F_c: ArrayLike, F_s: ArrayLike | None = None, sigma_2: ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Per-point tolerances (force [N], sigma_2 [N*s/m]) of the physical constraints.
 
     ``ROUNDOFF`` times the larger of 1 and the magnitudes of F_c and F_s [N] (for F_c >= 0
@@ -87,7 +94,7 @@ def _clamp_scalars(out: dict, F_c, F_s, sigma_2) -> dict:
     return out
 
 
-def check_parameters(**values) -> None:
+def check_parameters(**values: ArrayLike) -> None:
     """Raise ValueError if any named parameter is NaN or outside its valid range.
 
     Parameters are scalars or arrays; every element is checked. Names not in
@@ -106,7 +113,7 @@ def check_parameters(**values) -> None:
                 raise ValueError(f"parameter {name} = {first!r} is out of range; expected {rule}")
 
 
-def check_signal(name: str, value) -> np.ndarray:
+def check_signal(name: str, value: ArrayLike) -> np.ndarray:
     """Return ``value`` as a float array, raising ValueError if it holds NaN."""
     arr = np.asarray(value, dtype=float)
     if np.isnan(arr).any():
@@ -114,7 +121,7 @@ def check_signal(name: str, value) -> np.ndarray:
     return arr
 
 
-def as_output(result, *inputs):
+def as_output(result: np.ndarray | float, *inputs: ArrayLike) -> np.ndarray | float:
     """Return a Python float when every input was a scalar, else the array."""
     if all(np.ndim(x) == 0 for x in inputs):
         return float(result)

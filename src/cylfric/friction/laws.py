@@ -17,9 +17,14 @@ References
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ._checks import as_output, check_parameters, check_signal
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "coulomb",
@@ -41,7 +46,7 @@ __all__ = [
 ]
 
 
-def coulomb(velocity, F_c):
+def coulomb(velocity: ArrayLike, F_c: float | np.ndarray) -> np.ndarray | float:
     """Coulomb (dry) friction, thesis eq. 2.1.
 
     Parameters
@@ -66,7 +71,7 @@ def coulomb(velocity, F_c):
     return as_output(np.sign(v) * F_c, velocity, F_c)  # eq. 2.1
 
 
-def viscous(velocity, sigma_2):
+def viscous(velocity: ArrayLike, sigma_2: float | np.ndarray) -> np.ndarray | float:
     """Viscous friction, thesis eq. 2.2 (``gamma`` there, ``sigma_2`` in LuGre).
 
     Parameters
@@ -86,7 +91,14 @@ def viscous(velocity, sigma_2):
     return as_output(sigma_2 * v, velocity, sigma_2)  # eq. 2.2
 
 
-def stiction(velocity, F_c, F_s, *, external_force=0.0, velocity_tolerance=1e-4):
+def stiction(
+    velocity: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    *,
+    external_force: ArrayLike = 0.0,
+    velocity_tolerance: float = 1e-4,
+) -> np.ndarray | float:
     """Coulomb friction with stiction and breakaway, thesis eq. 2.3 (Karnopp switch).
 
     Within the band ``|v| < velocity_tolerance`` the contact is taken as stuck: friction
@@ -122,7 +134,15 @@ def stiction(velocity, F_c, F_s, *, external_force=0.0, velocity_tolerance=1e-4)
     return as_output(force, velocity, F_c, F_s, external_force)
 
 
-def stribeck(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+def stribeck(
+    velocity: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Steady-state friction of the LuGre model with Stribeck effect, thesis eq. 2.7.
 
     Parameters
@@ -163,7 +183,9 @@ def stribeck(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     return as_output(force, velocity, F_c, F_s, v_r, sigma_2, alpha)
 
 
-def stribeck_shape(speed, v_r, alpha=1.0):
+def stribeck_shape(
+    speed: float | np.ndarray, v_r: float | np.ndarray, alpha: float | np.ndarray = 1.0
+) -> np.ndarray | float:
     """The Stribeck decay ``exp(-(|v|/v_r)^alpha)`` of g(v), thesis eq. 2.5 [-].
 
     ``g(v) = F_c + (F_s - F_c) * stribeck_shape(v)``; no parameter checks (callers check).
@@ -171,7 +193,15 @@ def stribeck_shape(speed, v_r, alpha=1.0):
     return np.exp(-((np.abs(speed) / v_r) ** alpha))
 
 
-def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+def stribeck_unchecked(
+    velocity: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Eq. 2.7 as :func:`stribeck`, without parameter checks and always as an array.
 
     For optimisers, whose trial steps may leave the physical range (F_c < 0, ...); every
@@ -184,7 +214,15 @@ def stribeck_unchecked(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     return np.sign(v) * (g + sigma_2 * speed)  # eq. 2.7
 
 
-def stribeck_jacobian(speed, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+def stribeck_jacobian(
+    speed: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> dict[str, np.ndarray]:
     """Partial derivatives of the friction magnitude of eq. 2.7 at ``speed`` >= 0 [m/s].
 
     Returns a dict of arrays d|F|/d(parameter): ``F_c`` and ``F_s`` [-], ``v_r`` [N*s/m],
@@ -204,12 +242,19 @@ def stribeck_jacobian(speed, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
         "F_c": 1.0 - e,
         "F_s": e,
         "v_r": amplitude * alpha / v_r,
-        "sigma_2": speed,
+        "sigma_2": np.asarray(speed),  # already an array: for the type checker
         "alpha": -amplitude * log_ratio,
     }
 
 
-def dahl_derivative(velocity, force, F_c, sigma, *, exponent=1.0):
+def dahl_derivative(
+    velocity: ArrayLike,
+    force: ArrayLike,
+    F_c: ArrayLike,
+    sigma: float | np.ndarray,
+    *,
+    exponent: float = 1.0,
+) -> np.ndarray | float:
     """Time derivative of the Dahl friction force, thesis eq. 2.4.
 
     Dahl writes ``dF/dx = sigma (1 - F/F_c sign(v))^i``; along a motion ``dF/dt = dF/dx * v``.
@@ -244,7 +289,14 @@ def dahl_derivative(velocity, force, F_c, sigma, *, exponent=1.0):
     return as_output(slope * v, velocity, force, F_c, sigma, exponent)
 
 
-def lugre_g(velocity, F_c, F_s, v_r, *, alpha=1.0):
+def lugre_g(
+    velocity: ArrayLike,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """LuGre velocity function ``g(v) = F_c + (F_s - F_c) exp(-(|v|/v_r)^alpha)``, eq. 2.5.
 
     Returns the (even) bristle saturation level [N] at ``velocity`` [m/s].
@@ -255,7 +307,7 @@ def lugre_g(velocity, F_c, F_s, v_r, *, alpha=1.0):
     return as_output(g, velocity, F_c, F_s, v_r, alpha)
 
 
-def _check_g_positive(F_c, F_s):
+def _check_g_positive(F_c, F_s) -> None:
     if np.any(np.minimum(np.asarray(F_c), np.asarray(F_s)) <= 0):
         raise ValueError(
             "parameters F_c and F_s must both be > 0 N for the dynamic LuGre model "
@@ -263,7 +315,16 @@ def _check_g_positive(F_c, F_s):
         )
 
 
-def lugre_state_derivative(velocity, z, sigma_0, F_c, F_s, v_r, *, alpha=1.0):
+def lugre_state_derivative(
+    velocity: ArrayLike,
+    z: ArrayLike,
+    sigma_0: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Bristle-state derivative of the LuGre model, thesis eq. 2.5.
 
     Parameters
@@ -294,7 +355,17 @@ def lugre_state_derivative(velocity, z, sigma_0, F_c, F_s, v_r, *, alpha=1.0):
     return as_output(dz, velocity, z, sigma_0, F_c, F_s, v_r, alpha)
 
 
-def lugre_unchecked(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha=1.0):
+def lugre_unchecked(
+    velocity: float | np.ndarray,
+    z: float | np.ndarray,
+    sigma_0: float | np.ndarray,
+    sigma_1: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    alpha: float | np.ndarray = 1.0,
+) -> tuple[np.ndarray | float, np.ndarray | float]:
     """LuGre force and bristle rate (eq. 2.5) without parameter checks: (force [N], dz/dt [m/s]).
 
     For integrators that call it at every step after checking the parameters once; every
@@ -302,11 +373,22 @@ def lugre_unchecked(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha
     scalars (Python floats) and arrays alike.
     """
     g = F_c + (F_s - F_c) * stribeck_shape(velocity, v_r, alpha)  # eq. 2.5, g(v)
-    dz = velocity - sigma_0 * abs(velocity) * z / g  # eq. 2.5
+    dz = velocity - sigma_0 * abs(velocity) * z / g  # type: ignore[operator]  # eq. 2.5
     return sigma_0 * z + sigma_1 * dz + sigma_2 * velocity, dz
 
 
-def lugre_force(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, *, alpha=1.0):
+def lugre_force(
+    velocity: ArrayLike,
+    z: ArrayLike,
+    sigma_0: float | np.ndarray,
+    sigma_1: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """LuGre friction force ``sigma_0 z + sigma_1 dz/dt + sigma_2 v``, thesis eq. 2.5.
 
     Parameters
@@ -342,7 +424,15 @@ def lugre_force(velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, *, alpha=
     return as_output(force, velocity, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha)
 
 
-def lugre_steady_state(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+def lugre_steady_state(
+    velocity: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    sigma_2: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Steady-state LuGre force, thesis eq. 2.6/2.7 (identical to :func:`stribeck`).
 
     At constant velocity ``dz/dt = 0`` gives ``z_ss = sign(v) g(v) / sigma_0`` and the
@@ -351,7 +441,17 @@ def lugre_steady_state(velocity, F_c, F_s, v_r, sigma_2, *, alpha=1.0):
     return stribeck(velocity, F_c, F_s, v_r, sigma_2, alpha=alpha)
 
 
-def lugre_z_update(z, velocity, step, sigma_0, F_c, F_s, v_r, *, alpha=1.0):
+def lugre_z_update(
+    z: ArrayLike,
+    velocity: ArrayLike,
+    step: float | np.ndarray,
+    sigma_0: float | np.ndarray,
+    F_c: float | np.ndarray,
+    F_s: float | np.ndarray,
+    v_r: float | np.ndarray,
+    *,
+    alpha: float | np.ndarray = 1.0,
+) -> np.ndarray | float:
     """Exact LuGre bristle update over a step at constant velocity.
 
     For constant ``v`` over a step ``h`` the bristle equation (eq. 2.5) is linear in z:
@@ -393,7 +493,9 @@ def lugre_z_update(z, velocity, step, sigma_0, F_c, F_s, v_r, *, alpha=1.0):
     return as_output(z_ss + (z0 - z_ss) * decay, z, velocity, step, sigma_0, F_c, F_s, v_r)
 
 
-def barus_viscosity(pressure, viscosity_0, pressure_coefficient):
+def barus_viscosity(
+    pressure: ArrayLike, viscosity_0: float, pressure_coefficient: float
+) -> np.ndarray | float:
     """Barus isothermal pressure-viscosity law ``mu = mu_0 exp(alpha_p p)``, thesis eq. 2.9.
 
     Parameters
@@ -420,7 +522,9 @@ def barus_viscosity(pressure, viscosity_0, pressure_coefficient):
     return as_output(viscosity_0 * np.exp(pressure_coefficient * p), pressure)  # eq. 2.9
 
 
-def hersey_number(velocity, viscosity, load_per_length):
+def hersey_number(
+    velocity: ArrayLike, viscosity: float | np.ndarray, load_per_length: float | np.ndarray
+) -> np.ndarray | float:
     """Hersey number ``|v| mu / (F_N / L)``, thesis eq. 2.8 (dimensionless).
 
     Parameters

@@ -14,11 +14,15 @@ linear law (eq. 2.10, 4.1-4.3). Which chamber pressure a law sees is the explici
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ._checks import check_signal
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "PRESSURE_LAWS",
@@ -34,7 +38,7 @@ __all__ = [
 ]
 
 
-def constant(pressure, intercept):
+def constant(pressure: ArrayLike, intercept: float) -> np.ndarray:
     """Pressure-independent value ``a`` (broadcast to the shape of ``pressure``).
 
     Parameters
@@ -47,7 +51,7 @@ def constant(pressure, intercept):
     return intercept + 0.0 * np.asarray(pressure, dtype=float)
 
 
-def linear(pressure, intercept, slope):
+def linear(pressure: ArrayLike, intercept: float, slope: float) -> np.ndarray:
     """Linear pressure law ``a + b p`` (thesis eq. 2.10 and 4.1-4.3).
 
     Parameters
@@ -62,13 +66,13 @@ def linear(pressure, intercept, slope):
     return intercept + slope * np.asarray(pressure, dtype=float)
 
 
-def quadratic(pressure, intercept, slope, curvature):
+def quadratic(pressure: ArrayLike, intercept: float, slope: float, curvature: float) -> np.ndarray:
     """Quadratic pressure law ``a + b p + c p^2``; ``curvature`` in [unit/Pa^2]."""
     p = np.asarray(pressure, dtype=float)
     return intercept + slope * p + curvature * p * p
 
 
-def exponential(pressure, intercept, amplitude, rate):
+def exponential(pressure: ArrayLike, intercept: float, amplitude: float, rate: float) -> np.ndarray:
     """Exponential pressure law ``a + b (exp(c p) - 1)``.
 
     The form the composite-seal (Bosch Rexroth) data of thesis ch. 2 suggested. The value at
@@ -82,7 +86,9 @@ MIN_RATE = 1e-14
 """Smallest ``|rate|`` [1/Pa] of the exponential law; below it the law is the linear law."""
 
 
-def exponential_by_slope(pressure, intercept, initial_slope, rate):
+def exponential_by_slope(
+    pressure: ArrayLike, intercept: float, initial_slope: float, rate: float
+) -> np.ndarray:
     """The exponential law by its initial slope: ``a + s (exp(c p) - 1) / c``.
 
     The same law as :func:`exponential` with ``amplitude = s / c``, written so that it stays
@@ -94,7 +100,7 @@ def exponential_by_slope(pressure, intercept, initial_slope, rate):
     return intercept + initial_slope * np.expm1(c * p) / c
 
 
-PRESSURE_LAWS = {
+PRESSURE_LAWS: dict[str, Callable[..., np.ndarray]] = {
     "constant": constant,
     "linear": linear,
     "quadratic": quadratic,
@@ -111,7 +117,7 @@ PRESSURE_LAW_COEFFICIENTS = {
 """Coefficient names of each pressure law, in order. Units: the parameter's unit
 (``intercept``, ``amplitude``), per Pa (``slope``, ``rate`` [1/Pa]), per Pa^2 (``curvature``)."""
 
-PRESSURE_REFERENCES = {
+PRESSURE_REFERENCES: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
     "a": lambda pa, pb: pa,
     "b": lambda pa, pb: pb,
     "sum": lambda pa, pb: pa + pb,
@@ -121,7 +127,12 @@ PRESSURE_REFERENCES = {
 """How two chamber pressures combine into the pressure a law sees."""
 
 
-def operating_pressure(pressure_a, pressure_b=None, *, reference="mean"):
+def operating_pressure(
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike | None = None,
+    *,
+    reference: str = "mean",
+) -> np.ndarray:
     """Combine chamber pressures into the pressure a pressure law uses [Pa].
 
     Parameters
@@ -144,7 +155,12 @@ def operating_pressure(pressure_a, pressure_b=None, *, reference="mean"):
     return PRESSURE_REFERENCES[reference](pa, pb)
 
 
-def params_at_pressure(pressure, coefficients, *, law="linear"):
+def params_at_pressure(
+    pressure: ArrayLike,
+    coefficients: Mapping[str, Any],
+    *,
+    law: str = "linear",
+) -> dict[str, Any]:
     """Evaluate a coefficient set at an operating pressure -> friction parameter dict.
 
     Parameters
@@ -173,7 +189,7 @@ def params_at_pressure(pressure, coefficients, *, law="linear"):
     """
     check_signal("pressure", pressure)
     scalar = np.ndim(pressure) == 0
-    out = {}
+    out: dict[str, float | np.ndarray] = {}
     for name, spec in coefficients.items():
         if scalar and type(spec) is float:  # a constant at one pressure: nothing to evaluate
             out[name] = spec
@@ -198,15 +214,15 @@ def params_at_pressure(pressure, coefficients, *, law="linear"):
 
 
 def simscape_cylinder_friction(
-    pressure_a,
-    pressure_b,
+    pressure_a: ArrayLike,
+    pressure_b: ArrayLike,
     *,
-    preload_force,
-    coulomb_friction_coefficient,
-    breakaway_ratio,
-    viscous_coefficient,
-    transition_coefficient,
-):
+    preload_force: float,
+    coulomb_friction_coefficient: float,
+    breakaway_ratio: float,
+    viscous_coefficient: float,
+    transition_coefficient: float,
+) -> dict[str, Any]:
     """Parameters of Simscape's "Cylinder Friction" block as a Stribeck parameter dict.
 
     Simscape Fluids models ``F_C = F_pr + f_cfr (p_A + p_B)`` (reference fixed to the *sum*
@@ -242,7 +258,7 @@ def simscape_cylinder_friction(
         )
     p = operating_pressure(pressure_a, pressure_b, reference="sum")
     F_c = preload_force + coulomb_friction_coefficient * p
-    out = {
+    out: dict[str, float | np.ndarray] = {
         "F_c": F_c,
         "F_s": breakaway_ratio * F_c,
         "sigma_2": viscous_coefficient,

@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._checks import check_parameters
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["stribeck_velocity", "NoStribeckMinimumWarning"]
 
@@ -41,7 +45,9 @@ def _one(F_c, F_s, v_r, sigma_2, alpha) -> float:
     return brentq(_slope, start, upper, args=(dF, v_r, sigma_2, alpha), xtol=1e-14 * v_r)
 
 
-def stribeck_velocity(F_c, F_s, v_r, sigma_2, *, alpha=1.0):
+def stribeck_velocity(
+    F_c: ArrayLike, F_s: ArrayLike, v_r: ArrayLike, sigma_2: ArrayLike, *, alpha: ArrayLike = 1.0
+) -> np.ndarray | float:
     """Velocity of minimum steady-state friction of the Stribeck law (eq. 2.7).
 
     This is the thesis' v_Stribeck (Table 4.1), which differs from the curve parameter

@@ -10,6 +10,10 @@ and per-direction fits on request.
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from typing import Any
 
 __all__ = [
     "identify",
@@ -46,7 +50,7 @@ _SUBMODULES = (
 )
 
 
-def __getattr__(name):
+def __getattr__(name: str) -> Any:
     """Load the steady-state identification (scipy.optimize) only when a name is used.
 
     ``import cylfric.identify.motion`` or ``.dynamic`` then does not pay for it.
@@ -62,5 +66,5 @@ def __getattr__(name):
     return value
 
 
-def __dir__():
+def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))

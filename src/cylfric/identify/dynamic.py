@@ -34,12 +34,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
 from ..io.campaign import DYNAMIC_TESTS
 from ..model import FrictionModel
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Mapping, Sequence
+
 
 __all__ = [
     "DYNAMIC_TESTS",
@@ -136,7 +141,7 @@ class DynamicRecord:
         return float(self.time[1] - self.time[0])
 
 
-def clean_force(force, *, sigma=SPIKE_SIGMA):
+def clean_force(force: np.ndarray, *, sigma: float = SPIKE_SIGMA) -> tuple[np.ndarray, int]:
     """Force [N] with isolated spikes replaced by the mean of their neighbours; and their count.
 
     A sample is a spike when its departure from the mean of its two neighbours (the second
@@ -184,7 +189,7 @@ def _force_rate(text, where) -> float:
         ) from None
 
 
-def lowpass(signal, interval, cutoff=FORCE_CUTOFF):
+def lowpass(signal: np.ndarray, interval: float, cutoff: float | None = FORCE_CUTOFF) -> np.ndarray:
     """Zero-phase 8th-order Butterworth low-pass of ``signal`` sampled every ``interval`` [s].
 
     ``cutoff`` [Hz]; the signal is returned unchanged when the cut-off is at or above
@@ -201,15 +206,15 @@ def lowpass(signal, interval, cutoff=FORCE_CUTOFF):
 
 
 def dynamic_record(
-    data,
-    metadata,
+    data: Mapping[str, Any],
+    metadata: Mapping[str, Any],
     *,
-    test=None,
-    mass=None,
-    position_sign=1.0,
-    force_sign=1.0,
-    hold=HOLD,
-    cutoff=FORCE_CUTOFF,
+    test: str | None = None,
+    mass: float | None = None,
+    position_sign: float = 1.0,
+    force_sign: float = 1.0,
+    hold: float = HOLD,
+    cutoff: float | None = FORCE_CUTOFF,
 ) -> DynamicRecord:
     """A :class:`DynamicRecord` from a read run (``cylfric.io.campaign.read_run`` output).
 
@@ -308,7 +313,7 @@ def dynamic_record(
     )
 
 
-def simulate_record(model: FrictionModel, record: DynamicRecord, **changes) -> np.ndarray:
+def simulate_record(model: FrictionModel, record: DynamicRecord, **changes: Any) -> np.ndarray:
     """Displacement [m] of ``model`` driven by the record's net force (public simulator).
 
     ``changes`` (``sigma_0=``, ``sigma_1=``) are applied to the model first.
@@ -356,7 +361,7 @@ class PreslidingFit:
     message: str = ""
 
 
-def initial_slope(record: DynamicRecord, *, fraction=0.5) -> float:
+def initial_slope(record: DynamicRecord, *, fraction: float = 0.5) -> float:
     """Slope of force against displacement [N/m] on the first loading from rest.
 
     Fits displacement against force (the force is the accurate signal) over the samples of
@@ -417,7 +422,7 @@ def _input_noise_spread(record, model, theta, residual, draws):
     return np.sqrt(np.mean(np.square(shifts), axis=0))
 
 
-def fit_presliding(record: DynamicRecord, model: FrictionModel, *, draws=2) -> PreslidingFit:
+def fit_presliding(record: DynamicRecord, model: FrictionModel, *, draws: int = 2) -> PreslidingFit:
     """Fit ``sigma_0`` [N/m] and ``sigma_1`` [N*s/m] to one presliding record.
 
     ``model`` supplies the steady-state law (g(v), sigma_2) at the record's pressure; its
@@ -505,7 +510,13 @@ def fit_presliding(record: DynamicRecord, model: FrictionModel, *, draws=2) -> P
     )
 
 
-def breakaway_force(record_or_time, force=None, displacement=None, *, travel=BREAKAWAY_TRAVEL):
+def breakaway_force(
+    record_or_time: DynamicRecord | np.ndarray,
+    force: np.ndarray | None = None,
+    displacement: np.ndarray | None = None,
+    *,
+    travel: float = BREAKAWAY_TRAVEL,
+) -> float:
     """Net applied force [N] when the rod has first travelled ``travel`` [m] from rest.
 
     Takes a :class:`DynamicRecord` or ``(time [s], force [N], displacement [m])``. The force
@@ -532,7 +543,7 @@ def breakaway_force(record_or_time, force=None, displacement=None, *, travel=BRE
     return float(np.polyval(line, t_cross))
 
 
-def ramp_fit(record: DynamicRecord, *, travel=BREAKAWAY_TRAVEL) -> tuple[float, float]:
+def ramp_fit(record: DynamicRecord, *, travel: float = BREAKAWAY_TRAVEL) -> tuple[float, float]:
     """(rate [N/s], start time [s]) of the straight line fitted to a ramp test's force.
 
     Fitted over the samples between 10 % of the force reached at breakaway (or of the peak
@@ -550,7 +561,9 @@ def ramp_fit(record: DynamicRecord, *, travel=BREAKAWAY_TRAVEL) -> tuple[float, 
     return float(rate), float(-intercept / rate)
 
 
-def validate_breakaway(model: FrictionModel, records, *, travel=BREAKAWAY_TRAVEL) -> pd.DataFrame:
+def validate_breakaway(
+    model: FrictionModel, records: Iterable[DynamicRecord], *, travel: float = BREAKAWAY_TRAVEL
+) -> pd.DataFrame:
     """Breakaway forces of the ramp tests, measured and simulated with ``model``.
 
     Each breakaway record's ramp (:func:`ramp_fit`: the straight line the machine followed,
@@ -703,7 +716,11 @@ def _pressure_law(pressure, value, stderr, name):
 
 
 def identify_dynamic(
-    records, model: FrictionModel, *, progress=None, travel=BREAKAWAY_TRAVEL
+    records: Sequence[DynamicRecord],
+    model: FrictionModel,
+    *,
+    progress: Callable[..., Any] | None = None,
+    travel: float = BREAKAWAY_TRAVEL,
 ) -> DynamicIdentification:
     """Identify sigma_0 [N/m] and sigma_1 [N*s/m] from presliding records; validate on ramps.
 

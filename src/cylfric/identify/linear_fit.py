@@ -16,6 +16,7 @@ physical range); the result is a :class:`~cylfric.model.FrictionModel` in SI.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -29,6 +30,11 @@ from .pressure_fit import (
     information_criteria,
 )
 from .stribeck_fit import robust_least_squares
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from numpy.typing import ArrayLike
 
 __all__ = ["fit_linear_surface", "COMPONENTS"]
 
@@ -49,18 +55,18 @@ _NOT_IN_LAW = {
 
 
 def fit_linear_surface(
-    velocity,
-    pressure,
-    friction,
+    velocity: ArrayLike,
+    pressure: ArrayLike,
+    friction: ArrayLike,
     *,
-    friction_law="stribeck",
-    fixed=None,
-    sigma=None,
-    groups=None,
-    loss="soft_l1",
-    reference="mean",
-    not_identified=None,
-):
+    friction_law: Literal["stribeck", "coulomb_viscous", "coulomb"] = "stribeck",
+    fixed: Mapping[str, Any] | None = None,
+    sigma: ArrayLike | None = None,
+    groups: ArrayLike | None = None,
+    loss: str = "soft_l1",
+    reference: str = "mean",
+    not_identified: Mapping[str, Any] | None = None,
+) -> SurfaceFit:
     """Fit F(v, p) with linear pressure laws, bounded to the physical range.
 
     Parameters

@@ -28,11 +28,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from ..model import PARAMETER_BOUNDS, FrictionModel
 from .motion_plausibility import check_plausibility
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.io.motion_config import MotionRecord
+
+    from ..io.motion_config import MotionConfig
 
 __all__ = [
     "MotionFit",
@@ -59,7 +70,7 @@ MIN_PRESSURE_SPREAD = 1e5
 """Pressure spread [Pa] below which the refinement fits constants (no pressure slope)."""
 
 
-def central_difference(values, step):
+def central_difference(values: ArrayLike, step: float) -> np.ndarray:
     """Derivative by central differences (one-sided at the two ends).
 
     Parameters
@@ -87,7 +98,9 @@ def central_difference(values, step):
     return out
 
 
-def motion_signals(time, position, *, cutoff=100.0, order=4):
+def motion_signals(
+    time: ArrayLike, position: ArrayLike, *, cutoff: float = 100.0, order: int = 4
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Filtered position, velocity and acceleration of a uniformly sampled record.
 
     Parameters
@@ -209,7 +222,7 @@ class MotionFit:
     joint: dict | None = None
     flags: tuple = field(default=())
 
-    def predict(self, velocity, acceleration):
+    def predict(self, velocity: ArrayLike, acceleration: ArrayLike) -> np.ndarray:
         """Force [N] of the identified IDIM at velocity [m/s] and acceleration [m/s^2]."""
         v = np.asarray(velocity, dtype=float)
         W = _regressors(v, np.asarray(acceleration, dtype=float), self.per_direction)
@@ -295,7 +308,13 @@ def _names(per_direction):
     return ("mass", "F_v", "F_c", "offset")
 
 
-def fit_motion(record, config=None, *, per_direction=False, plausibility=None):
+def fit_motion(
+    record: MotionRecord | StrPath,
+    config: MotionConfig | None = None,
+    *,
+    per_direction: bool = False,
+    plausibility: Mapping[str, Any] | None = None,
+) -> MotionFit:
     """Identify mass, viscous and Coulomb friction and offset from a logged motion (IDIM-LS).
 
     Parameters
@@ -339,6 +358,7 @@ def fit_motion(record, config=None, *, per_direction=False, plausibility=None):
                 "the signals"
             )
         record = read_motion_record(record, config)
+    record = cast("MotionRecord", record)  # a record (or an object with its signals)
     if config is None:
         config = MotionConfig(signals={})
     _check_finite(record)
@@ -445,7 +465,7 @@ def fit_motion(record, config=None, *, per_direction=False, plausibility=None):
     return replace(fit, refinement=refinement)
 
 
-def _check_finite(record):
+def _check_finite(record) -> None:
     """Refuse a record (also one built in Python) holding NaN or inf in a signal it uses."""
     for name in ("time", "position", "force", "pressure_a", "pressure_b"):
         values = getattr(record, name)
@@ -476,7 +496,12 @@ def _least_squares(W, F, file, names):
 
 
 def refine_pressure_model(
-    fit: MotionFit, config, *, velocity=None, pressure_a=None, pressure_b=None
+    fit: MotionFit,
+    config: MotionConfig,
+    *,
+    velocity: np.ndarray | None = None,
+    pressure_a: np.ndarray | None = None,
+    pressure_b: np.ndarray | None = None,
 ) -> PressureRefinement:
     """Refine the friction of an IDIM fit to a pressure-dependent steady-state model.
 

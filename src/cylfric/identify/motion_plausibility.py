@@ -37,8 +37,16 @@ not told apart from a genuine small motion by its magnitudes and is not flagged.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from numpy.typing import ArrayLike
+
+    from cylfric.identify.motion import MotionFit
 
 __all__ = ["PlausibilityFlag", "LIMITS", "CHECKS", "check_plausibility", "record_evidence"]
 
@@ -90,7 +98,7 @@ class PlausibilityFlag:
         return asdict(self)
 
 
-def record_evidence(signals: dict, position) -> dict:
+def record_evidence(signals: Mapping[str, np.ndarray], position: ArrayLike) -> dict[str, float]:
     """What the record shows: stroke [m], fastest speed [m/s], largest |acceleration|
     [m/s^2] and largest |force| [N] (the regression signals of a fit; the stroke of the
     full-rate position)."""
@@ -224,7 +232,9 @@ CHECKS = {
 """Check name -> ``check(fit, evidence, limits) -> list of PlausibilityFlag``."""
 
 
-def check_plausibility(fit, position, **limits) -> tuple:
+def check_plausibility(
+    fit: MotionFit, position: ArrayLike, **limits: float
+) -> tuple[PlausibilityFlag, ...]:
     """Flags of the implausible magnitudes of a motion fit.
 
     Parameters

@@ -21,19 +21,35 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
+    from cylfric.identify.motion import MotionFit
+    from cylfric.io.motion_config import MotionConfig
 
 __all__ = ["ServoReplay", "controller_output", "replay_closed_loop", "relative_error"]
 
 
-def relative_error(measured, simulated) -> float:
+def relative_error(measured: ArrayLike, simulated: ArrayLike) -> float:
     """Relative error norm ||measured - simulated|| / ||measured|| [-] (the benchmark's)."""
     measured = np.asarray(measured, dtype=float)
     return float(np.linalg.norm(measured - np.asarray(simulated)) / np.linalg.norm(measured))
 
 
-def controller_output(reference, position, *, kp, kv, sample_time, saturation=math.inf):
+def controller_output(
+    reference: ArrayLike,
+    position: ArrayLike,
+    *,
+    kp: float,
+    kv: float,
+    sample_time: float,
+    saturation: float = math.inf,
+) -> np.ndarray:
     """The cascade P-P controller's output from recorded signals (no plant).
 
     Parameters
@@ -112,22 +128,22 @@ def _step_parameters(fit):
 
 
 def replay_closed_loop(
-    fit,
-    time,
-    reference,
-    measured_position,
-    measured_force,
+    fit: MotionFit,
+    time: ArrayLike,
+    reference: ArrayLike,
+    measured_position: ArrayLike,
+    measured_force: ArrayLike,
     *,
-    kp,
-    kv,
-    force_scale,
-    saturation=math.inf,
-    disturbance=None,
-    substeps=10,
-    border=50,
-    cutoff=100.0,
-    order=4,
-):
+    kp: float,
+    kv: float,
+    force_scale: float,
+    saturation: float = math.inf,
+    disturbance: ArrayLike | None = None,
+    substeps: int = 10,
+    border: int = 50,
+    cutoff: float | int = 100.0,
+    order: float | int = 4,
+) -> ServoReplay:
     """Simulate an identified axis in its recorded servo loop and compare with the record.
 
     Parameters
@@ -215,7 +231,7 @@ def replay_closed_loop(
     )
 
 
-def validate_on_record(fit, path, config) -> ServoReplay:
+def validate_on_record(fit: MotionFit, path: StrPath, config: MotionConfig) -> ServoReplay:
     """Closed-loop replay of ``fit`` on a second record, as ``config.validation`` describes.
 
     Parameters

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.optimize import curve_fit
@@ -23,6 +24,11 @@ from ..friction import stribeck_unchecked
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS, PRESSURE_LAWS, exponential_by_slope
 from ..model import PARAMETER_BOUNDS, FrictionModel
 from .stribeck_fit import design_columns, robust_least_squares, solve_linear
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping
+
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "PressureLawFit",
@@ -59,7 +65,7 @@ def _rate(c):
     return c if abs(c) >= _MIN_RATE else math.copysign(_MIN_RATE, c)
 
 
-def information_criteria(rss, n, k):
+def information_criteria(rss: float, n: int, k: int) -> tuple[float, float]:
     """Gaussian AIC and BIC from the residual sum of squares ``rss`` [N^2]."""
     n = max(n, 1)
     rss = max(rss, 1e-300)
@@ -109,7 +115,14 @@ class PressureLawFit:
         return {"law": self.law, **self.coefficients}
 
 
-def regress_parameters(pressure, values, stderr=None, *, parameter="", laws=("linear",)):
+def regress_parameters(
+    pressure: ArrayLike,
+    values: ArrayLike,
+    stderr: ArrayLike | None = None,
+    *,
+    parameter: str = "",
+    laws: Iterable[str] = ("linear",),
+) -> dict[str, PressureLawFit]:
     """Weighted regression of one parameter on pressure with each law in ``laws``.
 
     Parameters
@@ -200,18 +213,18 @@ def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
 
 
 def fit_surface(
-    velocity,
-    pressure,
-    friction,
+    velocity: ArrayLike,
+    pressure: ArrayLike,
+    friction: ArrayLike,
     *,
-    pressure_law="linear",
-    fixed=None,
-    loss="soft_l1",
-    start=None,
-    reference="mean",
-    sigma=None,
-    groups=None,
-):
+    pressure_law: str = "linear",
+    fixed: Mapping[str, Any] | None = None,
+    loss: str = "soft_l1",
+    start: FrictionModel | None = None,
+    reference: str = "mean",
+    sigma: ArrayLike | None = None,
+    groups: ArrayLike | None = None,
+) -> SurfaceFit:
     """One fit of the whole surface F(v, p) with pressure laws for F_c, F_s and sigma_2.
 
     Parameters

@@ -7,12 +7,19 @@ eq. 4.4) of the whole model refit with alpha and v_r held.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pandas as pd
 from scipy.optimize import minimize
 
 from ..model import FrictionModel
 from .stribeck_fit import design_columns, solve_linear
+
+if TYPE_CHECKING:
+    from typing import Any
+
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "rmse_at",
@@ -30,7 +37,9 @@ THESIS_V_R = (0.005, 0.00743, 0.010, 0.015)
 """v_r values of thesis Table 4.4 [m/s]; Tables 4.2/4.3 use 7.43 and 10 mm/s."""
 
 
-def rmse_at(velocity, pressure, friction, v_r, alpha):
+def rmse_at(
+    velocity: ArrayLike, pressure: ArrayLike, friction: ArrayLike, v_r: float, alpha: float
+) -> float:
     """RMSE [N] of the linear-law model refit at fixed ``v_r`` [m/s] and ``alpha`` [-]."""
     speed = np.abs(np.asarray(velocity, dtype=float))
     p_bar = np.asarray(pressure, dtype=float) / 1e5
@@ -40,7 +49,15 @@ def rmse_at(velocity, pressure, friction, v_r, alpha):
     return float(np.sqrt(np.mean((a @ coef - force) ** 2)))
 
 
-def refit_at(velocity, pressure, friction, v_r, alpha, *, reference="mean"):
+def refit_at(
+    velocity: ArrayLike,
+    pressure: ArrayLike,
+    friction: ArrayLike,
+    v_r: float,
+    alpha: float,
+    *,
+    reference: str = "mean",
+) -> tuple[FrictionModel, float]:
     """The linear-law model refit with ``v_r`` [m/s] and ``alpha`` [-] held: (model, RMSE [N]).
 
     The six pressure-law coefficients of F_c, F_s and sigma_2 come from one linear
@@ -66,7 +83,9 @@ def refit_at(velocity, pressure, friction, v_r, alpha, *, reference="mean"):
     return model, rmse
 
 
-def sensitivity_refits(velocity, pressure, friction, *, reference="mean"):
+def sensitivity_refits(
+    velocity: ArrayLike, pressure: ArrayLike, friction: ArrayLike, *, reference: str = "mean"
+) -> list[dict[str, Any]]:
     """The refits of thesis Figs. 4.4-4.12: a list of dicts ``panel``, ``alpha [-]``,
     ``v_r [m/s]``, ``rmse [N]``, ``model`` (:class:`~cylfric.model.FrictionModel`).
 
@@ -83,7 +102,14 @@ def sensitivity_refits(velocity, pressure, friction, *, reference="mean"):
     return out
 
 
-def sensitivity_grid(velocity, pressure, friction, *, alphas=None, v_rs=None):
+def sensitivity_grid(
+    velocity: ArrayLike,
+    pressure: ArrayLike,
+    friction: ArrayLike,
+    *,
+    alphas: ArrayLike | None = None,
+    v_rs: ArrayLike | None = None,
+) -> tuple[pd.DataFrame, dict[str, float]]:
     """RMSE over a grid of alpha and v_r, and the recommended fixed values.
 
     Returns a DataFrame with columns ``alpha [-]``, ``v_r [m/s]``, ``rmse [N]``, and the
@@ -127,7 +153,7 @@ def sensitivity_grid(velocity, pressure, friction, *, alphas=None, v_rs=None):
     }
 
 
-def thesis_tables(velocity, pressure, friction):
+def thesis_tables(velocity: ArrayLike, pressure: ArrayLike, friction: ArrayLike) -> pd.DataFrame:
     """Tables 4.2-4.4 layout: one row per (table, alpha, v_r) with the RMSE [N].
 
     ``table`` is ``"4.2"`` (alpha varies, v_r = 7.43 mm/s), ``"4.3"`` (alpha varies,

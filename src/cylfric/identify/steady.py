@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -41,6 +42,11 @@ from .stribeck_fit import (
     StribeckFit,
     fit_stribeck,
 )
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from matplotlib.figure import Figure
 
 __all__ = [
     "identify",
@@ -73,12 +79,12 @@ fixed sigma_2 adds a known viscous term ``sigma_2 |v|``. F_s, v_r and alpha shap
 Stribeck dip, which such data cannot show: holding them is refused."""
 
 
-def _distinct_speeds(speed, relative=0.1):
+def _distinct_speeds(speed, relative: float = 0.1):
     s = np.sort(np.abs(speed))
     return 1 + int(np.sum(np.diff(s) > relative * s[1:])) if s.size else 0
 
 
-def validity_of(points) -> dict:
+def validity_of(points: pd.DataFrame) -> dict[str, float]:
     """The ranges a points table covers: ``pressure_min/max`` [Pa], ``velocity_min/max`` [m/s].
 
     The pressure range starts at 0 Pa at the lowest: the mean of a noisy pressure channel at
@@ -192,7 +198,7 @@ class Identification:
         )
         return html_summary(self.model, title="Identification") + fit
 
-    def plot(self):
+    def plot(self) -> Figure:
         """Thesis Fig. 4.1: the points per pressure, the model and its 95 % band of the mean
         (:func:`cylfric.report.figures.figure_fit`). Returns the matplotlib Figure."""
         from ..report.figures import figure_fit  # the plotting module; it imports no identify
@@ -223,7 +229,7 @@ def _per_pressure(points, levels, fixed):
     return pd.DataFrame(rows), fits
 
 
-def _check_per_pressure(per_pressure, fits):
+def _check_per_pressure(per_pressure, fits) -> None:
     """Warn about failed fits and parameters that fall significantly as pressure rises."""
     for fit, (_, row) in zip(fits, per_pressure.iterrows(), strict=True):
         if not fit.success:
@@ -250,7 +256,7 @@ def _check_per_pressure(per_pressure, fits):
             )
 
 
-def point_errors(points):
+def point_errors(points: pd.DataFrame) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(sigma [N], groups) of a points table for the weighted, run-clustered surface fit.
 
     ``sigma`` is each window's standard error ``friction_std / sqrt(n)`` (floored at a tenth
@@ -274,7 +280,9 @@ STRONG_EVIDENCE_BIC = 10.0
 evidence on the scale of Kass & Raftery 1995)."""
 
 
-def unphysical(model, validity, *, points=41):
+def unphysical(
+    model: FrictionModel, validity: Mapping[str, float], *, points: int = 41
+) -> str | None:
     """Why a model is unphysical within the validity pressures, or None.
 
     Checks F_c >= 0, F_s >= F_c and sigma_2 >= 0 at ``points`` pressures over the range.
@@ -434,10 +442,10 @@ def _core(points, levels, *, pressure_law, fixed, notes, validity):
 def identify(
     points: pd.DataFrame,
     *,
-    fixed=None,
-    pressure_law="linear",
-    per_direction=False,
-    sensitivity=True,
+    fixed: Mapping[str, Any] | None = None,
+    pressure_law: str = "linear",
+    per_direction: bool = False,
+    sensitivity: bool = True,
 ) -> Identification:
     """Identify the pressure-dependent friction model from a points table.
 

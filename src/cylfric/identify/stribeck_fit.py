@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -23,6 +24,11 @@ from ..friction import (
     stribeck_velocity,
 )
 from ..model import PARAMETER_BOUNDS, STEADY_PARAMETERS
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping
+
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "StribeckFit",
@@ -47,7 +53,7 @@ class IdentificationWarning(UserWarning):
     """The data cannot support part of the model; the result says what was done instead."""
 
 
-def design_columns(speed, pressure, v_r, alpha):
+def design_columns(speed: np.ndarray, pressure: np.ndarray, v_r: float, alpha: float) -> np.ndarray:
     """Columns of the model linear in the other coefficients at fixed ``v_r``, ``alpha``.
 
     Eq. 2.7 with linear pressure laws is linear in (a_c, b_c, a_s, b_s, a_2, b_2):
@@ -59,7 +65,13 @@ def design_columns(speed, pressure, v_r, alpha):
     return np.column_stack([1 - e, pressure * (1 - e), e, pressure * e, speed, pressure * speed])
 
 
-def robust_least_squares(residuals, x0, bounds, loss="soft_l1", jac="2-point"):
+def robust_least_squares(
+    residuals: Callable[[np.ndarray], np.ndarray],
+    x0: ArrayLike,
+    bounds: tuple[ArrayLike, ArrayLike],
+    loss: str = "soft_l1",
+    jac: str | Callable[[np.ndarray], np.ndarray] = "2-point",
+) -> Any:
     """Bounded least squares; a robust ``loss`` refit scaled by the first fit's residual spread.
 
     A plain fit finds the residual spread (1.4826 MAD); the robust refit from there uses it
@@ -81,7 +93,7 @@ def robust_least_squares(residuals, x0, bounds, loss="soft_l1", jac="2-point"):
     )
 
 
-def solve_linear(a, y):
+def solve_linear(a: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Least-squares coefficients of ``a @ c ~ y`` by column-scaled normal equations.
 
     About five times faster than ``numpy.linalg.lstsq`` for the tall, narrow design matrices
@@ -181,7 +193,14 @@ def _start_values(speed, friction, fixed):
     return start
 
 
-def fit_stribeck(velocity, friction, *, fixed=None, loss="soft_l1", start=None):
+def fit_stribeck(
+    velocity: ArrayLike,
+    friction: ArrayLike,
+    *,
+    fixed: Mapping[str, Any] | None = None,
+    loss: Literal["linear", "soft_l1", "huber"] = "soft_l1",
+    start: Mapping[str, Any] | None = None,
+) -> StribeckFit:
     """Fit eq. 2.7 to steady-state points.
 
     Parameters

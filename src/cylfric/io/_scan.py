@@ -24,7 +24,7 @@ _POW10 = np.array([10.0**k for k in range(23)])
 
 
 @njit(cache=True, nogil=True)
-def scan_lines(buf):
+def scan_lines(buf: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Line starts, ends (excluding CR/LF) and kinds (0 blank, 1 numeric, 2 text)."""
     n = buf.shape[0]
     count = 1
@@ -130,7 +130,15 @@ def _parse_number(buf, i, end, decimal):
 
 
 @njit(cache=True, nogil=True)
-def parse_block(buf, starts, ends, lines, ncols, sep, decimal):
+def parse_block(
+    buf: np.ndarray,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    lines: np.ndarray,
+    ncols: int,
+    sep: int,
+    decimal: int,
+) -> tuple[np.ndarray, int, int, int]:
     """Parse ``lines`` (indices of numeric lines) into an (n, ncols) float array.
 
     The array is column-major (the transpose of an (ncols, n) block): each column is one

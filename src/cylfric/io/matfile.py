@@ -3,15 +3,25 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .text import BenchFileError
 
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+
+    from cylfric._typing import StrPath
+
 __all__ = ["read_mat"]
 
 
-def read_mat(path, *, variables=None, units=None):
+def read_mat(
+    path: StrPath, *, variables: Sequence[str] | None = None, units: Mapping[str, Any] | None = None
+) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read the vector variables of a MATLAB v4-v7.2 ``.mat`` file.
 
     Parameters

@@ -46,11 +46,15 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..units import UnitError, parse_quantity, unit_dimension
 from .text import BenchFileError
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
 
 __all__ = [
     "MotionConfig",
@@ -188,7 +192,7 @@ class MotionConfig:
         )
 
 
-def load_motion_config(path) -> MotionConfig:
+def load_motion_config(path: StrPath) -> MotionConfig:
     """Read and check ``motion.toml``.
 
     Parameters
@@ -300,7 +304,7 @@ def _line_of(path, key, table=None) -> int | None:
     return None
 
 
-def _validate(doc, path):
+def _validate(doc, path) -> None:
     """Raise BenchFileError naming the key (and its line) of the first schema violation."""
     import jsonschema
 
@@ -397,7 +401,7 @@ def _strip_unit(name: str) -> str:
     return name.rsplit(" [", 1)[0] if name.endswith("]") and " [" in name else name
 
 
-def read_motion_record(path, config: MotionConfig) -> MotionRecord:
+def read_motion_record(path: StrPath, config: MotionConfig) -> MotionRecord:
     """Read the signals that ``config`` names from a ``.mat`` or bench text record.
 
     Parameters

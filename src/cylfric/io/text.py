@@ -19,10 +19,19 @@ import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..units import UnitError, to_si, unit_dimension
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    import pandas as pd
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "BenchFileError",
@@ -49,14 +58,18 @@ def escape_control(text: str) -> str:
 class BenchFileError(ValueError):
     """A bench file cannot be read; the message names the file, the line and what was expected."""
 
-    def __init__(self, path, message, line=None):
+    def __init__(self, path: StrPath, message: str, line: int | None = None) -> None:
         self.path = str(path)
         self.line = line
         self.message = message
         where = f"{self.path}" + (f", line {line}" if line is not None else "")
         super().__init__(escape_control(f"{where}: {message}"))
 
-    def __reduce__(self):  # pickled whole (extraction sends errors between processes)
+    def __reduce__(
+        self,
+    ) -> tuple[
+        type[BenchFileError], tuple[str, str, int | None]
+    ]:  # pickled whole (extraction sends errors between processes)
         return (type(self), (self.path, self.message, self.line))
 
 
@@ -180,15 +193,15 @@ def _decode(raw: bytes, path, encoding=None, line=None) -> str:
 
 
 def read_bench_text(
-    path,
+    path: StrPath,
     *,
-    columns=None,
-    units=None,
-    delimiter="auto",
-    decimal="auto",
-    encoding=None,
-    roles=None,
-):
+    columns: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+    delimiter: str = "auto",
+    decimal: str = "auto",
+    encoding: str | None = None,
+    roles: Mapping[str, str] | None = None,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a bench text file into a DataFrame in SI; see :func:`read_bench_arrays`.
 
     Returns ``(data, metadata)`` with ``data`` a pandas DataFrame whose column names carry
@@ -210,15 +223,15 @@ def read_bench_text(
 
 
 def read_bench_arrays(
-    path,
+    path: StrPath,
     *,
-    columns=None,
-    units=None,
-    delimiter="auto",
-    decimal="auto",
-    encoding=None,
-    roles=None,
-):
+    columns: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+    delimiter: str = "auto",
+    decimal: str = "auto",
+    encoding: str | None = None,
+    roles: Mapping[str, Any] | None = None,
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Read a bench text file into SI arrays.
 
     Parameters
@@ -437,7 +450,7 @@ def read_bench_arrays(
     return data, metadata
 
 
-def data_row_line(path, row: int) -> int | None:
+def data_row_line(path: StrPath, row: int) -> int | None:
     """1-based line of the file holding data row ``row`` (0-based, over all segments).
 
     The rows of :func:`read_bench_arrays` are the file's numeric lines in order; this maps a
@@ -558,7 +571,13 @@ def _column_labels(names):
     return labels
 
 
-def si_columns(path, names, units, values, roles=None):
+def si_columns(
+    path: StrPath,
+    names: Sequence[str],
+    units: Sequence[str],
+    values: ArrayLike,
+    roles: Mapping[str, Any] | None = None,
+) -> tuple[dict[str, np.ndarray], list[str]]:
     """Named columns with their units as the readers' SI dict (``"time [s]"``, ...).
 
     ``values`` is an (n, len(names)) array; quantities are recognised by name (or chosen by
@@ -570,7 +589,7 @@ def si_columns(path, names, units, values, roles=None):
     return _assemble([(0, hdr, np.asarray(values, dtype=float), 1)], Path(path), roles or {})
 
 
-def _assemble(frames, path, roles, own=False):
+def _assemble(frames, path, roles, own: bool = False):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column.
 
     ``own``: the blocks are the reader's own arrays, converted in place (no copy); else the
@@ -636,11 +655,16 @@ def _assemble(frames, path, roles, own=False):
     return {k: np.concatenate([p[k] for p in parts]) for k in keys}, col_units
 
 
-def read_mts_text(path, **kwargs):
+def read_mts_text(path: StrPath, **kwargs: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a testing-machine text export (MTS-like). See :func:`read_bench_text`."""
     return read_bench_text(path, **kwargs)
 
 
-def read_delimited(path, columns=None, units=None, **kwargs):
+def read_delimited(
+    path: StrPath,
+    columns: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+    **kwargs: Any,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a plain delimited file, with or without a header row. See :func:`read_bench_text`."""
     return read_bench_text(path, columns=columns, units=units, **kwargs)

@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._atomic import atomic_write_bytes, atomic_write_text
+
+if TYPE_CHECKING:
+    from .._typing import StrPath
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "write_mts_text", "write_manifest"]
 
@@ -29,7 +33,7 @@ def _block(columns: dict, decimals: dict) -> bytes:
 
 
 def write_mts_text(
-    path,
+    path: StrPath,
     segments: list[dict],
     *,
     header: dict,
@@ -80,7 +84,7 @@ def write_mts_text(
     return atomic_write_bytes(path, out.getvalue())
 
 
-def write_manifest(path, rows: list[tuple[str, float, float]]) -> Path:
+def write_manifest(path: StrPath, rows: list[tuple[str, float, float]]) -> Path:
     """Write ``manifest.csv`` with columns ``file,pressure_bar,velocity_mm_s``."""
     text = "file,pressure_bar,velocity_mm_s\n" + "".join(
         f"{name},{p:g},{v:g}\n" for name, p, v in rows

@@ -28,6 +28,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import TYPE_CHECKING, cast, overload
 
 import numpy as np
 
@@ -55,6 +56,18 @@ from .names import (
     _si_unit,
     engineering_unit,
 )
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Sequence
+    from typing import Any
+
+    import pandas as pd
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
+
+    from .._typing import StrPath
+
 
 __all__ = [
     "FrictionModel",
@@ -204,26 +217,26 @@ class FrictionModel:
 
     def __init__(
         self,
-        coefficients=None,
+        coefficients: Mapping[str, Any] | None = None,
         *,
-        pressure_law="linear",
-        friction_law="stribeck",
-        sigma_0=None,
-        sigma_1=None,
-        dynamic_status=None,
-        reference="mean",
-        simulation_law="lugre",
-        stderr=None,
-        fixed=(),
-        bounds=None,
-        covariance=None,
-        statistics=None,
-        validity=None,
-        provenance=None,
-        not_identified=None,
-        record=None,
-        influence=None,
-    ):
+        pressure_law: str = "linear",
+        friction_law: str = "stribeck",
+        sigma_0: float | Mapping[str, Any] | None = None,
+        sigma_1: float | Mapping[str, Any] | None = None,
+        dynamic_status: Mapping[str, Any] | None = None,
+        reference: str = "mean",
+        simulation_law: str = "lugre",
+        stderr: Mapping[str, Any] | None = None,
+        fixed: Iterable[str] = (),
+        bounds: Mapping[str, Any] | None = None,
+        covariance: tuple[Sequence[str], np.ndarray] | None = None,
+        statistics: Mapping[str, Any] | None = None,
+        validity: Mapping[str, Any] | None = None,
+        provenance: Mapping[str, Any] | None = None,
+        not_identified: Mapping[str, Any] | None = None,
+        record: Mapping[str, Any] | None = None,
+        influence: tuple[Sequence[str], np.ndarray] | None = None,
+    ) -> None:
         if coefficients is None:
             coefficients = THESIS_2016.coefficients
         if pressure_law not in PRESSURE_LAWS:
@@ -376,7 +389,7 @@ class FrictionModel:
             "record": dict(self.record),
         }
 
-    def replace(self, **changes) -> FrictionModel:
+    def replace(self, **changes: Any) -> FrictionModel:
         """A copy with some constructor arguments changed (``model.replace(sigma_0=2e6)``).
 
         Changing a coefficient drops the covariance unless a new one is given. A model read
@@ -404,7 +417,7 @@ class FrictionModel:
         return model
 
     # ------------------------------------------------------------------ views
-    def coefficients(self, *, include_dynamic=True) -> dict:
+    def coefficients(self, *, include_dynamic: bool = True) -> dict:
         """The coefficient set (SI) for :func:`cylfric.friction.params_at_pressure`.
 
         Constants are floats, pressure laws dicts (with ``"law"`` when it differs from
@@ -444,7 +457,7 @@ class FrictionModel:
         """Names of the fitted (varying) coefficients."""
         return tuple(p.name for p in self.parameters.values() if p.vary and p.value is not None)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         laws = ", ".join(f"{n}: {self.laws[n]}" for n in self.identified)
         return (
             f"FrictionModel({self.friction_law}, pressure laws {{{laws}}}, "
@@ -452,11 +465,13 @@ class FrictionModel:
         )
 
     # ------------------------------------------------------------------ evaluation
-    def operating_pressure(self, pressure_a, pressure_b=None):
+    def operating_pressure(
+        self, pressure_a: ArrayLike, pressure_b: ArrayLike | None = None
+    ) -> np.ndarray:
         """The pressure the laws see [Pa] from chamber pressures [Pa] (the model's rule)."""
         return operating_pressure(pressure_a, pressure_b, reference=self.reference)
 
-    def params_at(self, pressure) -> dict:
+    def params_at(self, pressure: ArrayLike) -> dict[str, float | np.ndarray]:
         """Friction-law parameters (SI) at an operating pressure [Pa], dynamic ones included.
 
         A reduced law is returned as eq. 2.7 with ``F_s = F_c`` (and ``sigma_2 = 0`` for
@@ -476,7 +491,23 @@ class FrictionModel:
         params.setdefault("alpha", 1.0)
         return clamp_roundoff(params)  # a value fitted onto a bound, off by rounding only
 
-    def friction(self, velocity, pressure, *, strict=False):
+    @overload
+    def friction(self, velocity: float, pressure: float, *, strict: bool = False) -> float: ...
+    @overload
+    def friction(
+        self, velocity: np.ndarray, pressure: ArrayLike, *, strict: bool = False
+    ) -> np.ndarray: ...
+    @overload
+    def friction(
+        self, velocity: ArrayLike, pressure: np.ndarray, *, strict: bool = False
+    ) -> np.ndarray: ...
+    @overload
+    def friction(
+        self, velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
+    ) -> np.ndarray | float: ...
+    def friction(
+        self, velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
+    ) -> np.ndarray | float:
         """Steady-state friction force [N] at ``velocity`` [m/s] and operating ``pressure`` [Pa].
 
         Vectorised (velocity and pressure broadcast). Warns with :class:`ValidityWarning`
@@ -493,7 +524,7 @@ class FrictionModel:
     """Constructor arguments :meth:`replace` changed since the model was read from
     :attr:`source` (sorted names; empty for the file's own model)."""
 
-    def _friction(self, velocity, pressure, coefficients, *, checked=True):
+    def _friction(self, velocity, pressure, coefficients, *, checked: bool = True):
         params = self._params(pressure, coefficients)
         if not checked:
             return stribeck_unchecked(velocity, **{k: params[k] for k in STEADY_PARAMETERS})
@@ -509,7 +540,9 @@ class FrictionModel:
         changed = f", with {', '.join(self.replaced)} replaced" if self.replaced else ""
         return type(exc)(f"{self.source}{changed}: {exc}")
 
-    def dynamic_force(self, velocity, z, pressure):
+    def dynamic_force(
+        self, velocity: ArrayLike, z: ArrayLike, pressure: ArrayLike
+    ) -> np.ndarray | float:
         """LuGre friction force [N] (eq. 2.5) at velocity [m/s], bristle deflection z [m]."""
         params = self.params_at(pressure)
         try:
@@ -517,7 +550,9 @@ class FrictionModel:
         except ValueError as exc:
             raise self._named(exc) from None
 
-    def check(self, velocity, pressure, *, strict=False):
+    def check(
+        self, velocity: ArrayLike, pressure: ArrayLike, *, strict: bool = False
+    ) -> np.ndarray:
         """Where (velocity [m/s], pressure [Pa]) lie inside the validity ranges.
 
         ``velocity=None`` checks the pressures only (a simulation passes through every
@@ -571,8 +606,8 @@ class FrictionModel:
     # ------------------------------------------------------------------ uncertainty
     def _jacobian(self, velocity, pressure):
         """d friction / d coefficient [N/unit] for the covariance names, by central differences."""
-        names, matrix = self.covariance
-        base = {n: p.value for n, p in self.parameters.items()}
+        names, matrix = cast("tuple[Sequence[str], np.ndarray]", self.covariance)  # callers check
+        base: dict[str, Any] = {n: p.value for n, p in self.parameters.items()}
         columns = []
         for i, name in enumerate(names):
             scale = math.sqrt(matrix[i, i]) if matrix[i, i] > 0 else 0.0
@@ -587,7 +622,9 @@ class FrictionModel:
             columns.append((values[0] - values[1]) / (2 * h))
         return np.stack(columns, axis=-1)
 
-    def jacobian(self, velocity, pressure, names=None):
+    def jacobian(
+        self, velocity: ArrayLike, pressure: ArrayLike, names: Sequence[str] | None = None
+    ) -> np.ndarray:
         """Sensitivity of the steady-state friction to each coefficient, d F / d theta.
 
         Central differences of :meth:`friction` (no validity check) at (velocity [m/s],
@@ -598,7 +635,7 @@ class FrictionModel:
         """
         if names is None:
             names = [n for n in self.varying if n.partition(".")[0] in STEADY_PARAMETERS]
-        base = {n: p.value for n, p in self.parameters.items()}
+        base: dict[str, Any] = {n: p.value for n, p in self.parameters.items()}  # None: refused
         missing = [n for n in names if base.get(n) is None]
         if missing:
             raise ValueError(f"no value for {missing}; coefficients of this model: {self.varying}")
@@ -623,7 +660,7 @@ class FrictionModel:
         return np.stack(columns, axis=-1)
 
     def _coefficients_from(self, values):
-        out = {}
+        out: dict[str, Any] = {}
         for name in STEADY_PARAMETERS:
             law = self.laws[name]
             if law is None:
@@ -649,7 +686,7 @@ class FrictionModel:
             return float(_normal_quantile(q))
         return stdtrit(dof, q)
 
-    def effective_dof(self, velocity, pressure):
+    def effective_dof(self, velocity: ArrayLike, pressure: ArrayLike) -> np.ndarray:
         """Degrees of freedom [-] of :meth:`standard_error` at (velocity [m/s], pressure [Pa]).
 
         With the runs' :attr:`influence` (a fitted model), Satterthwaite's effective number
@@ -669,7 +706,7 @@ class FrictionModel:
             effective = np.where(total > 0, total**2 / (share**2).sum(axis=-1), np.inf)
         return np.clip(effective, 1.0, np.inf if dof is None else float(dof))
 
-    def standard_error(self, velocity, pressure):
+    def standard_error(self, velocity: ArrayLike, pressure: ArrayLike) -> np.ndarray:
         """Standard error [N] of the mean friction at (velocity [m/s], pressure [Pa]).
 
         First-order propagation of the coefficient covariance: ``sqrt(J C J^T)``.
@@ -686,7 +723,9 @@ class FrictionModel:
         var = np.einsum("...i,ij,...j->...", jac, self.covariance[1], jac)
         return np.sqrt(np.clip(var, 0.0, None))
 
-    def band(self, velocity, pressure, level=0.95, *, strict=False):
+    def band(
+        self, velocity: ArrayLike, pressure: ArrayLike, level: float = 0.95, *, strict: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Confidence band (lower, upper) [N] of the mean friction at ``level``.
 
         The model's friction plus and minus the Student-t quantile (each point's
@@ -701,7 +740,9 @@ class FrictionModel:
         half = self._quantile(level, dof) * self.standard_error(velocity, pressure)
         return f - half, f + half
 
-    def prediction_band(self, velocity, pressure, level=0.95, *, strict=False):
+    def prediction_band(
+        self, velocity: ArrayLike, pressure: ArrayLike, level: float = 0.95, *, strict: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Band (lower, upper) [N] for a new measured point: the mean's band plus the scatter.
 
         Adds the fit's residual standard deviation (``statistics["residual_std"]``) to the
@@ -724,7 +765,7 @@ class FrictionModel:
         half = self._quantile(level, dof) * np.sqrt(se**2 + scatter**2)
         return f - half, f + half
 
-    def correlations(self):
+    def correlations(self) -> tuple[tuple[str, ...], np.ndarray] | None:
         """(names, matrix) of the correlation coefficients of the fitted coefficients."""
         if self.covariance is None:
             return None
@@ -737,7 +778,7 @@ class FrictionModel:
         return names, corr
 
     # ------------------------------------------------------------------ reports
-    def fit_report(self, *, min_correlation=0.1) -> str:
+    def fit_report(self, *, min_correlation: float = 0.1) -> str:
         """A text report like lmfit's ``fit_report``, in engineering units (N, bar, mm/s)."""
         from .text import fit_report
 
@@ -749,7 +790,7 @@ class FrictionModel:
 
         return law_lines(self)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """The coefficients as a DataFrame: SI and engineering values, units, standard errors,
         pressure law, held or fitted (:func:`cylfric.model.text.parameter_table`)."""
         from .text import parameter_table
@@ -762,7 +803,14 @@ class FrictionModel:
 
         return html_summary(self)
 
-    def plot(self, pressures=None, *, velocities=None, level=0.95, ax=None):
+    def plot(
+        self,
+        pressures: Sequence[float] | None = None,
+        *,
+        velocities: Sequence[float] | None = None,
+        level: float = 0.95,
+        ax: Axes | None = None,
+    ) -> Figure:
         """Friction against speed at a few pressures with the band of the mean (if any).
 
         Delegates to :func:`cylfric.report.figures.figure_model` (the report's style).
@@ -794,7 +842,7 @@ class FrictionModel:
         return to_datasheet(self)
 
     @classmethod
-    def from_datasheet(cls, source) -> FrictionModel:
+    def from_datasheet(cls, source: StrPath | Mapping[str, Any]) -> FrictionModel:
         """The model of a datasheet (a path to a JSON file, or the dict); validated."""
         from .serialize import from_datasheet
 

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from datetime import UTC, datetime
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +26,15 @@ from .names import (
     PARAMETER_UNITS,
     STEADY_PARAMETERS,
 )
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from typing import Any, TypeVar
+
+    from .._typing import StrPath
+    from .core import FrictionModel
+
+    _M = TypeVar("_M", bound=FrictionModel)
 
 __all__ = [
     "SCHEMA",
@@ -75,7 +86,7 @@ class DatasheetError(ValueError):
     """A datasheet does not follow the schema; the message names the file and the key."""
 
 
-def clean(value):
+def clean(value: Any) -> Any:
     """JSON-safe copy: NaN/inf -> None, numpy scalars and arrays -> Python, tuples -> lists."""
     if isinstance(value, dict):
         return {str(k): clean(v) for k, v in value.items()}
@@ -101,7 +112,7 @@ def _bound(x):
     return None if not math.isfinite(x) else float(x)
 
 
-def to_datasheet(model) -> dict:
+def to_datasheet(model: FrictionModel) -> dict[str, Any]:
     """The datasheet dict of ``model`` (see the module docstring for who owns which key)."""
     from .. import __version__
 
@@ -165,10 +176,10 @@ def to_datasheet(model) -> dict:
     return clean(sheet)
 
 
-def from_datasheet(cls, source):
+def from_datasheet(cls: type[_M], source: StrPath | Mapping[str, Any]) -> _M:
     """Build ``cls`` (a FrictionModel) from a datasheet path or dict, after validation."""
-    if isinstance(source, str | Path):
-        sheet, where = read_datasheet(source), str(source)
+    if isinstance(source, str | os.PathLike):
+        sheet, where = read_datasheet(source), os.fspath(source)
     else:
         sheet, where = validate(dict(source)), "datasheet"
     model_part = sheet["model"]
@@ -216,15 +227,15 @@ def from_datasheet(cls, source):
         )
     except (ValueError, TypeError) as exc:
         raise DatasheetError(f"{where}: {exc}") from None
-    if isinstance(source, str | Path):
-        model.source = str(source)  # evaluation errors name the file
+    if isinstance(source, str | os.PathLike):
+        model.source = os.fspath(source)  # evaluation errors name the file
     return model
 
 
 def _coefficient_names(parameters, default_law):
     from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 
-    names = set()
+    names: set[str] = set()
     for name, spec in parameters.items():
         if isinstance(spec, dict):
             law = spec.get("law", default_law)
@@ -235,7 +246,7 @@ def _coefficient_names(parameters, default_law):
     return names
 
 
-def _numbers(value, path=""):
+def _numbers(value, path: str = ""):
     """(path, number) of every number in a nested JSON value."""
     if isinstance(value, dict):
         for k, v in value.items():
@@ -286,7 +297,7 @@ def _physical(sheet):
     return None
 
 
-def validate(sheet: dict, *, source="datasheet") -> dict:
+def validate(sheet: dict, *, source: str = "datasheet") -> dict:
     """Raise :class:`DatasheetError` naming the first problem; return ``sheet``.
 
     Checks the schema, that every number is finite (no NaN, no infinity), and the physics
@@ -319,7 +330,7 @@ def validate(sheet: dict, *, source="datasheet") -> dict:
     return sheet
 
 
-def read_datasheet(path) -> dict:
+def read_datasheet(path: StrPath) -> dict[str, Any]:
     """Read and validate a datasheet JSON file (errors name the file)."""
     path = Path(path)
     try:

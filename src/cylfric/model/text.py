@@ -6,14 +6,20 @@ Engineering units throughout (N, bar, mm/s, N*s/mm), as the thesis and its users
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from .names import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from .core import FrictionModel
+
 __all__ = ["law_lines", "fit_report", "format_value", "parameter_table", "html_summary"]
 
 
-def format_value(value, stderr=None, digits=4) -> str:
+def format_value(value: float | None, stderr: float | None = None, digits: int = 4) -> str:
     """``"70.18 ± 0.021"``: the value to ``digits`` significant digits, stderr to two."""
     if value is None:
         return "n/a"
@@ -30,7 +36,7 @@ def _term(model, name):
     return text + ("" if p.vary else " (fixed)"), unit
 
 
-def law_lines(model) -> list[str]:
+def law_lines(model: FrictionModel) -> list[str]:
     """The steady-state laws in engineering units with standard errors, one line each.
 
     ``F_c(p) = 70.18 ± 0.021 N + 0.5 ± 0.00021 N/bar * p``; parameters not identified say so.
@@ -68,7 +74,7 @@ def law_lines(model) -> list[str]:
     return lines
 
 
-def fit_report(model, *, min_correlation=0.1) -> str:
+def fit_report(model: FrictionModel, *, min_correlation: float = 0.1) -> str:
     """lmfit-style report: model, fit statistics, variables ± stderr, correlations, dynamics."""
     stats = model.statistics
     lines = ["[[Model]]"]
@@ -166,7 +172,7 @@ PARAMETER_COLUMNS = (
 """Columns of :func:`parameter_table`."""
 
 
-def parameter_table(model):
+def parameter_table(model: FrictionModel) -> pd.DataFrame:
     """The model's coefficients as a DataFrame, one row each (index: ``"F_c.slope"``, ...).
 
     Columns: ``law`` (the parameter's pressure law), ``value`` and ``stderr`` in SI with
@@ -201,7 +207,7 @@ def parameter_table(model):
     return frame
 
 
-def html_summary(model, title="FrictionModel") -> str:
+def html_summary(model: FrictionModel, title: str = "FrictionModel") -> str:
     """HTML for a notebook: the laws, a table of coefficients with units and standard
     errors in engineering units, the operating-pressure rule and the validity ranges."""
     import html

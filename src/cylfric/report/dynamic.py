@@ -8,6 +8,7 @@ never imports identify).
 from __future__ import annotations
 
 import html
+from typing import TYPE_CHECKING
 
 import matplotlib
 import numpy as np
@@ -16,10 +17,15 @@ from matplotlib.figure import Figure
 
 from .figures import STYLE, log_axis
 
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any as _Results  # identification results, duck-typed: never imported here
+
+
 __all__ = ["figure_dynamic", "dynamic_tables", "dynamic_html"]
 
 
-def figure_dynamic(dynamic) -> Figure:
+def figure_dynamic(dynamic: _Results) -> Figure:
     """Left: net force [N] against displacement [um] of each presliding record's first slow
     cycle, the fitted model's curve and the line of slope sigma_0 (presliding stiffness).
     Right: breakaway force [N] against force rate [N/s], measured and simulated."""
@@ -85,7 +91,7 @@ def _first_cycle(record):
     return slice(max(start - 1, 0), stop)
 
 
-def dynamic_tables(dynamic) -> tuple[pd.DataFrame, pd.DataFrame]:
+def dynamic_tables(dynamic: _Results) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(per-pressure sigma table, breakaway table) in engineering units (bar, N/mm, N*s/mm)."""
     pp = dynamic.per_pressure
     sigma = pd.DataFrame(
@@ -114,7 +120,9 @@ def dynamic_tables(dynamic) -> tuple[pd.DataFrame, pd.DataFrame]:
     return sigma, breakaway
 
 
-def dynamic_html(dynamic, png_base64: str | None, table) -> str:
+def dynamic_html(
+    dynamic: _Results, png_base64: str | None, table: Callable[[pd.DataFrame], str]
+) -> str:
     """The report section (HTML) of the dynamic parameters; ``table`` renders a DataFrame."""
     sigma, breakaway = dynamic_tables(dynamic)
     parts = ["<h2>Dynamic parameters (presliding and breakaway tests)</h2>"]

@@ -5,12 +5,22 @@ from __future__ import annotations
 import base64
 import html
 import math
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
 from ..escape import html_text
 from ..io.writers import atomic_write_text
 from .figures import render_all, save_rendered
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping, Sequence
+    from pathlib import Path
+    from typing import Any
+    from typing import Any as _Results  # identification results, duck-typed: never imported here
+
+    from cylfric._typing import StrPath
+    from cylfric.steady_state import Extraction
 
 __all__ = ["render_report", "write_report", "write_report_folder", "offset_by_pressure"]
 
@@ -43,15 +53,15 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
 
 
 def render_report(
-    sheet,
-    ident,
-    extraction,
-    figures,
+    sheet: Mapping[str, Any],
+    ident: _Results,
+    extraction: Extraction,
+    figures: Iterable[tuple[str, str, bytes]],
     *,
-    title="cylfric friction report",
-    excluded=None,
-    exports=None,
-    dynamic_section=None,
+    title: str = "cylfric friction report",
+    excluded: pd.DataFrame | None = None,
+    exports: Sequence[Mapping[str, Any]] | None = None,
+    dynamic_section: str | None = None,
 ) -> str:
     """HTML text of the report: datasheet summary, figures, tables, data quality."""
     parts = [
@@ -179,7 +189,7 @@ def _engineering_per_pressure(table):
     return out
 
 
-def offset_by_pressure(extraction, t_limit=4.0, smallest=0.5) -> str:
+def offset_by_pressure(extraction: Extraction, t_limit: float = 4.0, smallest: float = 0.5) -> str:
     """HTML: the load-cell offset per pressure level, and whether it changes with pressure.
 
     Each run with windows in both directions has its own offset (F_up + F_down) / 2 [N]. A
@@ -266,14 +276,22 @@ def _quality(extraction) -> str:
     return "\n".join(lines)
 
 
-def write_report(path, text: str):
+def write_report(path: StrPath, text: str) -> Path:
     """Write the report atomically."""
     return atomic_write_text(path, text)
 
 
 def write_report_folder(
-    out, sheet, ident, extraction, excluded=None, *, workers=2, exports=None, dynamic=None
-) -> dict:
+    out: Path,
+    sheet: Mapping[str, Any],
+    ident: _Results,
+    extraction: Extraction,
+    excluded: pd.DataFrame | None = None,
+    *,
+    workers: int = 2,
+    exports: Sequence[Mapping[str, Any]] | None = None,
+    dynamic: _Results | None = None,
+) -> dict[str, Path]:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
     Returns {output name: path}. ``workers=2`` draws on two cores (see

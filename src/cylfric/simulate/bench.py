@@ -19,6 +19,7 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -27,6 +28,13 @@ from ..io.campaign import DYNAMIC_TESTS
 from ..io.writers import write_manifest, write_mts_text
 from . import kernels
 from .plant import THESIS_CYLINDER, Cylinder, FrictionModel
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Mapping, Sequence
+
+    from numpy.typing import ArrayLike
+
+    from cylfric._typing import StrPath
 
 __all__ = [
     "BenchSettings",
@@ -244,7 +252,9 @@ def _stroke_plan(settings: BenchSettings, speed: float, interval: float):
     return length, n
 
 
-def run_plan(speed: float, settings: BenchSettings | None = None, *, slow=False):
+def run_plan(
+    speed: float, settings: BenchSettings | None = None, *, slow: bool = False
+) -> tuple[float, float, int]:
     """Stroke length [m], sample interval [s] and sample count of a run at ``speed`` [m/s].
 
     ``slow`` selects ``slow_interval``. Raises ValueError when the speed does not fit the
@@ -261,7 +271,7 @@ def run_virtual_test(
     speed_mm_s: float,
     settings: BenchSettings | None = None,
     *,
-    rng=None,
+    rng: np.random.Generator | None = None,
     slow: bool | None = None,
 ) -> VirtualRun:
     """Simulate one run of the virtual bench at ``pressure_bar`` [bar] and ``speed_mm_s`` [mm/s].
@@ -337,7 +347,7 @@ def run_file_name(index: int, pressure_bar: float, speed_mm_s: float) -> str:
 _FORCE_SCALE = {"N": 1.0, "kN": 1e-3}
 
 
-def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int):
+def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int) -> None:
     scale = _FORCE_SCALE[s.force_unit]
     units = {"Time": "s", "Axial Displacement": "mm", "Axial Force": s.force_unit}
     decimals = {"Time": 3, "Axial Displacement": 4, "Axial Force": 5 if s.force_unit == "kN" else 2}
@@ -375,12 +385,12 @@ def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int):
 
 
 def generate_campaign(
-    out_dir,
+    out_dir: StrPath,
     settings: BenchSettings | None = None,
     *,
-    progress=None,
+    progress: Callable[..., Any] | None = None,
     workers: int | None = None,
-    tests=("constant-velocity",),
+    tests: Iterable[str] = ("constant-velocity",),
     dynamic: DynamicTestSettings | None = None,
 ) -> dict:
     """Write a virtual campaign: one file per pressure x speed, plus ``manifest.csv``.
@@ -515,7 +525,7 @@ class DynamicTestSettings:
     breakaway_rates: tuple = (50.0, 200.0, 1000.0)  # [N/s]
     breakaway_stop: float = 1.0e-3  # [m] travel at which the machine ends a ramp
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if len(self.presliding_frequencies) != len(self.presliding_periods):
             raise ValueError(
                 "presliding_frequencies and presliding_periods need the same length; got "
@@ -564,7 +574,9 @@ class DynamicRun:
     sample_interval: float
 
 
-def presliding_force(time, amplitude, settings: DynamicTestSettings):
+def presliding_force(
+    time: ArrayLike, amplitude: float, settings: DynamicTestSettings
+) -> np.ndarray:
     """Net force [N] of the presliding test at ``time`` [s] (zero during the hold)."""
     time = np.asarray(time, dtype=float)
     force = np.zeros_like(time)
@@ -595,7 +607,7 @@ def run_dynamic_test(
     *,
     force_rate: float | None = None,
     dynamic: DynamicTestSettings | None = None,
-    rng=None,
+    rng: np.random.Generator | None = None,
 ) -> DynamicRun:
     """Simulate one force-controlled test of the virtual bench.
 
@@ -692,13 +704,15 @@ def run_dynamic_test(
     )
 
 
-def dynamic_file_name(index: int, test: str, pressure_bar: float, force_rate=None) -> str:
+def dynamic_file_name(
+    index: int, test: str, pressure_bar: float, force_rate: float | None = None
+) -> str:
     """``dyn_004_p55bar_breakaway_r200Ns.txt``: the test kind and pressure in the name."""
     rate = "" if force_rate is None or math.isnan(force_rate) else f"_r{force_rate:g}Ns"
     return f"dyn_{index:03d}_p{pressure_bar:g}bar_{test}{rate}.txt"
 
 
-def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int):
+def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int) -> None:
     scale = _FORCE_SCALE[s.force_unit]
     units = {"Time": "s", "Axial Displacement": "mm", "Axial Force": s.force_unit}
     decimals = {
@@ -738,14 +752,14 @@ def _write_dynamic_run(path: Path, run: DynamicRun, s: BenchSettings, index: int
 
 
 def generate_dynamic_tests(
-    out_dir,
+    out_dir: StrPath,
     settings: BenchSettings | None = None,
     *,
-    tests=DYNAMIC_TESTS,
+    tests: Sequence[str] = DYNAMIC_TESTS,
     dynamic: DynamicTestSettings | None = None,
     start_index: int = 0,
-    progress=None,
-) -> list[dict]:
+    progress: Callable[..., Any] | None = None,
+) -> list[dict[str, Any]]:
     """Write presliding and breakaway runs at each pressure of ``settings``.
 
     Returns the manifest rows: ``file``, ``pressure_bar``, ``test``, ``force_rate_N_s``
@@ -782,7 +796,7 @@ def generate_dynamic_tests(
     return rows
 
 
-def write_test_manifest(path, rows) -> Path:
+def write_test_manifest(path: StrPath, rows: Iterable[Mapping[str, Any]]) -> Path:
     """``manifest.csv`` with the test kind: ``file,pressure_bar,velocity_mm_s,test,force_rate_N_s``.
 
     ``rows`` are dicts with ``file``, ``pressure_bar`` [bar], and ``velocity_mm_s`` [mm/s]

@@ -23,7 +23,7 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
-def exp_neg(x):
+def exp_neg(x: float) -> float:
     """exp(-x) for x >= 0, as math.exp to rounding (at most 1 ulp apart) but cheaper where it can.
 
     Below 1e-3 the Taylor series to x^5 (its truncation, < x^6/720 < 1.4e-21, is below double
@@ -38,7 +38,7 @@ def exp_neg(x):
 
 
 @njit(cache=True, inline="always")
-def stribeck_decay(speed, inv_v_r, alpha):
+def stribeck_decay(speed: float, inv_v_r: float, alpha: float) -> float:
     """exp(-(|v|/v_r)^alpha) of g(v) (eq. 2.5) from ``speed = |v|`` and ``1 / v_r`` [-]."""
     u = speed * inv_v_r
     if alpha == 2.0:  # Gaussian Stribeck curve: u*u is exact and avoids pow
@@ -49,13 +49,15 @@ def stribeck_decay(speed, inv_v_r, alpha):
 
 
 @njit(cache=True, inline="always")
-def g_function(speed, F_c, F_s, v_r, alpha):
+def g_function(speed: float, F_c: float, F_s: float, v_r: float, alpha: float) -> float:
     """g(v) of eq. 2.5 for ``speed = |v|`` [N]."""
     return F_c + (F_s - F_c) * stribeck_decay(speed, 1.0 / v_r, alpha)
 
 
 @njit(cache=True, inline="always")
-def z_step(z0, v, h, sigma_0, F_c, F_s, v_r, alpha):
+def z_step(
+    z0: float, v: float, h: float, sigma_0: float, F_c: float, F_s: float, v_r: float, alpha: float
+) -> tuple[float, float]:
     """Exact z over a step at constant v: returns (z(h), integral of z over the step)."""
     if v == 0.0:
         return z0, z0 * h
@@ -74,7 +76,17 @@ def z_step(z0, v, h, sigma_0, F_c, F_s, v_r, alpha):
 
 
 @njit(cache=True, inline="always")
-def lugre_instant(v, z, sigma_0, sigma_1, sigma_2, F_c, F_s, v_r, alpha):
+def lugre_instant(
+    v: float,
+    z: float,
+    sigma_0: float,
+    sigma_1: float,
+    sigma_2: float,
+    F_c: float,
+    F_s: float,
+    v_r: float,
+    alpha: float,
+) -> float:
     """Instantaneous LuGre force (eq. 2.5) [N]."""
     g = g_function(abs(v), F_c, F_s, v_r, alpha)
     dz = v - sigma_0 * abs(v) * z / g
@@ -325,7 +337,9 @@ def _outputs(x, v, z, e, xr, vr, fe, fc, fs, s2, k, c, ki, params, offset):
 
 
 @njit(cache=True, inline="always")
-def _write(out, j, tj, i_grid, mode, sig, inv_dt_s, ramp, x, v, z, e, k, c, ki, params, offset):
+def _write(
+    out, j, tj, i_grid, mode, sig, inv_dt_s, ramp, x, v, z, e, k, c, ki, params, offset
+) -> None:
     """Output point j: position, velocity, z, friction force (eq. 2.5) [N] and the force of
     the drive on the rod [N] (``offset`` added) into ``out[:, j]``."""
     s0, s1, inv_v_r, alpha = params
@@ -558,7 +572,9 @@ def _partials(v, z, sigma_0, F_c, F_s, inv_v_r, alpha, decay):
 
 
 @njit(cache=True, inline="always")
-def lugre_partials(v, z, sigma_0, F_c, F_s, v_r, alpha):
+def lugre_partials(
+    v: float, z: float, sigma_0: float, F_c: float, F_s: float, v_r: float, alpha: float
+) -> tuple[float, float, float, float]:
     """Partial derivatives of dz/dt = v - sigma_0 |v| z / g(v) (eq. 2.5).
 
     Returns ``(d/dv, d/dz, d/dF_c, d/dF_s)`` of dz/dt, with dg/d|v| from eq. 2.5's

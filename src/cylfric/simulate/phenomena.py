@@ -6,20 +6,32 @@ tests can check them and ``docs/make_figures.py`` can draw them.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .plant import AppliedForce, Cylinder, FrictionModel, PrescribedMotion, SpringPull, simulate
+
+if TYPE_CHECKING:
+    from .result import SimulationResult
 
 __all__ = ["stick_slip", "friction_lag", "presliding", "breakaway_force"]
 
 _MASS = 10.0  # [kg], the stick-slip benchmark's mass
 
 
-def _model(sigma_0=1e6, mass=_MASS):
+def _model(sigma_0: float = 1e6, mass=_MASS):
     return FrictionModel(sigma_0=sigma_0, sigma_1=float(np.sqrt(sigma_0 * mass)))
 
 
-def stick_slip(pressure, *, stiffness=2e4, speed=5e-3, duration=10.0, mass=_MASS):
+def stick_slip(
+    pressure: float,
+    *,
+    stiffness: float = 2e4,
+    speed: float = 5e-3,
+    duration: float = 10.0,
+    mass: float = _MASS,
+) -> tuple[SimulationResult, float]:
     """Spring pulled at constant ``speed`` [m/s] through ``stiffness`` [N/m] at ``pressure`` [Pa].
 
     Returns the result and the peak-to-peak spring force over the second half [N] (the
@@ -37,7 +49,14 @@ def stick_slip(pressure, *, stiffness=2e4, speed=5e-3, duration=10.0, mass=_MASS
     return result, float(spring.max() - spring.min())
 
 
-def friction_lag(pressure, *, mean_speed=0.010, amplitude=0.008, frequency=5.0, periods=6):
+def friction_lag(
+    pressure: float,
+    *,
+    mean_speed: float = 0.010,
+    amplitude: float = 0.008,
+    frequency: float = 5.0,
+    periods: int = 6,
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Friction against a sinusoidal velocity ``mean + amplitude sin(2 pi f t)`` [m/s].
 
     Returns (velocity, friction) over the last period and the mean friction difference
@@ -67,7 +86,14 @@ def friction_lag(pressure, *, mean_speed=0.010, amplitude=0.008, frequency=5.0, 
     return v, f, float(np.mean(up - down))
 
 
-def presliding(pressure, *, fraction=0.5, ramp_time=0.5, hold=0.5, sigma_0=1e6):
+def presliding(
+    pressure: float,
+    *,
+    fraction: float = 0.5,
+    ramp_time: float = 0.5,
+    hold: float = 0.5,
+    sigma_0: float = 1e6,
+) -> tuple[SimulationResult, float, float]:
     """Ramp a force to ``fraction * F_c`` [-], hold, release: the spring-like presliding regime.
 
     Returns the result, the displacement at the peak force [m] and ``F_peak / sigma_0`` [m],
@@ -87,7 +113,7 @@ def presliding(pressure, *, fraction=0.5, ramp_time=0.5, hold=0.5, sigma_0=1e6):
     return result, float(at_peak), peak / sigma_0
 
 
-def breakaway_force(pressure, rate, *, sigma_0=1e6):
+def breakaway_force(pressure: float, rate: float, *, sigma_0: float = 1e6) -> float:
     """Breakaway force [N] under an applied force ramp of ``rate`` [N/s].
 
     The breakaway force is the first peak of the friction force: friction rises with the

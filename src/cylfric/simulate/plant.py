@@ -19,6 +19,7 @@ import warnings
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -27,6 +28,12 @@ from ..friction import get_law, law_params
 from ..model import FrictionModel, ValidityWarning
 from . import kernels
 from .result import SimulationResult
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+    from typing import Any
+
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "simulate_batch",
@@ -76,7 +83,7 @@ class Cylinder:
     area_b: float = 0.0
     stroke: float = math.inf
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not (self.mass > 0 and math.isfinite(self.mass)):
             raise ValueError(
                 f"Cylinder mass = {self.mass} is out of range; expected a finite mass > 0 kg"
@@ -85,7 +92,15 @@ class Cylinder:
             raise ValueError("Cylinder areas must be >= 0 m^2")
 
     @classmethod
-    def from_diameters(cls, bore, rod, mass, *, double_rod=False, stroke=math.inf):
+    def from_diameters(
+        cls,
+        bore: float,
+        rod: float,
+        mass: float,
+        *,
+        double_rod: bool = False,
+        stroke: float = math.inf,
+    ) -> Cylinder:
         """Build from bore and rod diameters [m]; ``double_rod`` for a symmetric cylinder."""
         if not 0 <= rod < bore:
             raise ValueError(
@@ -149,7 +164,7 @@ class SpringPull:
     speed: float
     damping: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
             raise ValueError(
                 f"SpringPull stiffness = {self.stiffness} is out of range; expected a finite "
@@ -214,7 +229,9 @@ ROSENBROCK_RTOL = 1e-6
 MAX_STEPS = 50_000_000
 
 
-def rosenbrock_tolerances(rtol, params):
+def rosenbrock_tolerances(
+    rtol: float, params: Mapping[str, Any]
+) -> tuple[float, float, float, float]:
     """Absolute tolerances of the Rosenbrock integrator from its ``rtol`` and the friction.
 
     Position 1 mm, velocity ``v_r``, bristle deflection ``F_c / sigma_0`` (the slip deflection)
@@ -246,7 +263,7 @@ def _rosenbrock_scales(rtol, params):
 def simulate(
     cylinder: Cylinder,
     friction: FrictionModel,
-    drive,
+    drive: PrescribedMotion | AppliedForce | SpringPull | PositionServo,
     duration: float,
     *,
     dt: float = 1e-3,
@@ -330,7 +347,7 @@ def simulate(
     return result
 
 
-def _check_speed(friction: FrictionModel, velocity, strict: bool):
+def _check_speed(friction: FrictionModel, velocity, strict: bool) -> None:
     """Warn (raise with ``strict``) when a simulated speed [m/s] exceeds the model's
     validity speeds: the friction law was extrapolated there. Speeds below the range are
     not flagged (every start from rest passes through them)."""
@@ -351,7 +368,7 @@ def _check_speed(friction: FrictionModel, velocity, strict: bool):
         warnings.warn(message, ValidityWarning, stacklevel=3)
 
 
-def _batch_validity(models, what: str, values, strict: bool):
+def _batch_validity(models, what: str, values, strict: bool) -> None:
     """One warning (or error) naming the sets whose operating ``pressure`` [Pa] or largest
     ``speed`` [m/s] leaves their model's validity range (operating pressure of both
     chambers at the set's pressure; speeds below the range are not flagged)."""
@@ -405,7 +422,7 @@ def _output_samples(duration, dt):
     return None
 
 
-def _check_output_size(size, limit, how, ways_out):
+def _check_output_size(size, limit, how, ways_out) -> None:
     """Refuse, before allocating, outputs above ``limit`` bytes; ``how`` says how the
     estimate came about, ``ways_out`` how to make it smaller."""
     if not limit > 0:
@@ -687,7 +704,7 @@ def _params_checked(friction, pressure):
     return params
 
 
-def _check_friction(friction, params):
+def _check_friction(friction, params) -> None:
     """Clear errors for friction parameters the integrators cannot use (checked once)."""
     if friction.simulation_law != "lugre":
         return
@@ -698,12 +715,12 @@ def _check_friction(friction, params):
 
 
 @functools.lru_cache(maxsize=4096)
-def _check_lugre_numbers(*values):
+def _check_lugre_numbers(*values) -> None:
     """The check of constant parameters, remembered: sweeps re-use the same sets."""
     _check_lugre_arrays(dict(zip(_LUGRE_NAMES, values, strict=True)))
 
 
-def _check_lugre_arrays(shape):
+def _check_lugre_arrays(shape) -> None:
     from ..friction import lugre_force
 
     try:
@@ -758,10 +775,10 @@ class BatchResult:
     drive_force: np.ndarray | None = None
     info: dict = field(default_factory=dict)
 
-    def __len__(self):
+    def __len__(self) -> int:
         return self.position.shape[0]
 
-    def __getitem__(self, i) -> SimulationResult:
+    def __getitem__(self, i: int) -> SimulationResult:
         """Set ``i`` as the :class:`SimulationResult` that :func:`simulate` returns."""
         p = np.full(self.time.shape, self.pressure[i])
         return SimulationResult(
@@ -793,12 +810,15 @@ def _per_set(value, n_sets, name):
 
 
 def simulate_batch(
-    cylinder,
-    models,
-    drive,
+    cylinder: Cylinder | Sequence[Cylinder],
+    models: FrictionModel | Sequence[FrictionModel],
+    drive: AppliedForce
+    | SpringPull
+    | PositionServo
+    | Sequence[AppliedForce | SpringPull | PositionServo],
     duration: float,
     *,
-    pressures=None,
+    pressures: ArrayLike | None = None,
     dt: float = 1e-3,
     record_every: int = 10,
     rtol: float | None = None,

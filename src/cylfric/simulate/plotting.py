@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 
-def plot_result(result, ax=None):
+if TYPE_CHECKING:
+    import numpy as np
+
+    from .result import SimulationResult
+
+
+def plot_result(result: SimulationResult, ax: np.ndarray | None = None) -> np.ndarray:
     """Position [mm], velocity [mm/s] and friction [N] against time [s]; returns the axes."""
     import matplotlib.pyplot as plt
 

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..friction import get_law, law_params, lugre_force, lugre_unchecked
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from typing import Any
 
 
 def solve_reference(
@@ -23,8 +29,8 @@ def solve_reference(
     v0,
     z0,
     *,
-    rtol=1e-9,
-    method="Radau",
+    rtol: float = 1e-9,
+    method: str = "Radau",
 ):
     """Integrate the plant of :mod:`cylfric.simulate.kernels` with scipy.
 
@@ -109,12 +115,12 @@ def solve_reference(
     )
 
 
-def params_const(params, name):
+def params_const(params: Mapping[str, Any], name: str) -> float | np.ndarray:
     value = np.asarray(params[name], dtype=float)
     return float(value.flat[0])
 
 
-def solve_prescribed_reference(time, velocity, z0, params, *, rtol=1e-10):
+def solve_prescribed_reference(time, velocity, z0, params, *, rtol: float = 1e-10):
     """Radau solution of the LuGre bristle equation along a prescribed velocity record."""
     v_r, alpha = params_const(params, "v_r"), params_const(params, "alpha")
     # every pressure-dependent parameter may vary along the record (a pressure signal)

@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 UNITS = {
     "position": "m",
@@ -39,7 +43,7 @@ class SimulationResult:
     outputs: dict
     info: dict = field(default_factory=dict)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """A DataFrame with one column per signal, named with its unit (``"time [s]"``)."""
         import pandas as pd
 
@@ -48,7 +52,7 @@ class SimulationResult:
             columns[f"{name} [{UNITS.get(name, '-')}]"] = values
         return pd.DataFrame(columns)
 
-    def plot(self, ax=None):
+    def plot(self, ax: np.ndarray | None = None) -> np.ndarray:
         """Plot position, velocity and friction force against time (see :mod:`.plotting`)."""
         from .plotting import plot_result
 
