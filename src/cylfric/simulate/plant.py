@@ -50,12 +50,13 @@ MAX_OUTPUT_BYTES = 2**30
 """Default limit [bytes] (1 GiB) of the estimated peak memory of a simulation (above what
 the process held before the call); raise it with ``max_output_bytes=``."""
 
-PEAK_BYTES_PER_SAMPLE = 128
+PEAK_BYTES_PER_SAMPLE = 256
 """Peak memory of :func:`simulate` [bytes per output sample], measured (issue 23): peak RSS
 (``resource.getrusage``) minus the RSS before the call, in a fresh process after a 1 s
 warm-up run, for 2000 s at dt = 1 ms (2e6 samples): 64 for a spring with ``"rosenbrock"``
 or ``"dopri"`` (the 8 output arrays), 104 for ``"fixed"`` and prescribed motion, 112 for an
-applied force or a position servo (their input grid); rounded up to 128."""
+applied force or a position servo (their input grid); 212 once for a position servo in a
+test run beside other processes (tests/test_simulate_limits.py); rounded up to 256."""
 
 BATCH_PEAK_FACTOR = 2.5
 """Peak memory of :func:`simulate_batch` over the arrays it counts (records and input rows)
@@ -313,7 +314,7 @@ def simulate(
     max_output_bytes : float
         Limit of the estimated peak memory [bytes] (default :data:`MAX_OUTPUT_BYTES`,
         1 GiB), checked before anything is allocated: (duration / dt + 1) samples x
-        :data:`PEAK_BYTES_PER_SAMPLE` (128 bytes, measured: the 8 output arrays of 8 bytes
+        :data:`PEAK_BYTES_PER_SAMPLE` (256 bytes, measured: the 8 output arrays of 8 bytes
         and the input grid and working arrays of the integrators).
 
     Returns
