@@ -20,7 +20,13 @@ from ._paths import OutputPathError, failed, os_error_message, refuse_link
 if TYPE_CHECKING:
     from ._typing import StrPath
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "failed", "os_error_message"]
+__all__ = [
+    "atomic_write_bytes",
+    "atomic_write_chunks",
+    "atomic_write_text",
+    "failed",
+    "os_error_message",
+]
 
 _UMASK = os.umask(0o022)
 os.umask(_UMASK)  # read once at import: mkstemp makes 0600 files, outputs get 0666 & ~umask
@@ -32,6 +38,13 @@ def atomic_write_bytes(path: StrPath, data: bytes) -> Path:
     Raises OutputPathError (a ValueError) when ``path`` is a symbolic link, and OSError
     naming ``path`` and the action (see the module docstring) when the write fails.
     """
+    return atomic_write_chunks(path, (data,))
+
+
+def atomic_write_chunks(path, chunks) -> Path:
+    """Write the bytes of the iterable ``chunks`` one after the other to ``path``, through a
+    temporary file and a rename (a large file never held whole in memory); errors as
+    :func:`atomic_write_bytes`."""
     path = refuse_link(path, "output file")
     if path.exists() and not path.is_file() and not path.is_dir():
         raise OutputPathError(
@@ -50,7 +63,8 @@ def atomic_write_bytes(path: StrPath, data: bytes) -> Path:
         raise failed(exc, "writing", path) from exc
     try:
         with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
+            for chunk in chunks:
+                handle.write(chunk)
         os.chmod(tmp, 0o666 & ~_UMASK)
         os.replace(tmp, path)
     except OSError as exc:

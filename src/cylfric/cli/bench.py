@@ -84,6 +84,19 @@ def generate(
 
 DRIVES = ("spring", "sine", "ramp-force", "servo-step")
 
+OUTPUT_STEP = 1e-3
+"""Output interval of ``cylfric simulate`` [s]."""
+
+CLI_PEAK_BYTES_PER_SAMPLE = 256
+"""Peak memory of ``cylfric simulate`` [bytes per output sample] above the process after a
+1 s run, measured (issue 23) with ``/usr/bin/time -v`` (maximum resident set size) in fresh
+processes at 300 s and 1000 s of the default spring drive, as the slope between them: the
+simulation, its figure (a line of every sample in three axes, PNG and SVG) and simulation.csv
+written in blocks of :data:`CSV_ROWS` rows; see :func:`_csv_blocks`."""
+
+CSV_ROWS = 100_000
+"""Rows of simulation.csv formatted at a time (the file is never held whole in memory)."""
+
 
 @app.command()
 @guarded
@@ -106,20 +119,21 @@ def simulate(
     max_output_gib: float = typer.Option(
         1.0,
         "--max-output-gib",
-        help="Refuse (exit 2) before allocating when the outputs would exceed this many GiB "
-        "(samples every 1 ms x 8 signals x 8 bytes: 1 GiB is about 4.6 h simulated).",
+        help="Refuse (exit 2) before allocating when the estimated peak memory would exceed "
+        "this many GiB (samples every 1 ms x 256 bytes measured: 1 GiB is about 70 min "
+        "simulated).",
     ),
 ):
     """Simulate a cylinder with dynamic LuGre friction; writes simulation.csv and a figure.
 
-    Outputs every 1 ms; their size is estimated before the run and a simulation above
+    Outputs every 1 ms; the peak memory is estimated before the run and a simulation above
     --max-output-gib (default 1 GiB) is refused with exit 2: shorten --duration or raise
     the limit.
     """
     import numpy as np
 
+    from .._atomic import atomic_write_chunks
     from ..friction.literature import LITERATURE
-    from ..io.writers import atomic_write_text
     from ..model import FrictionModel
     from ..report.figures import save_figure
     from ..simulate import (
@@ -152,6 +166,7 @@ def simulate(
         friction = friction.replace(sigma_0=s0, sigma_1=math.sqrt(s0 * m))
     if not (m > 0 and k > 0 and t_end > 0):
         raise BadInput("--mass, --stiffness and --duration must be > 0")
+    _check_peak(duration, t_end, max_output_gib)
     from .._paths import make_folder, refuse_link
 
     refuse_link(out)  # before the simulation: a symbolic link is refused, not written through
@@ -174,6 +189,7 @@ def simulate(
                 drives[drive](),
                 t_end,
                 pressure_a=p,
+                dt=OUTPUT_STEP,
                 max_output_bytes=max_output_gib * 2**30,
             )
         except ValueError as exc:  # e.g. a law extrapolated below 0 outside its validity
@@ -181,9 +197,8 @@ def simulate(
             raise BadInput(str(exc) if named else f"{model}: {exc}") from None
     for note in dict.fromkeys(str(w.message) for w in caught):
         console.print(f"[yellow]note:[/yellow] {terminal(note)}")
-    frame = result.to_pandas()
     make_folder(out)
-    atomic_write_text(out / "simulation.csv", frame.to_csv(index=False))
+    atomic_write_chunks(out / "simulation.csv", _csv_blocks(result))
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), constrained_layout=True)
@@ -193,7 +208,39 @@ def simulate(
     f = result.outputs["friction_force"]
     console.print(
         terminal(
-            f"{drive}: {len(frame)} samples over {t_end:g} s; friction {f.min():.1f} to "
+            f"{drive}: {result.time.size} samples over {t_end:g} s; friction {f.min():.1f} to "
             f"{f.max():.1f} N; wrote {out / 'simulation.csv'} and simulation.png/svg"
         )
     )
+
+
+def _check_peak(duration: str, t_end: float, max_output_gib: float):
+    """Refuse (exit 2), before anything is allocated, a simulation whose estimated peak
+    memory (:data:`CLI_PEAK_BYTES_PER_SAMPLE` per output sample) exceeds the limit."""
+    if not max_output_gib > 0:
+        raise BadInput(f"--max-output-gib {max_output_gib:g}: expected a size > 0 GiB")
+    ratio = t_end / OUTPUT_STEP
+    samples = ratio + 1 if math.isfinite(ratio) else math.inf
+    peak = samples * CLI_PEAK_BYTES_PER_SAMPLE
+    if peak > max_output_gib * 2**30:
+        raise BadInput(
+            f"--duration {duration}: {samples:.4g} samples every {OUTPUT_STEP * 1e3:g} ms would "
+            f"take about {peak / 2**30:.3g} GiB of memory at its peak ({CLI_PEAK_BYTES_PER_SAMPLE}"
+            f" bytes measured per sample), above the limit of {max_output_gib:.3g} GiB; shorten "
+            "--duration or raise the limit with --max-output-gib"
+        )
+
+
+def _csv_blocks(result):
+    """simulation.csv as bytes, :data:`CSV_ROWS` rows at a time (the columns of
+    ``result.to_pandas()``, the same text)."""
+    import pandas as pd
+
+    from ..simulate.result import UNITS
+
+    columns = {"time [s]": result.time}
+    for name, values in {**result.states, **result.outputs}.items():
+        columns[f"{name} [{UNITS.get(name, '-')}]"] = values
+    for start in range(0, result.time.size, CSV_ROWS):
+        block = pd.DataFrame({k: v[start : start + CSV_ROWS] for k, v in columns.items()})
+        yield block.to_csv(index=False, header=start == 0).encode("utf-8")

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import BadInput, console, guarded, print_table
+from .common import BadInput, _plain, console, guarded, print_table
 
 SIGNALS_CSV = "motion_signals.csv"
 FIT_JSON = "motion_fit.json"
@@ -64,6 +64,7 @@ def register(app) -> None:
 def _run(record, config, out, per_direction, validate, accept_implausible=False):
     import hashlib
     import json
+    import warnings
 
     from ..identify.motion import fit_motion
     from ..io.motion_config import load_motion_config, read_motion_record
@@ -86,7 +87,12 @@ def _run(record, config, out, per_direction, validate, accept_implausible=False)
         raise BadInput(f"--out {out}: writing {clash[0]} would overwrite an input file")
     settings = load_motion_config(config)
     data = read_motion_record(record, settings)
-    fit = fit_motion(data, settings, per_direction=per_direction)
+    # warnings reach the user once each, as notes (not as Python's own lines with a path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = fit_motion(data, settings, per_direction=per_direction)
+    for note in dict.fromkeys(str(w.message) for w in caught):
+        console.print(terminal(f"note: {note}", markup=False), markup=False)
     if fit.flags and not accept_implausible:
         listed = "; ".join(flag.summary() for flag in fit.flags)
         hints = " ".join(dict.fromkeys(flag.hint for flag in fit.flags))
@@ -123,8 +129,11 @@ def _run(record, config, out, per_direction, validate, accept_implausible=False)
     refined = fit.refinement.model if fit.refinement is not None else None
     if refined is not None:
         sheet = refined.to_datasheet()
-        atomic_write_text(out / "datasheet.json", json.dumps(sheet, indent=2) + "\n")
-    atomic_write_text(out / FIT_JSON, json.dumps(document, indent=2, default=float) + "\n")
+        text = json.dumps(_plain(sheet), indent=2, allow_nan=False)
+        atomic_write_text(out / "datasheet.json", text + "\n")
+    # valid JSON: a non-finite value (a parameter the record does not determine) is null
+    text = json.dumps(_plain(document), indent=2, allow_nan=False)
+    atomic_write_text(out / FIT_JSON, text + "\n")
     atomic_write_text(out / SIGNALS_CSV, _csv(fit.signals))
     for name, png in _draw_all(jobs).items():
         atomic_write_bytes(out / name, png)

@@ -482,7 +482,14 @@ def _check_finite(record) -> None:
 
 def _least_squares(W, F, file, names):
     """Ordinary least squares with covariance sigma^2 (W^T W)^-1 (sigma^2 = RSS / (n - p))."""
-    theta, _, rank, _ = np.linalg.lstsq(W, F, rcond=None)
+    try:
+        theta, _, rank, _ = np.linalg.lstsq(W, F, rcond=None)
+        inverse = np.linalg.inv(W.T @ W) if rank == W.shape[1] else None
+    except np.linalg.LinAlgError as exc:
+        raise ValueError(
+            f"{file}: the least-squares fit of {list(names)} failed ({exc}); check the "
+            "record's signals for spikes or a wrong unit"
+        ) from None
     if rank < W.shape[1]:
         raise ValueError(
             f"{file}: the regression is singular (rank {rank} of {W.shape[1]}): the motion "
@@ -491,7 +498,7 @@ def _least_squares(W, F, file, names):
     residual = F - W @ theta
     dof = max(F.size - W.shape[1], 1)
     variance = float(residual @ residual) / dof
-    covariance = variance * np.linalg.inv(W.T @ W)
+    covariance = variance * inverse
     return theta, covariance, residual
 
 

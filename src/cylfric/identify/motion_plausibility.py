@@ -30,8 +30,13 @@ limit                         value    why
                                        viscous) at most 2 x the largest force recorded
 ============================  =======  ====================================================
 
-A record in m whose unit says mm (1000x too small) is
-not told apart from a genuine small motion by its magnitudes and is not flagged.
+Not caught: a position in m whose unit says mm (1000x too small) looks like a genuine small
+motion. A force unit slip in either direction (kN exported as N read as N, or the reverse)
+scales the identified mass, friction levels and offset alike, so every ratio the checks use
+is unchanged and the fit passes: a force 1000x too large gave mass 95,114 kg and F_c
+20,409 N on the EMPS record. No gate is set on absolute magnitudes, which would fire on
+genuine large machines; check the force unit (motion.toml ``force_scale``, the record's
+header) against the rig.
 """
 
 from __future__ import annotations

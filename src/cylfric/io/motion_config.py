@@ -380,6 +380,44 @@ class MotionRecord:
     file: str
 
 
+MAX_MAGNITUDE = {"position": 1e3, "force": 1e9, "pressure_a": 1e10, "pressure_b": 1e10}
+"""Largest magnitude [SI: m, N, Pa] of a sample of a motion record: beyond any physical rig
+(a stroke of 1 km, 1 GN, 100 kbar); a larger sample is a spike or a corrupt value and is
+refused like a non-finite one (it would swamp the least squares)."""
+
+VARYING = ("position", "force")
+"""Signals refused when constant: the regression needs their variation."""
+
+
+def _check_samples(path, name, role, values, is_mat, unit):
+    """Refuse absurd magnitudes (:data:`MAX_MAGNITUDE`, in SI) and a constant position or
+    force, naming the file, the channel and the first bad sample."""
+    from .text import data_row_line
+
+    limit = MAX_MAGNITUDE.get(role)
+    if limit is not None:
+        bad = np.flatnonzero(np.abs(values) > limit)
+        if bad.size:
+            first = int(bad[0])
+            where = f"sample {first}" + ("" if is_mat else f" (data row {first + 1})")
+            raise BenchFileError(
+                path,
+                f"{name} ({role}) holds {values[first]:.6g} {unit} at {where}"
+                + (f" and {bad.size - 1} more such samples" if bad.size > 1 else "")
+                + f"; beyond any physical rig (|{role}| above {limit:g} {unit}): a spike or "
+                "a corrupt value; remove or interpolate it (or cut the record) before the "
+                "identification",
+                line=None if is_mat else data_row_line(path, first),
+            )
+    if role in VARYING and values.size and np.ptp(values) == 0:
+        raise BenchFileError(
+            path,
+            f"{name} ({role}) does not change ({values[0]:.6g} {unit} in all {values.size} "
+            "samples); the identification needs a recorded signal that varies: check that "
+            "motion.toml names the right channel",
+        )
+
+
 def _non_finite(path, name, role, values, bad, is_mat) -> BenchFileError:
     """The error for non-finite samples: file, channel, first sample index (and its line in
     a text record), how many there are, and what to do."""
@@ -483,6 +521,8 @@ def read_motion_record(path: StrPath, config: MotionConfig) -> MotionRecord:
             from ..units import to_si
 
             values = to_si(values, unit, SIGNAL_DIMENSIONS[role])
+        si_unit = {"position": "m", "force": "", "time": "s"}.get(role, "Pa")
+        _check_samples(path, config.signals[role], role, values, is_mat, si_unit)
         si[role] = values
     force_scale = scale("force_scale", config.force_scale, "signals")
     time = si["time"]

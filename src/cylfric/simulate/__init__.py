@@ -1,8 +1,10 @@
 """Time-domain simulation of a cylinder with dynamic pressure-dependent friction."""
 
 from .plant import (
+    BATCH_PEAK_FACTOR,
     DEFAULT_FIXED_STEP,
     MAX_OUTPUT_BYTES,
+    PEAK_BYTES_PER_SAMPLE,
     THESIS_CYLINDER,
     AppliedForce,
     BatchResult,
@@ -30,4 +32,6 @@ __all__ = [
     "THESIS_CYLINDER",
     "DEFAULT_FIXED_STEP",
     "MAX_OUTPUT_BYTES",
+    "PEAK_BYTES_PER_SAMPLE",
+    "BATCH_PEAK_FACTOR",
 ]

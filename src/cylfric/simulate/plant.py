@@ -48,12 +48,28 @@ __all__ = [
     "THESIS_CYLINDER",
     "DEFAULT_FIXED_STEP",
     "MAX_OUTPUT_BYTES",
+    "PEAK_BYTES_PER_SAMPLE",
+    "BATCH_PEAK_FACTOR",
     "output_bytes",
 ]
 
 MAX_OUTPUT_BYTES = 2**30
-"""Default limit [bytes] (1 GiB) of the arrays a simulation allocates for its outputs (and
-for a batch also its full-rate input rows); raise it with ``max_output_bytes=``."""
+"""Default limit [bytes] (1 GiB) of the estimated peak memory of a simulation (above what
+the process held before the call); raise it with ``max_output_bytes=``."""
+
+PEAK_BYTES_PER_SAMPLE = 256
+"""Peak memory of :func:`simulate` [bytes per output sample], measured (issue 23): peak RSS
+(``resource.getrusage``) minus the RSS before the call, in a fresh process after a 1 s
+warm-up run, for 2000 s at dt = 1 ms (2e6 samples): 64 for a spring with ``"rosenbrock"``
+or ``"dopri"`` (the 8 output arrays), 104 for ``"fixed"`` and prescribed motion, 112 for an
+applied force or a position servo (their input grid); 212 once for a position servo in a
+test run beside other processes (tests/test_simulate_limits.py); rounded up to 256."""
+
+BATCH_PEAK_FACTOR = 2.5
+"""Peak memory of :func:`simulate_batch` over the arrays it counts (records and input rows)
+[-], measured as for :data:`PEAK_BYTES_PER_SAMPLE` (3 sets, 2000 s, dt = 1 ms): 1.18 for
+springs, 2.23 for applied forces (each input row is built, then stacked into one array);
+rounded up to 2.5."""
 
 OUTPUT_ARRAYS = 8
 """Arrays of a :class:`SimulationResult` on the output grid: time, position, velocity, z,
@@ -313,9 +329,10 @@ def simulate(
         when the simulated speed leaves its validity speeds (after the run; the result is
         then not returned).
     max_output_bytes : float
-        Limit of the outputs' size [bytes] (default :data:`MAX_OUTPUT_BYTES`, 1 GiB), checked
-        before anything is allocated: (duration / dt + 1) samples x 8 arrays x 8 bytes. The
-        integrators' working arrays add up to about as much again.
+        Limit of the estimated peak memory [bytes] (default :data:`MAX_OUTPUT_BYTES`,
+        1 GiB), checked before anything is allocated: (duration / dt + 1) samples x
+        :data:`PEAK_BYTES_PER_SAMPLE` (256 bytes, measured: the 8 output arrays of 8 bytes
+        and the input grid and working arrays of the integrators).
 
     Returns
     -------
@@ -324,16 +341,16 @@ def simulate(
     Raises
     ------
     ValueError
-        Bad arguments; outputs larger than ``max_output_bytes`` (the message gives the
-        estimated size, the limit and the ways out: a coarser ``dt``, a shorter
-        ``duration`` or a higher limit).
+        Bad arguments; an estimated peak above ``max_output_bytes`` (the message gives the
+        estimate, the limit and the ways out: a coarser ``dt``, a shorter ``duration`` or a
+        higher limit).
     """
     n = _output_samples(duration, dt)
     if n is not None:
         _check_output_size(
-            output_bytes(n), max_output_bytes, f"{n:.4g} samples (duration {duration:g} s "
-            f"every dt = {dt:g} s) x {OUTPUT_ARRAYS} arrays x 8 bytes", "a coarser output grid "
-            "(a larger dt) or a shorter duration",
+            n * PEAK_BYTES_PER_SAMPLE, max_output_bytes, f"{n:.4g} samples (duration "
+            f"{duration:g} s every dt = {dt:g} s) x {PEAK_BYTES_PER_SAMPLE} bytes measured per "
+            "sample", "a coarser output grid (a larger dt) or a shorter duration",
         )  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -412,14 +429,23 @@ def output_bytes(samples: int, arrays: int = OUTPUT_ARRAYS) -> int:
 
 
 def _output_samples(duration, dt):
-    """Samples of the output grid, or None when the arguments are invalid (the body of the
-    simulation refuses them with its own message)."""
+    """Samples of the output grid (``math.inf`` when duration / dt overflows), or None when
+    the arguments are invalid (the body of the simulation refuses them with its own
+    message)."""
     try:
         if 0 < dt <= duration < math.inf:
-            return int(round(duration / dt)) + 1
+            return _samples(duration, dt)
     except TypeError:
         pass
     return None
+
+
+def _samples(duration: float, dt: float) -> float:
+    """Samples of a grid every ``dt`` over ``duration`` [s]; ``math.inf`` when the ratio
+    overflows (a huge duration such as 1e308 s: refused by the size check, not an
+    OverflowError)."""
+    ratio = duration / dt
+    return int(round(ratio)) + 1 if math.isfinite(ratio) else math.inf
 
 
 def _check_output_size(size, limit, how, ways_out) -> None:
@@ -430,8 +456,8 @@ def _check_output_size(size, limit, how, ways_out) -> None:
     if size <= limit:
         return
     raise ValueError(
-        f"the simulation would allocate about {size / 2**30:.3g} GiB of outputs ({how}), above "
-        f"the limit of {limit / 2**30:.3g} GiB; use {ways_out}, or raise the limit "
+        f"the simulation would take about {size / 2**30:.3g} GiB of memory at its peak ({how}), "
+        f"above the limit of {limit / 2**30:.3g} GiB; use {ways_out}, or raise the limit "
         "(max_output_bytes= in Python, --max-output-gib on the command line)"
     )
 
@@ -859,10 +885,10 @@ def simulate_batch(
         all sets) when a set's pressure leaves its model's validity pressures (before the
         run) or its recorded speed leaves the validity speeds (after it).
     max_output_bytes : float
-        Limit [bytes] (default :data:`MAX_OUTPUT_BYTES`, 1 GiB), checked before anything is
-        allocated, of the recorded outputs (sets x 5 signals x records x 8 bytes) plus the
-        full-rate input rows (3 per distinct non-spring drive, and one shared, x samples x
-        8 bytes).
+        Limit of the estimated peak memory [bytes] (default :data:`MAX_OUTPUT_BYTES`,
+        1 GiB), checked before anything is allocated: the recorded outputs (sets x 5 signals
+        x records x 8 bytes) plus the full-rate input rows (3 per distinct non-spring drive,
+        and one shared, x samples x 8 bytes), times :data:`BATCH_PEAK_FACTOR` (2.5, measured).
 
     Returns
     -------
@@ -873,8 +899,8 @@ def simulate_batch(
     Raises
     ------
     ValueError
-        Bad arguments; outputs and inputs larger than ``max_output_bytes`` (the message
-        gives the estimated size, the limit and the ways out).
+        Bad arguments; an estimated peak above ``max_output_bytes`` (the message gives the
+        estimate, the limit and the ways out).
     """
     rtol = ROSENBROCK_RTOL if rtol is None else rtol
     if not (0 < rtol < 1):
@@ -914,15 +940,15 @@ def simulate_batch(
             f"need 0 < dt <= duration and record_every >= 1 (duration < inf); got dt = {dt} s, "
             f"duration = {duration} s, record_every = {record_every}"
         )
-    n = int(round(duration / dt)) + 1
-    records = -(-n // int(record_every))
+    n = _samples(duration, dt)
+    records = -(-n // int(record_every)) if n < math.inf else n
     input_rows = 1 + len({id(d) for d in drives if not isinstance(d, SpringPull)})
     _check_output_size(
-        output_bytes(records, 5 * n_sets) + output_bytes(n, 3 * input_rows + 1),
+        BATCH_PEAK_FACTOR * (5 * n_sets * records + (3 * input_rows + 1) * n) * 8,
         max_output_bytes,
         f"{n_sets} sets x 5 signals x {records:.4g} records, plus {3 * input_rows + 1} "
         f"input rows x {n:.4g} samples (duration {duration:g} s every dt = {dt:g} s), "
-        "x 8 bytes",
+        f"x 8 bytes x {BATCH_PEAK_FACTOR} measured",
         "a larger dt or record_every, a shorter duration or fewer sets",
     )
     time = np.arange(n) * dt
