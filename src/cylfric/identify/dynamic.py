@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import pandas as pd
@@ -532,6 +532,8 @@ def breakaway_force(
         )
     else:
         time = np.asarray(record_or_time, dtype=float)
+    # the (time, force, displacement) form: the caller gives all three
+    assert force is not None and displacement is not None
     beyond = np.nonzero(np.asarray(displacement) >= travel)[0]
     if beyond.size == 0 or beyond[0] == 0:
         return math.nan
@@ -645,7 +647,7 @@ class DynamicIdentification:
             "units": {"sigma_0": "N/m", "sigma_1": "N*s/m", "pressure": "Pa", "force": "N"},
             "laws": self.laws,
             "per_pressure": [
-                {k.split(" [")[0]: v for k, v in row.items()}
+                {cast("str", k).split(" [")[0]: v for k, v in row.items()}
                 for row in self.per_pressure.to_dict("records")
             ],
             "breakaway_validation": {
@@ -653,7 +655,7 @@ class DynamicIdentification:
                 "rms_relative_error": float(np.sqrt(np.mean(errors**2))) if errors.size else None,
                 "max_relative_error": float(np.max(np.abs(errors))) if errors.size else None,
                 "tests": [
-                    {k.split(" [")[0]: v for k, v in row.items()}
+                    {cast("str", k).split(" [")[0]: v for k, v in row.items()}
                     for row in self.breakaway.to_dict("records")
                 ],
             },

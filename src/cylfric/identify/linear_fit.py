@@ -16,7 +16,7 @@ physical range); the result is a :class:`~cylfric.model.FrictionModel` in SI.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
@@ -229,16 +229,19 @@ def _start(speed, p_bar, force, friction_law, fixed, blocks, shape, p_lo, p_hi, 
         x0.append(v_r0 if name == "v_r" else alpha0)
         lower.append(PARAMETER_BOUNDS[name][0])
         upper.append(PARAMETER_BOUNDS[name][1])
-    lower, upper = np.array(lower), np.array(upper)
-    top = np.where(np.isfinite(upper), upper - 1e-12, np.inf)
-    x0 = np.clip(np.array(x0, dtype=float), lower + 1e-12, top)
-    return x0, lower, upper
+    lower_x, upper_x = np.array(lower), np.array(upper)
+    top = np.where(np.isfinite(upper_x), upper_x - 1e-12, np.inf)
+    start = np.clip(np.array(x0, dtype=float), lower_x + 1e-12, top)
+    return start, lower_x, upper_x
 
 
 def _to_model(x, blocks, shape, fixed, friction_law, p_lo, span):
     """Model coefficients (SI), their covariance names and d(coefficients)/d(x)."""
-    rows, names, coefficients = [], [], {}
-    lines = {}  # quantity -> (intercept row, slope row) over x, pressure in bar
+    rows: list[np.ndarray] = []
+    names: list[str] = []
+    coefficients: dict[str, Any] = {}
+    # quantity -> (intercept row, slope row) over x, pressure in bar
+    lines: dict[str, tuple[np.ndarray, np.ndarray | None]] = {}
     i = 0
     for quantity, count in blocks:
         if count == 2:
@@ -259,14 +262,15 @@ def _to_model(x, blocks, shape, fixed, friction_law, p_lo, span):
             coefficients[par] = {"law": "constant", "intercept": float(fixed[par])}
             continue
         members = [lines[m] for m in parts[par] if m in lines]
-        intercept = sum(m[0] for m in members)
+        # (members is never empty: a fitted quantity has its lines, so no sum() of nothing)
+        intercept = cast("np.ndarray", sum(m[0] for m in members))
         slopes = [m[1] for m in members if m[1] is not None]
         if par == "F_s" and "F_c" in fixed:  # F_s = fixed F_c + amplitude
             shift = float(fixed["F_c"])
         else:
             shift = 0.0
         if slopes:
-            slope = sum(slopes)
+            slope = cast("np.ndarray", sum(slopes))
             coefficients[par] = {
                 "intercept": float(intercept @ x + shift),
                 "slope": float(slope @ x) / _BAR,
@@ -329,7 +333,7 @@ def _onto_bounds(coefficients, ends):
 
 def _stderr(coefficients, names, covariance):
     se = dict(zip(names, np.sqrt(np.clip(np.diag(covariance), 0, None)), strict=True))
-    out = {}
+    out: dict[str, Any] = {}
     for par, spec in coefficients.items():
         if isinstance(spec, dict):
             if spec.get("law") == "constant":

@@ -564,9 +564,11 @@ def refine_pressure_model(
 
     if pa is None:
         pa, pb = pb, None
+    assert pa is not None  # a record with pressures: fit_motion calls only with one or two
     reference = config.reference if pb is not None else "a"
     pressure = np.asarray(operating_pressure(pa, pb, reference=reference), dtype=float)
     v_eval = velocity if full else sig["velocity [m/s]"]
+    assert v_eval is not None  # full: the velocity was given
     v, acc, F = sig["velocity [m/s]"], sig["acceleration [m/s^2]"], sig["force [N]"]
     ones = reduce(np.ones_like(v_eval))
     notes = []
@@ -640,7 +642,7 @@ def refine_pressure_model(
 
     def build(x, **extra):
         theta = T @ x
-        coeffs = {}
+        coeffs: dict[str, Any] = {}
         for key in ("F_c", "F_s", "sigma_2"):
             if sloped and f"{key}.intercept" in names:
                 coeffs[key] = {
@@ -674,7 +676,7 @@ def refine_pressure_model(
         cov_x = np.full((len(labels), len(labels)), np.nan)
     cov_model = T @ cov_x @ T.T
     err = dict(zip(names, np.sqrt(np.clip(np.diag(cov_model), 0, None)), strict=True))
-    stderr = {}
+    stderr: dict[str, Any] = {}
     for key in ("F_c", "F_s", "sigma_2"):
         if sloped and f"{key}.intercept" in names:
             stderr[key] = {c: float(err[f"{key}.{c}"]) for c in ("intercept", "slope")}

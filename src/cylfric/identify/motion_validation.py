@@ -142,7 +142,7 @@ def replay_closed_loop(
     substeps: int = 10,
     border: int = 50,
     cutoff: float | int = 100.0,
-    order: float | int = 4,
+    order: int = 4,
 ) -> ServoReplay:
     """Simulate an identified axis in its recorded servo loop and compare with the record.
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from scipy.optimize import curve_fit
@@ -201,7 +201,7 @@ class SurfaceFit:
 
 
 def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
-    best = (np.inf, None)
+    best: tuple[float, Any] = (np.inf, None)
     for v_r in v_r_grid:
         for alpha in alpha_grid:
             a = design_columns(speed, p_bar, v_r, alpha)
@@ -273,7 +273,8 @@ def fit_surface(
     alpha_grid = [fixed["alpha"]] if "alpha" in fixed else np.linspace(0.4, 3.0, 14)
     if start is not None and start.laws["F_c"] == "linear":
         coef = [
-            start.parameters[f"{par}.{key}"].value * (_BAR if key == "slope" else 1.0)
+            cast("float", start.parameters[f"{par}.{key}"].value)  # set: F_c is linear
+            * (_BAR if key == "slope" else 1.0)
             for par in PRESSURE_DEPENDENT
             for key in ("intercept", "slope")
         ]
@@ -282,7 +283,7 @@ def fit_surface(
         coef, v_r0, alpha0 = _grid_start(speed, p_bar, force, v_r_grid, alpha_grid)
     names = PRESSURE_LAW_COEFFICIENTS[pressure_law]
     k = len(names)
-    x0 = []
+    x0: list[Any] = []  # floats (a start model's v_r, alpha: float | None)
     for j in range(3):  # the linear coefficients (pressure in bar), then higher-order terms
         a, b = coef[2 * j], coef[2 * j + 1]
         extra = {"linear": [], "quadratic": [0.0], "exponential": [1e-4]}[pressure_law]
@@ -300,13 +301,15 @@ def fit_surface(
     def model_force(x):
         values = [function(p_bar, *x[j * k : (j + 1) * k]) for j in range(3)]
         sh = {**fixed, **dict(zip(shared, x[3 * k :], strict=True))}
-        return stribeck_unchecked(speed, *values[:2], sh["v_r"], values[2], alpha=sh["alpha"])
+        return stribeck_unchecked(  # type: ignore[call-arg, misc]  # values[:2]: F_c, F_s
+            speed, *values[:2], sh["v_r"], values[2], alpha=sh["alpha"]
+        )
 
     def residuals(x):
         return (model_force(x) - force) * weight
 
-    x0 = np.clip(x0, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
-    result = robust_least_squares(residuals, x0, (lower, upper), loss)
+    start_x = np.clip(x0, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
+    result = robust_least_squares(residuals, start_x, (lower, upper), loss)
     res = force - model_force(result.x)  # data minus model [N]
     n_free = len(result.x)
     dof = max(force.size - n_free, 1)
@@ -419,7 +422,7 @@ def _block_jacobian(law, coef):
 def _stderr_of(coefficients, names, covariance, fixed):
     """Standard errors mirroring ``coefficients`` from the covariance (0 for held values)."""
     se = dict(zip(names, np.sqrt(np.clip(np.diag(covariance), 0, None)), strict=True))
-    out = {}
+    out: dict[str, Any] = {}
     for par, spec in coefficients.items():
         if isinstance(spec, dict):
             out[par] = {c: float(se[f"{par}.{c}"]) for c in spec}

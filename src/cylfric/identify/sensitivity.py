@@ -7,7 +7,7 @@ eq. 4.4) of the whole model refit with alpha and v_r held.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import pandas as pd
@@ -129,7 +129,8 @@ def sensitivity_grid(
         for v in v_rs
     ]
     table = pd.DataFrame(rows)
-    best = table.loc[table["rmse [N]"].idxmin()]
+    # the row of the smallest rmse (idxmin: a label of the RangeIndex); all-float columns
+    best = cast("pd.Series[float]", table.loc[cast("int", table["rmse [N]"].idxmin())])
 
     def objective(x):
         return rmse_at(velocity, pressure, friction, float(np.exp(x[0])), float(x[1]))

@@ -387,7 +387,7 @@ def _core(points, levels, *, pressure_law, fixed, notes, validity):
         )
     sigma, groups = point_errors(points)
     args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
-    weights = {"sigma": sigma, "groups": groups}
+    weights: dict[str, Any] = {"sigma": sigma, "groups": groups}
     linear, alternative = _linear_model(args, fixed, weights, notes)
     fits_by_law = {"linear": linear}
     shape_only = set(fixed) <= {"v_r", "alpha"}
@@ -500,7 +500,7 @@ def identify(
             f"{len(used)} usable points are too few; expected at least "
             f"{MIN_POINTS} (check the flags of the points table)"
         )
-    notes = []
+    notes: list[str] = []
     labels, levels = pressure_levels(used["pressure [Pa]"])
     used = used.assign(level=labels)
     validity = validity_of(used)

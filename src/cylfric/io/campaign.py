@@ -675,7 +675,7 @@ def _number(text: str, delimiter: str) -> float:
     return float(text.replace(",", ".") if delimiter != "," else text)
 
 
-def _read_manifest(folder: Path) -> dict:
+def _read_manifest(folder: Path) -> _Manifest:
     path = folder / MANIFEST_NAME
     rows = _Manifest()
     if not path.is_file():
@@ -839,7 +839,7 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
         _check_encodable(path)
         pressure = velocity = math.nan
         extra, source = {}, {}
-        nominal = {"pressure": {}, "velocity": {}}
+        nominal: dict[str, dict[str, tuple[float, str]]] = {"pressure": {}, "velocity": {}}
         if path.name in manifest:
             pressure, velocity, extra = manifest[path.name]
             source = {"pressure": "manifest", "velocity": "manifest"}
@@ -998,6 +998,7 @@ def _read_mat_run(path: Path, config: CampaignConfig):
             "(found the vectors " + ", ".join(found["variables"]) + ")",
         )
     frame, metadata = read_mat(path, variables=list(config.columns))
+    assert config.units is not None  # load_config gives [columns] names and units together
     data, col_units = si_columns(
         path, config.columns, config.units, frame.to_numpy(), roles=config.roles
     )

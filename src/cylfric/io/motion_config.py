@@ -185,7 +185,7 @@ class MotionConfig:
         """Line of ``key = ...`` (in ``[table]``) in the file (None without a file)."""
         return _line_of(self.source, key, table) if self.source else None
 
-    def error(self, table: str, key: str, message: str) -> BenchFileError:
+    def error(self, table: str | None, key: str, message: str) -> BenchFileError:
         """A :class:`BenchFileError` naming this file, the line of ``table.key``, ``message``."""
         return BenchFileError(
             self.source or "motion config", message, line=self.line_of(key, table)

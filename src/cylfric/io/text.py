@@ -19,7 +19,7 @@ import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -307,7 +307,7 @@ def read_bench_arrays(
     buf = np.frombuffer(raw, dtype=np.uint8)
     starts, ends, kinds = scan_lines(buf)
     text_idx = np.flatnonzero(kinds == TEXT)
-    data_idx = np.flatnonzero(kinds == NUMERIC)
+    data_idx: np.ndarray = np.flatnonzero(kinds == NUMERIC)
     del kinds
     if buf.size < 2**31:  # line offsets and indices in 32 bits: half the index of a big file
         starts, ends, data_idx = (a.astype(np.int32) for a in (starts, ends, data_idx))
@@ -433,14 +433,15 @@ def read_bench_arrays(
     names = blocks[0][2].names
     # the bytes and the line index are done with: let them go before the columns are
     # assembled (peak memory about the file plus its numbers, not twice that)
-    raw = buf = starts = ends = data_idx = text_idx = runs = run = blocks = None
+    # (None only to release them: none is read again, so no Optional in their types)
+    raw = buf = starts = ends = data_idx = text_idx = runs = run = blocks = None  # type: ignore[assignment]
     data, col_units = _assemble(frames, path, roles or {}, own=True)
     metadata = {
         "file": str(path),
         "header": header_meta,
         "columns": names,
         "units": col_units,
-        "delimiter": {None: "whitespace"}.get(delim, delim),
+        "delimiter": cast("dict[str | None, str]", {None: "whitespace"}).get(delim, delim),
         "decimal": decimal,
         "events": events,
         "rows": int(len(data["segment [-]"])),
@@ -474,7 +475,7 @@ def _split_header(line: str, delim, ncols: int) -> list[str]:
     wide = [c for c in re.split(r"\s{2,}|\t", line.strip()) if c]
     if len(wide) == ncols:
         return wide
-    merged = []
+    merged: list[str] = []
     for token in cells:
         if merged and re.fullmatch(r"[\[(].*[\])]", token):
             merged[-1] = f"{merged[-1]} {token}"
@@ -560,7 +561,7 @@ def _column_roles(names, roles, path, line):
 def _column_labels(names):
     """Names that tell every column apart: a name used more than once gets ``#1``, ``#2``
     ... by its place (``Axial Force#2``, as campaign.toml ``[columns]`` may name it)."""
-    seen = {}
+    seen: dict[str, int] = {}
     labels = []
     for name in names:
         if names.count(name) > 1:

@@ -434,16 +434,16 @@ def generate_campaign(
     out = make_folder(out_dir, "out_dir")  # a symbolic link is refused, not written through
     dynamic_tests = tuple(t for t in tests if t in DYNAMIC_TESTS)
     if "constant-velocity" not in tests:
-        rows = generate_dynamic_tests(
+        dynamic_rows = generate_dynamic_tests(
             out, s, tests=dynamic_tests, dynamic=dynamic, progress=progress
         )
-        write_test_manifest(out / "manifest.csv", rows)
+        write_test_manifest(out / "manifest.csv", dynamic_rows)
         return {
-            "files": [out / r["file"] for r in rows],
+            "files": [out / r["file"] for r in dynamic_rows],
             "steps": 0,
-            "samples": int(sum(r["run"].time.size for r in rows)),
+            "samples": int(sum(r["run"].time.size for r in dynamic_rows)),
             "settings": s,
-            "dynamic": rows,
+            "dynamic": dynamic_rows,
         }
     slow = s.slow_speeds()
     jobs = [(i, p, v) for i, (p, v) in enumerate(s.runs())]
@@ -462,7 +462,7 @@ def generate_campaign(
     with ThreadPoolExecutor(max_workers=workers) as pool:
         results = list(pool.map(one, jobs))
     rows = [(path.name, p, v) for (path, _, _), (_, p, v) in zip(results, jobs, strict=True)]
-    info = {
+    info: dict[str, Any] = {
         "files": [r[0] for r in results],
         "steps": int(sum(r[1] for r in results)),
         "samples": int(sum(r[2] for r in results)),

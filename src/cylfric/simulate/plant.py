@@ -493,7 +493,8 @@ def _simulate(
                 raise ValueError(f"{name} contains NaN or inf; expected finite values")
         pa = np.full(n, p_a)
         pb = pa if pressure_b is None else np.full(n, p_b)
-        checked_a, checked_b = p_a, p_b
+        checked_a: float | np.ndarray = p_a
+        checked_b: float | np.ndarray = p_b
     else:
         time = np.arange(n) * dt
         pa = _on_grid(pressure_a, time, "pressure_a")
@@ -509,7 +510,7 @@ def _simulate(
     friction.check(None, operating, strict=strict)
     if constant:
         params = _params_checked(friction, float(operating))
-        f_pressure = float(cylinder.area_a * p_a - cylinder.area_b * p_b)
+        f_pressure: float | np.ndarray = float(cylinder.area_a * p_a - cylinder.area_b * p_b)
     else:
         params = _friction_params(friction, checked_a, checked_b)
         _check_friction(friction, params)
@@ -574,13 +575,13 @@ def _simulate(
             *(_const(params, name) for name in ("sigma_0", "sigma_1", "v_r", "alpha")),
         )
         if method == "rosenbrock":
-            time, out, accepted, rejected, reached = kernels.rosenbrock(
+            time, out, accepted, rejected, reached = kernels.rosenbrock(  # type: ignore[call-arg]  # numba Dispatcher
                 sig, dt_s, ramp, dt, n, x0, v0, z0, *lugre, rtol,
                 *rosenbrock_tolerances(rtol, params), MAX_STEPS, offset,
             )  # fmt: skip
             info.update(rtol=rtol, scheme="Rodas3")
         else:
-            time, out, accepted, rejected, reached = kernels.dopri(
+            time, out, accepted, rejected, reached = kernels.dopri(  # type: ignore[call-arg]  # numba Dispatcher
                 sig, dt_s, ramp, dt, n, x0, v0, z0, *lugre, rtol, 1e-12, 1e-9, 1e-13,
                 MAX_STEPS, offset,
             )  # fmt: skip
@@ -630,7 +631,7 @@ def _simulate(
         info.update(info_extra)
     else:  # method == "fixed"
         substeps = max(1, int(math.ceil(dt / step - 1e-9)))
-        pos, vel, z, force, mean_force, iterations = kernels.fixed_step(
+        pos, vel, z, force, mean_force, iterations = kernels.fixed_step(  # type: ignore[call-arg]  # numba Dispatcher
             dt,
             substeps,
             *_plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext),
@@ -709,7 +710,10 @@ def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_re
 _LUGRE_NAMES = ("sigma_0", "sigma_1", "sigma_2", "F_c", "F_s", "v_r", "alpha")
 
 
-_PARAMS = weakref.WeakKeyDictionary()
+# model -> (its parameters, laws, pressure and simulation law; {pressure: checked params})
+_PARAMS: weakref.WeakKeyDictionary[FrictionModel, tuple[tuple[Any, ...], dict[float, dict]]] = (
+    weakref.WeakKeyDictionary()
+)
 
 
 def _params_checked(friction, pressure):
@@ -806,6 +810,9 @@ class BatchResult:
 
     def __getitem__(self, i: int) -> SimulationResult:
         """Set ``i`` as the :class:`SimulationResult` that :func:`simulate` returns."""
+        # simulate_batch records all three (None only in a BatchResult built by hand)
+        assert self.velocity is not None and self.z is not None
+        assert self.drive_force is not None
         p = np.full(self.time.shape, self.pressure[i])
         return SimulationResult(
             self.time,
@@ -824,7 +831,7 @@ class BatchResult:
         return [self[i] for i in range(len(self))]
 
 
-def _per_set(value, n_sets, name):
+def _per_set(value: Any, n_sets: int, name: str) -> list[Any]:
     """A scalar-or-sequence argument as a list of ``n_sets`` items."""
     if isinstance(value, (list, tuple)):
         if len(value) not in (1, n_sets):
@@ -997,7 +1004,7 @@ def simulate_batch(
             except ValueError as exc:
                 raise ValueError(f"set {i}: {exc}") from None
     atol = _rosenbrock_scales(rtol, friction)
-    out, steps, reached = kernels.rosenbrock_batch(
+    out, steps, reached = kernels.rosenbrock_batch(  # type: ignore[call-arg]  # numba Dispatcher
         dt, n, record_every, x0, v0, columns["row"].astype(np.int64), columns["ramp"],
         columns["mass"], columns["k"], columns["c"], columns["ki"], columns["f_offset"],
         np.array(rows_x), np.array(rows_v), np.array(rows_f),
