@@ -958,6 +958,7 @@ def simulate_batch(
         f"x 8 bytes x {BATCH_PEAK_FACTOR} measured",
         "a larger dt or record_every, a shorter duration or fewer sets",
     )
+    n = int(n)  # finite: an overflowing count was refused by the size check above
     time = np.arange(n) * dt
     # input signals: springs pulled at constant speed share one zero row (their ramp is a
     # per-set number); other drives get one row per distinct drive object
