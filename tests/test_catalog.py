@@ -281,6 +281,15 @@ def test_predict_scales_forces_and_adds_the_rule_uncertainty(db):
         db.predict("thesis", 0.080, rule_stderr=1.5)
 
 
+def test_predict_a_rod_seal_without_a_target_bore(db):
+    # a rod seal needs no bore: the name of the prediction had multiplied bore=None
+    db.add(_sheet(), "thesis", bore=0.040, rod=0.028)
+    predicted = db.predict("thesis", None, rod=0.036, contact="rod")  # type: ignore[arg-type]  # bore is unused by a rod seal
+    assert predicted["name"] == "thesis scaled to rod 36 mm"
+    assert predicted["prediction"]["ratio"] == pytest.approx(0.036 / 0.028)
+    FrictionModel.from_datasheet(predicted)  # validates
+
+
 def test_predict_acceptance_on_the_virtual_bench(tmp_path):
     """A virtual campaign at bore 40 mm predicts one at bore 63 mm within the stated
     uncertainty when the bench's friction scales with the seal contact length (its true

@@ -48,6 +48,7 @@ def _install(task: Callable[[int], Any]) -> None:
 
 
 def _call(index: int) -> Any:
+    assert _task is not None  # set by _install in each worker
     return _task(index)
 
 
@@ -57,7 +58,7 @@ def run(
     *,
     workers: int = 1,
     min_items: int = 2,
-    done: Callable[[int], None] | None = None,
+    done: Callable[[int, Any], object] | None = None,
 ) -> list:
     """``[task(i) for i in range(n)]``, in ``workers`` forked processes when that pays.
 
@@ -101,7 +102,7 @@ def starmap(
     arguments: Sequence[tuple],
     *,
     workers: int,
-    done: Callable[[int], None] | None = None,
+    done: Callable[[int, Any], object] | None = None,
 ) -> list:
     """``[function(*a) for a in arguments]`` on a pool of ``workers`` processes.
 

@@ -80,13 +80,13 @@ def build_datasheet(
 
 
 def datasheet_model(
-    identification,
+    identification: Identification,
     *,
-    extraction=None,
-    files=None,
-    campaign=None,
-    name=None,
-    pressure_reference=None,
+    extraction: Extraction | None = None,
+    files: Sequence[StrPath] | None = None,
+    campaign: str | None = None,
+    name: str | None = None,
+    pressure_reference: str | None = None,
 ) -> FrictionModel:
     """The identified model with the campaign's record: what the datasheet holds.
 

@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 
     import pandas as pd
     from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
 
     from cylfric._typing import StrPath
 
@@ -176,6 +177,8 @@ def drift(
             }
         )
     p_grid, v_grid = _common_grid(model_a, model_b, pressures, velocities, n)
+    v: np.ndarray
+    p: np.ndarray
     v, p = np.meshgrid(v_grid, p_grid, indexing="ij")
     v, p = v.ravel(), p.ravel()
     with warnings.catch_warnings():
@@ -301,8 +304,8 @@ class RunOrderTrend:
         ``"run"`` or ``"mtime"``.
     """
 
-    points: object
-    runs: object
+    points: pd.DataFrame
+    runs: pd.DataFrame
     between_slope: float
     between_stderr: float
     within_slope: float
@@ -323,7 +326,7 @@ class RunOrderTrend:
         return "\n".join(lines)
 
 
-def _ols_slope(x, y):
+def _ols_slope(x: ArrayLike, y: ArrayLike) -> tuple[float, float]:
     """Least-squares slope of y on x and its standard error (NaN when not estimable)."""
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)

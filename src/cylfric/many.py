@@ -294,7 +294,8 @@ def fit_many(
         # fits side by side: each on one core (a fit alone reads files on two)
         options = replace(options, workers=1)
     t0, started = time.perf_counter(), time.time()
-    jobs, refused = [], {}
+    jobs: list[tuple] = []
+    refused: dict[str, dict[str, Any]] = {}
     for folder in campaigns:  # one campaign that cannot be fitted is a failed row, not fatal
         name = _name(folder, root)
         try:

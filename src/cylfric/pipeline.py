@@ -26,6 +26,10 @@ if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
 
     import pandas as pd
 
+    from .identify.dynamic import DynamicIdentification
+    from .identify.steady import Identification
+    from .steady_state import Extraction
+
 __all__ = ["fit_campaign", "FitOptions", "FitOutputs"]
 
 
@@ -44,13 +48,13 @@ class FitOutputs:
 
     out: Path
     datasheet: dict
-    identification: object
-    extraction: object
+    identification: Identification
+    extraction: Extraction
     files: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     excluded: pd.DataFrame | None = None
     exports: dict = field(default_factory=dict)
-    dynamic: object = None
+    dynamic: DynamicIdentification | None = None
 
 
 def _csv(path, frame: pd.DataFrame):
@@ -116,6 +120,7 @@ def fit_campaign(
                 f"options.glob = {options.glob!r} but the campaign was opened with glob "
                 f"{source.config.glob!r}; open it with Campaign.open(folder, glob=...)"
             )
+    assert not isinstance(folder, Campaign)  # replaced by its folder above
     folder, out = Path(folder), Path(out)
     _check_out(folder, out)
     make_folder(out.parent, f"--out {out}: its folder")

@@ -353,9 +353,9 @@ def d_optimal(
     scale[scale == 0] = 1.0
     x = rows / scale
     count = np.zeros(n_cand, dtype=int)
-    design = [] if start is None else list(start)
-    for i in design:
-        count[i] += 1
+    design: list[int] = [] if start is None else list(start)
+    for index in design:
+        count[index] += 1
     ridge = 1e-8 * np.eye(k)
     while len(design) < runs:
         m = x[design].T @ x[design] + ridge if design else ridge
@@ -365,22 +365,22 @@ def d_optimal(
         best = int(np.argmax(d))
         design.append(best)
         count[best] += 1
-    design = np.array(design)
+    chosen = np.array(design)
     for _ in range(max_sweeps):
-        m = x[design].T @ x[design]
+        m = x[chosen].T @ x[chosen]
         minv = np.linalg.pinv(m)
         d_all = np.einsum("ij,jk,ik->i", x, minv, x)
-        cross = x[design] @ minv @ x.T  # (runs, candidates)
-        d_in = d_all[design][:, None]
+        cross = x[chosen] @ minv @ x.T  # (runs, candidates)
+        d_in = d_all[chosen][:, None]
         gain = (1 + d_all[None, :]) * (1 - d_in) + cross**2 - 1  # det ratio - 1
         gain[:, count >= max_repeats] = -np.inf
         i, j = np.unravel_index(np.argmax(gain), gain.shape)
         if gain[i, j] <= 1e-9:
             break
-        count[design[i]] -= 1
+        count[chosen[i]] -= 1
         count[j] += 1
-        design[i] = j
-    return design
+        chosen[i] = j
+    return chosen
 
 
 @dataclass
@@ -582,11 +582,11 @@ def make_plan(
     rows = _information_rows(model, vv, pp, noise, names)
     chosen = d_optimal(rows, int(runs), max_repeats=max_repeats)
     rng = np.random.default_rng(seed)
-    order = []
+    shuffled: list[int] = []
     for p in np.unique(pp[chosen]):
         at = chosen[pp[chosen] == p]
-        order.extend(rng.permutation(at))
-    order = np.array(order)
+        shuffled.extend(rng.permutation(at))
+    order = np.array(shuffled)
     table = _run_table(pp[order], vv[order], settings)
     uncertainty = predicted_uncertainty(
         model, table["velocity [m/s]"], table["pressure [Pa]"], noise, fixed=fixed

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -288,7 +288,7 @@ def _outliers(groups, outlier_sigma, min_speeds, floor):
     ``groups`` is a list of (runs, log speed, friction) arrays sorted by speed, one per
     pressure level (and group of runs); ``floor`` [N] is the smallest robust sigma.
     """
-    residuals = {False: [], True: []}
+    residuals: dict[bool, list[tuple[Any, float]]] = {False: [], True: []}
     for runs, x, y in groups:
         if np.unique(np.round(x, 6)).size < min_speeds:
             continue

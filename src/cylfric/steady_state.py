@@ -174,7 +174,7 @@ def find_windows(
         raise ValueError(f"unknown window method {method!r}; valid: {list(WINDOW_METHODS)}")
     speed_ref = nominal_speed if nominal_speed > 0 else float(np.percentile(np.abs(velocity), 90))
     if not speed_ref > 0:
-        windows = []
+        windows: list[_Window] = []
         return (windows, {}) if return_components else windows
     moving = np.abs(velocity) > moving_fraction * speed_ref
     direction = np.sign(velocity) * moving

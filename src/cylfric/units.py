@@ -199,9 +199,9 @@ def _lookup(unit: str) -> tuple[str, float]:
             f"write {written} (or {written.upper()} in all capitals, as bench exports do)"
         )
     if key in _AMBIGUOUS:
-        milli, mega = _AMBIGUOUS[key]
+        milli_unit, mega_unit = _AMBIGUOUS[key]
         raise UnitError(
-            f"unit {unit!r} is ambiguous: write {milli} (milli) or {mega} (mega); "
+            f"unit {unit!r} is ambiguous: write {milli_unit} (milli) or {mega_unit} (mega); "
             "unit prefixes are case-sensitive"
         )
     return UNITS[key]

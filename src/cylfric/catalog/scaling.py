@@ -255,7 +255,8 @@ def predict_datasheet(
     record["per_pressure"] = []
     record["offset"] = None
     record.pop("offset_std", None)
-    target = f"bore {bore * 1e3:g} mm" + ("" if rod is None else f", rod {rod * 1e3:g} mm")
+    sizes = [(what, d) for what, d in (("bore", bore), ("rod", rod)) if d is not None]
+    target = ", ".join(f"{what} {d * 1e3:g} mm" for what, d in sizes)
     record["name"] = f"{source_name} scaled to {target}"
     prediction = {
         "from": source_name,

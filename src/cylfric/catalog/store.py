@@ -110,7 +110,7 @@ def _check_name(name) -> str:
 
 def _check_metadata(values: dict) -> dict:
     """Metadata keywords checked (SI numbers, text) -> column values."""
-    out = {}
+    out: dict[str, Any] = {}
     for key, value in values.items():
         if key not in METADATA:
             raise CatalogError(f"unknown metadata {key!r}; valid: {sorted(METADATA)}")

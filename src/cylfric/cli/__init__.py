@@ -60,6 +60,7 @@ def console_main() -> None:
     about 0.3 s of a ``cylfric fit`` together). With threads of its own still running it
     exits the usual way, still frozen. :func:`main` itself, for use in-process, does neither.
     """
+    code: str | int | None
     try:
         main()
         code = 0

@@ -5,12 +5,16 @@ from __future__ import annotations
 import math
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from ..escape import terminal
 from ..units import parse_quantity
 from .common import BadInput, _numbers, _progress, app, console, guarded
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 
 @app.command()
@@ -56,7 +60,11 @@ def generate(
         raise BadInput(
             f"--tests {tests!r}: unknown test(s) {unknown}; valid: {', '.join(TESTS)}, all"
         )
-    kwargs = {"seed": seed, "decimal_comma": decimal_comma, "pressure_channel": pressure_channel}
+    kwargs: dict[str, Any] = {
+        "seed": seed,
+        "decimal_comma": decimal_comma,
+        "pressure_channel": pressure_channel,
+    }
     if pressures:
         kwargs["pressures_bar"] = tuple(p / 1e5 for p in _numbers(pressures, "pressure", "bar"))
     if speeds:
@@ -171,7 +179,9 @@ def simulate(
 
     refuse_link(out)  # before the simulation: a symbolic link is refused, not written through
     params = friction.params_at(friction.operating_pressure(p))
-    drives = {
+    drives: dict[
+        str, Callable[[], PrescribedMotion | AppliedForce | SpringPull | PositionServo]
+    ] = {
         "spring": lambda: SpringPull(k, v),
         "sine": lambda: PrescribedMotion(lambda t: v * np.sin(2 * np.pi * t)),
         "ramp-force": lambda: AppliedForce(lambda t: 2 * params["F_s"] * t / t_end),

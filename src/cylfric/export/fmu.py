@@ -195,13 +195,14 @@ def compiler() -> str | None:
 
 
 # ---------------------------------------------------------------------------- variables
-def _unit_of(parameter: str, coefficient: str | None) -> tuple[str, tuple[int, int, int]]:
+def _unit_of(parameter: str, coefficient: str | None) -> tuple[str, tuple[int, ...]]:
     """(FMI unit name, SI exponents) of a coefficient of ``parameter``."""
     from ..model.core import PARAMETER_UNITS
 
     base = PARAMETER_UNITS[parameter]
-    exponents = _BASE[base]
-    power = {"slope": 1, "curvature": 2}.get(coefficient, 0)
+    exponents: tuple[int, ...] = _BASE[base]
+    powers: dict[str | None, int] = {"slope": 1, "curvature": 2}
+    power = powers.get(coefficient, 0)
     name = base.replace("*", ".")
     if coefficient == "rate":
         return "1/Pa", tuple(-e for e in _BASE["Pa"])
@@ -279,7 +280,7 @@ _COMMON_ROWS = {
         "longest internal step of co-simulation doStep",
     ),
 }
-_ELEMENT_ROWS = {
+_ELEMENT_ROWS: dict[str, dict[str, tuple[str, str, str | None, str, str]]] = {
     "friction": {
         "velocity": ("input", "continuous", None, "m/s", "rod velocity, > 0 extends"),
     },

@@ -89,7 +89,7 @@ def _specs(model):
     gives them (``F_s = F_c``, ``sigma_2 = 0``, ``v_r = 1``, ``alpha = 1``).
     """
     coefficients = model.coefficients()
-    out = []
+    out: list[tuple[str, str, str | dict[str, float]]] = []
     for name in STEADY_PARAMETERS + DYNAMIC_PARAMETERS:
         law = model.laws[name]
         spec = coefficients[name]

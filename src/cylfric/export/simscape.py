@@ -216,6 +216,7 @@ def _least_squares(residual, starts, lower, upper):
         fit = least_squares(residual, x0, bounds=(lower, upper), x_scale="jac", method="trf")
         if best is None or fit.cost < best.cost:
             best = fit
+    assert best is not None  # starts is never empty
     return best.x
 
 

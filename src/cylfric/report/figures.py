@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 import io
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 import numpy as np
@@ -21,6 +22,9 @@ from matplotlib.figure import Figure
 
 from ..friction import params_at_pressure
 from ..io.writers import atomic_write_bytes
+
+if TYPE_CHECKING:
+    from matplotlib.typing import RcKeyType
 
 __all__ = [
     "figure_fit",
@@ -38,7 +42,7 @@ __all__ = [
     "STYLE",
 ]
 
-STYLE = {
+STYLE: dict[RcKeyType, Any] = {
     "figure.dpi": 100,
     "axes.grid": True,
     "grid.alpha": 0.3,
@@ -81,7 +85,7 @@ def log_axis(ax, which="x", decades=None):
     """
     from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
 
-    subs = (1.0, 2.0, 5.0) if decades is None or decades <= 3 else (1.0, 3.0)
+    subs: tuple[float, ...] = (1.0, 2.0, 5.0) if decades is None or decades <= 3 else (1.0, 3.0)
     if decades is not None and decades > 5:
         subs = (1.0,)
     (ax.set_xscale if which == "x" else ax.set_yscale)("log")
@@ -93,7 +97,7 @@ def log_axis(ax, which="x", decades=None):
 
 # The fixed layout of every report figure: size [in], subplot grid, margins (fractions of
 # the figure), shared y axes and which panels have a log speed axis.
-_CANVASES = {
+_CANVASES: dict[str, dict[str, Any]] = {
     "fit": {
         "figsize": (7.5, 4.8),
         "adjust": {"left": 0.09, "right": 0.98, "bottom": 0.11, "top": 0.93},
