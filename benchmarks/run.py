@@ -35,7 +35,6 @@ RESULTS = HERE / "results"
 BUILD = HERE / "build"
 
 
-
 def _machine():
     return {
         "python": sys.version.split()[0],

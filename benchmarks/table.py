@@ -158,8 +158,7 @@ def _later_rows():
             rows.append(
                 (
                     f"`cylfric fit-many --workers 2`, 8 virtual campaigns, vs {baseline}",
-                    f"{value:.2f}x (median of {r[key]['calm_rounds']} calm rounds); "
-                    "same datasheets"
+                    f"{value:.2f}x (median of {r[key]['calm_rounds']} calm rounds); same datasheets"
                     if f["goal"]["same_datasheets"]
                     else f"{value:.2f}x; datasheets differ",
                     f">= {f['goal']['ratio']:g}x "

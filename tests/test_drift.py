@@ -242,8 +242,12 @@ def _quadratic_fc(model: FrictionModel) -> FrictionModel:
     0, plus a small curvature [N/Pa^2] (made up)."""
     coefficients = model.coefficients(include_dynamic=False)
     linear = coefficients["F_c"]
-    coefficients["F_c"] = {"law": "quadratic", "intercept": linear["intercept"],
-                           "slope": linear["slope"], "curvature": 1e-14}
+    coefficients["F_c"] = {
+        "law": "quadratic",
+        "intercept": linear["intercept"],
+        "slope": linear["slope"],
+        "curvature": 1e-14,
+    }
     return model.replace(coefficients=coefficients)  # the covariance of _model kept
 
 
@@ -264,9 +268,15 @@ def test_different_friction_laws_compare_no_coefficient():
     a = _model()
     coefficients = a.coefficients(include_dynamic=False)
     reduced = FrictionModel(
-        {"F_c": coefficients["F_c"], "F_s": None, "sigma_2": coefficients["sigma_2"],
-         "v_r": None, "alpha": None},
-        friction_law="coulomb_viscous", validity=VALIDITY,
+        {
+            "F_c": coefficients["F_c"],
+            "F_s": None,
+            "sigma_2": coefficients["sigma_2"],
+            "v_r": None,
+            "alpha": None,
+        },
+        friction_law="coulomb_viscous",
+        validity=VALIDITY,
     )
     table = drift(a, reduced, n=2)
     assert (table["kind"] == "friction").all() and len(table) == 4
@@ -280,8 +290,11 @@ def test_different_pressure_references_are_refused_naming_both(tmp_path):
     first, second = tmp_path / "a.json", tmp_path / "b.json"
     first.write_text(json.dumps(_model().to_datasheet()))
     second.write_text(json.dumps(_model().replace(reference="sum").to_datasheet()))
-    with pytest.raises(ValueError, match=r"a\.json and .*b\.json have different pressure "
-                                         r"references .*'mean'.*'sum'"):
+    with pytest.raises(
+        ValueError,
+        match=r"a\.json and .*b\.json have different pressure "
+        r"references .*'mean'.*'sum'",
+    ):
         drift(first, second)
     from typer.testing import CliRunner
 

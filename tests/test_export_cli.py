@@ -12,8 +12,7 @@ from cylfric.model import FrictionModel
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 
 runner = CliRunner()
-VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3,
-            "velocity_max": 0.135}
+VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3, "velocity_max": 0.135}
 
 
 @pytest.fixture(scope="module")
@@ -24,27 +23,38 @@ def datasheet(tmp_path_factory):
 
 
 def test_export_hopsan_writes_files_and_summary(datasheet, tmp_path):
-    result = runner.invoke(app, ["export", str(datasheet), "--to", "hopsan", "--out",
-                                 str(tmp_path), "--name", "rig"])
+    result = runner.invoke(
+        app, ["export", str(datasheet), "--to", "hopsan", "--out", str(tmp_path), "--name", "rig"]
+    )
     assert result.exit_code == 0, result.output
     assert "RMS difference" in result.output
-    for name in ("rig_hopsan.hcom", "rig_hopsan_parameters.csv", "README_hopsan.md",
-                 "loss_hopsan.csv", "loss_hopsan.txt", "loss_hopsan.png",
-                 "loss_hopsan_pressure_signal.csv"):
+    for name in (
+        "rig_hopsan.hcom",
+        "rig_hopsan_parameters.csv",
+        "README_hopsan.md",
+        "loss_hopsan.csv",
+        "loss_hopsan.txt",
+        "loss_hopsan.png",
+        "loss_hopsan_pressure_signal.csv",
+    ):
         assert (tmp_path / name).is_file(), name
 
 
 def test_export_modelica_from_the_command_line(datasheet, tmp_path):
-    result = runner.invoke(app, ["export", str(datasheet), "--to", "modelica", "--out",
-                                 str(tmp_path), "--name", "rig"])
+    result = runner.invoke(
+        app, ["export", str(datasheet), "--to", "modelica", "--out", str(tmp_path), "--name", "rig"]
+    )
     assert result.exit_code == 0, result.output
     assert "lossless" in result.output and (tmp_path / "Rig.mo").is_file()
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--to", "stl"], "--to 'stl': unknown export target; valid: ['fmu', 'hopsan'"),
-    (["--to", "hopsan"], "no such datasheet file"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--to", "stl"], "--to 'stl': unknown export target; valid: ['fmu', 'hopsan'"),
+        (["--to", "hopsan"], "no such datasheet file"),
+    ],
+)
 def test_export_bad_input_exits_2_naming_the_problem(datasheet, tmp_path, args, message):
     sheet = str(datasheet) if "stl" in args else str(tmp_path / "missing.json")
     result = runner.invoke(app, ["export", sheet, *args, "--out", str(tmp_path / "o")])
@@ -62,8 +72,10 @@ def test_export_unreadable_datasheet_exits_2(tmp_path):
 
 def test_fit_export_bad_target_stops_before_fitting(tmp_path):
     (tmp_path / "camp").mkdir()
-    result = runner.invoke(app, ["fit", str(tmp_path / "camp"), "--out", str(tmp_path / "o"),
-                                 "--export", "simscape,stl"])
+    result = runner.invoke(
+        app,
+        ["fit", str(tmp_path / "camp"), "--out", str(tmp_path / "o"), "--export", "simscape,stl"],
+    )
     assert result.exit_code == 2
     assert "unknown export target 'stl'" in result.output
     assert not (tmp_path / "o").exists()
@@ -71,11 +83,13 @@ def test_fit_export_bad_target_stops_before_fitting(tmp_path):
 
 def test_fit_with_export_writes_exports_and_report_section(tmp_path):
     campaign = tmp_path / "camp"
-    generate_campaign(campaign, BenchSettings(pressures_bar=(0.1, 159.0),
-                                              speeds_mm_s=(1, 4, 15, 60, 135)))
+    generate_campaign(
+        campaign, BenchSettings(pressures_bar=(0.1, 159.0), speeds_mm_s=(1, 4, 15, 60, 135))
+    )
     out = tmp_path / "out"
-    result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--export",
-                                 "hopsan,modelica"])
+    result = runner.invoke(
+        app, ["fit", str(campaign), "--out", str(out), "--export", "hopsan,modelica"]
+    )
     assert result.exit_code == 0, result.output
     assert (out / "export" / "hopsan" / "loss_hopsan.csv").is_file()
     assert list((out / "export" / "modelica").glob("*.mo"))
@@ -93,11 +107,13 @@ def test_fit_export_failure_names_campaign_and_target_and_writes_nothing(tmp_pat
     """One pressure level: the lossy exports have no pressure range to report the loss over.
     The error said only 'pressure_range = (5500000.0, 5500000.0) Pa is not a range'."""
     campaign = tmp_path / "camp"
-    generate_campaign(campaign, BenchSettings(pressures_bar=(55.0,),
-                                              speeds_mm_s=(1, 4, 15, 60, 135)))
+    generate_campaign(
+        campaign, BenchSettings(pressures_bar=(55.0,), speeds_mm_s=(1, 4, 15, 60, 135))
+    )
     out = tmp_path / "out"
-    result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report",
-                                 "--export", "modelica,hopsan"])
+    result = runner.invoke(
+        app, ["fit", str(campaign), "--out", str(out), "--no-report", "--export", "modelica,hopsan"]
+    )
     assert result.exit_code == 2
     assert " ".join(result.output.split()) == (
         f"error: {campaign}: --export hopsan failed: pressure_range = (5500000.0, 5500000.0) "
@@ -112,8 +128,9 @@ def test_fit_export_failure_keeps_the_earlier_output(tmp_path, monkeypatch):
     """A C compiler that fails (here $CC=false): the FMU export raised 'unexpected
     RuntimeError' (exit 1) and never said that the earlier --out was left as it was."""
     campaign = tmp_path / "camp"
-    generate_campaign(campaign, BenchSettings(pressures_bar=(0.1, 159.0),
-                                              speeds_mm_s=(1, 4, 15, 60, 135)))
+    generate_campaign(
+        campaign, BenchSettings(pressures_bar=(0.1, 159.0), speeds_mm_s=(1, 4, 15, 60, 135))
+    )
     out = tmp_path / "out"
     args = ["fit", str(campaign), "--out", str(out), "--no-report"]
     assert runner.invoke(app, args).exit_code == 0

@@ -36,29 +36,43 @@ def thesis():
 def test_translational_friction_peaks_at_the_breakaway_velocity_with_the_breakaway_force():
     # MathWorks Translational Friction: the Stribeck term peaks at v_brk (= v_st/sqrt(2))
     # where sqrt(2e) * (1/sqrt(2)) * exp(-1/2) = 1, so F(v_brk) ~ F_brk (+ small terms)
-    params = dict(breakaway_force=150.0, coulomb_force=100.0, viscous_coefficient=0.0,
-                  breakaway_velocity=0.01)
+    params = dict(
+        breakaway_force=150.0, coulomb_force=100.0, viscous_coefficient=0.0, breakaway_velocity=0.01
+    )
     stribeck_part = ssc.translational_friction(0.01, **params) - 100.0 * math.tanh(10.0)
     assert_allclose(stribeck_part, 50.0, rtol=1e-12)
     v = np.linspace(-0.2, 0.2, 101)
-    assert_allclose(ssc.translational_friction(-v, **params),
-                    -ssc.translational_friction(v, **params), atol=1e-12)
+    assert_allclose(
+        ssc.translational_friction(-v, **params),
+        -ssc.translational_friction(v, **params),
+        atol=1e-12,
+    )
     # far above v_brk: Coulomb plus viscous only
     fast = dict(params, viscous_coefficient=300.0)
     assert_allclose(ssc.translational_friction(1.0, **fast), 100.0 + 300.0, rtol=1e-9)
 
 
 def test_cylinder_friction_il_coulomb_force_uses_the_sum_of_chamber_pressures():
-    params = dict(preload_force=80.0, coulomb_friction_coefficient=3e-6, breakaway_ratio=1.0,
-                  breakaway_velocity=1e-3, viscous_coefficient=0.0)
+    params = dict(
+        preload_force=80.0,
+        coulomb_friction_coefficient=3e-6,
+        breakaway_ratio=1.0,
+        breakaway_velocity=1e-3,
+        viscous_coefficient=0.0,
+    )
     # R_brk = 1: no Stribeck term; at 1 m/s tanh = 1: F = F_pr + f_cfr (p_A + p_B)
     force = ssc.cylinder_friction_il(1.0, 50e5, 30e5, **params)
     assert_allclose(force, 80.0 + 3e-6 * 80e5, rtol=1e-12)
 
 
 def test_legacy_cylinder_friction_is_the_imported_block_and_linear_below_threshold():
-    block = dict(preload_force=70.0, coulomb_friction_coefficient=2e-6, breakaway_ratio=1.5,
-                 transition_coefficient=100.0, viscous_coefficient=400.0)
+    block = dict(
+        preload_force=70.0,
+        coulomb_friction_coefficient=2e-6,
+        breakaway_ratio=1.5,
+        transition_coefficient=100.0,
+        viscous_coefficient=400.0,
+    )
     v = np.array([-0.1, -0.02, 0.003, 0.05])
     expected = stribeck(v, **simscape_cylinder_friction(40e5, 40e5, **block))
     assert_allclose(ssc.cylinder_friction(v, 40e5, 40e5, **block), expected, rtol=1e-14)
@@ -71,8 +85,13 @@ def test_legacy_cylinder_friction_is_the_imported_block_and_linear_below_thresho
 def test_legacy_fit_recovers_a_model_that_is_the_block(thesis):
     # A cylfric model written in the block's own form (reference "sum", F_s = K F_c,
     # constant sigma_2, alpha = 1, v_r = 1/c_v): the least-squares fit must find it.
-    truth = dict(preload_force=75.0, coulomb_friction_coefficient=2.5e-6, breakaway_ratio=1.4,
-                 transition_coefficient=80.0, viscous_coefficient=350.0)
+    truth = dict(
+        preload_force=75.0,
+        coulomb_friction_coefficient=2.5e-6,
+        breakaway_ratio=1.4,
+        transition_coefficient=80.0,
+        viscous_coefficient=350.0,
+    )
     k = truth["breakaway_ratio"]
     model = FrictionModel(
         {
@@ -91,17 +110,26 @@ def test_legacy_fit_recovers_a_model_that_is_the_block(thesis):
         assert_allclose(fitted[name], value, rtol=1e-6, err_msg=name)
 
 
-@pytest.mark.parametrize("fit, block", [
-    (ssc.fit_cylinder_friction_il, ssc.cylinder_friction_il),
-    (ssc.fit_cylinder_friction, ssc.cylinder_friction),
-])
+@pytest.mark.parametrize(
+    "fit, block",
+    [
+        (ssc.fit_cylinder_friction_il, ssc.cylinder_friction_il),
+        (ssc.fit_cylinder_friction, ssc.cylinder_friction),
+    ],
+)
 def test_simscape_fits_are_least_squares_minima(thesis, fit, block):
     speeds, pressures = loss_grid(thesis, **SMALL_GRID)
     params = fit(thesis, speeds, pressures)
 
     def rms(p):
-        report = loss_report(thesis, lambda v, a, b: block(v, a, b, **p), target="t",
-                             title="t", speeds=speeds, pressures=pressures)
+        report = loss_report(
+            thesis,
+            lambda v, a, b: block(v, a, b, **p),
+            target="t",
+            title="t",
+            speeds=speeds,
+            pressures=pressures,
+        )
         return report.rms
 
     best = rms(params)
@@ -138,10 +166,16 @@ def test_hopsan_fit_is_the_linear_least_squares_solution(thesis):
     signal = hop.fit_hopsan_pressure_signal(thesis, speeds, pressures)
     design = np.column_stack([np.ones(V.size), 2 * P.ravel(), V.ravel()])
     (f_k0, k_p, b_p2), *_ = np.linalg.lstsq(design, target, rcond=None)
-    assert_allclose([signal["f_k0"], signal["f_k_pressure_coefficient"], signal["B_p"]],
-                    [f_k0, k_p, b_p2], rtol=1e-7)
-    assert_allclose(hop.hopsan_friction_pressure_signal(0.02, 50e5, 30e5, **signal),
-                    f_k0 + k_p * 80e5 + b_p2 * 0.02, rtol=1e-8)
+    assert_allclose(
+        [signal["f_k0"], signal["f_k_pressure_coefficient"], signal["B_p"]],
+        [f_k0, k_p, b_p2],
+        rtol=1e-7,
+    )
+    assert_allclose(
+        hop.hopsan_friction_pressure_signal(0.02, 50e5, 30e5, **signal),
+        f_k0 + k_p * 80e5 + b_p2 * 0.02,
+        rtol=1e-8,
+    )
 
 
 # ------------------------------------------------------------------ the loss report
@@ -163,24 +197,34 @@ def test_loss_report_of_the_thesis_model(thesis, tmp_path):
 
 def test_loss_report_grid_table_and_worst_point(thesis, tmp_path):
     speeds, pressures = loss_grid(thesis, **SMALL_GRID)
-    report = loss_report(thesis, lambda v, a, b: hop.hopsan_friction(v, f_k=120.0, B_p=300.0),
-                         target="hopsan", title="Hopsan", speeds=speeds, pressures=pressures,
-                         parameters={"f_k": (120.0, "N")})
+    report = loss_report(
+        thesis,
+        lambda v, a, b: hop.hopsan_friction(v, f_k=120.0, B_p=300.0),
+        target="hopsan",
+        title="Hopsan",
+        speeds=speeds,
+        pressures=pressures,
+        parameters={"f_k": (120.0, "N")},
+    )
     files = report.write(tmp_path)
     assert [f.suffix for f in files] == [".csv", ".txt", ".png"]
     table = pd.read_csv(files[0])
-    assert list(table.columns) == ["velocity [mm/s]", "pressure [bar]", "cylfric [N]",
-                                   "hopsan [N]", "difference [N]"]
+    assert list(table.columns) == [
+        "velocity [mm/s]",
+        "pressure [bar]",
+        "cylfric [N]",
+        "hopsan [N]",
+        "difference [N]",
+    ]
     assert len(table) == 2 * 12 * 4  # both directions
-    assert_allclose(table["difference [N]"], table["hopsan [N]"] - table["cylfric [N]"],
-                    atol=1e-6)
+    assert_allclose(table["difference [N]"], table["hopsan [N]"] - table["cylfric [N]"], atol=1e-6)
     assert_allclose(np.sort(np.abs(table["velocity [mm/s]"].unique()))[[0, -1]], [1.0, 135.0])
     # odd models: retraction mirrors extension
     ext = table[table["velocity [mm/s]"] > 0].sort_values(["pressure [bar]", "velocity [mm/s]"])
-    ret = table[table["velocity [mm/s]"] < 0].sort_values(["pressure [bar]", "velocity [mm/s]"],
-                                                          ascending=[True, False])
-    assert_allclose(ext["difference [N]"].to_numpy(), -ret["difference [N]"].to_numpy(),
-                    atol=1e-9)
+    ret = table[table["velocity [mm/s]"] < 0].sort_values(
+        ["pressure [bar]", "velocity [mm/s]"], ascending=[True, False]
+    )
+    assert_allclose(ext["difference [N]"].to_numpy(), -ret["difference [N]"].to_numpy(), atol=1e-9)
     v, p, d = report.worst
     assert abs(d) == pytest.approx(np.abs(table["difference [N]"]).max(), rel=1e-8)
     assert_allclose(report.rms, np.sqrt(np.mean(table["difference [N]"] ** 2)), rtol=1e-8)

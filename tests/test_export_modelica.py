@@ -20,8 +20,7 @@ from cylfric.export import export
 from cylfric.export.modelica import modelica_package
 from cylfric.model import FrictionModel
 
-VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3,
-            "velocity_max": 0.135}
+VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3, "velocity_max": 0.135}
 
 MODELS = {
     "thesis": FrictionModel(validity=VALIDITY),
@@ -56,6 +55,7 @@ MODELS = {
 
 def _steady_state_from_text(text, velocity, pressure_a, pressure_b):
     """Evaluate the .mo's own equations in steady state (a tiny reader for this package)."""
+
     def python(expr):
         expr = expr.replace("^", "**").replace("PressureLaws.", "")
         return re.sub(r"\babs\(", "np.abs(", re.sub(r"\bexp\(", "np.exp(", expr))
@@ -67,7 +67,8 @@ def _steady_state_from_text(text, velocity, pressure_a, pressure_b):
         env[name] = float(value)
     for name, inputs, body in re.findall(
         r"function (\w+) .*?((?:input Real \w+.*?;\s*)+)output Real y;\s*algorithm\s*y := (.*?);",
-        text, flags=re.S,
+        text,
+        flags=re.S,
     ):
         args = re.findall(r"input Real (\w+)", inputs)
         env[name] = eval(f"lambda {', '.join(args)}: {python(body)}", env)  # noqa: S307

@@ -18,8 +18,7 @@ from cylfric.model import FrictionModel
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 
 runner = CliRunner()
-VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3,
-            "velocity_max": 0.135}
+VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3, "velocity_max": 0.135}
 TINY = BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50))
 
 
@@ -59,13 +58,24 @@ def _commands(datasheet, campaigns, tmp_path):
     }
 
 
-COMMANDS = ("fit", "demo", "fit-many", "export", "fit-motion", "simulate", "plan", "generate",
-            "catalog compare", "drift")
+COMMANDS = (
+    "fit",
+    "demo",
+    "fit-many",
+    "export",
+    "fit-motion",
+    "simulate",
+    "plan",
+    "generate",
+    "catalog compare",
+    "drift",
+)
 
 
 @pytest.mark.parametrize("command", COMMANDS)
-def test_every_command_refuses_an_out_folder_that_is_a_link(command, datasheet, campaigns,
-                                                            tmp_path):
+def test_every_command_refuses_an_out_folder_that_is_a_link(
+    command, datasheet, campaigns, tmp_path
+):
     target = tmp_path / "elsewhere"
     target.mkdir()
     (target / "keep.txt").write_text("the user's\n")
@@ -93,14 +103,31 @@ def test_a_single_file_out_that_is_a_link_is_refused_not_replaced(to, datasheet,
 @pytest.mark.parametrize("command", ["predict", "export"])
 def test_catalog_file_outputs_refuse_a_link(command, datasheet, tmp_path):
     db = tmp_path / "cat.db"
-    runner.invoke(app, ["catalog", "add", str(datasheet), "--name", "a", "--db", str(db),
-                        "--bore", "40", "--rod", "20"])
+    runner.invoke(
+        app,
+        [
+            "catalog",
+            "add",
+            str(datasheet),
+            "--name",
+            "a",
+            "--db",
+            str(db),
+            "--bore",
+            "40",
+            "--rod",
+            "20",
+        ],
+    )
     target = tmp_path / "theirs.json"
     target.write_text("{}\n")
     link = tmp_path / "out.json"
     link.symlink_to(target)
-    args = (["catalog", "predict", "a", "--bore", "63", "--out", str(link)]
-            if command == "predict" else ["catalog", "export", str(link)])
+    args = (
+        ["catalog", "predict", "a", "--bore", "63", "--out", str(link)]
+        if command == "predict"
+        else ["catalog", "export", str(link)]
+    )
     result = runner.invoke(app, [*args, "--db", str(db)])
     assert result.exit_code == 2 and "is a symbolic link to" in result.output, result.output
     assert link.is_symlink() and target.read_text() == "{}\n"
@@ -109,8 +136,11 @@ def test_catalog_file_outputs_refuse_a_link(command, datasheet, tmp_path):
 def test_a_dangling_link_is_refused_with_what_to_do(tmp_path):
     link = tmp_path / "out"
     link.symlink_to(tmp_path / "gone")
-    with pytest.raises(OutputPathError, match=r"symbolic link to .*gone.* does not exist; "
-                                              r"remove the link"):
+    with pytest.raises(
+        OutputPathError,
+        match=r"symbolic link to .*gone.* does not exist; "
+        r"remove the link",
+    ):
         refuse_link(link)
 
 
@@ -129,8 +159,9 @@ def test_an_atomic_write_does_not_replace_a_device(tmp_path):
         atomic_write_text("/dev/null", "x")
 
 
-@pytest.mark.parametrize("name", ["../escape", "a/../../escape", "/abs", "", ".", "a\0b",
-                                  "a\nb", "..\\x", "C:evil"])
+@pytest.mark.parametrize(
+    "name", ["../escape", "a/../../escape", "/abs", "", ".", "a\0b", "a\nb", "..\\x", "C:evil"]
+)
 def test_names_that_would_leave_out_are_refused(name, tmp_path):
     with pytest.raises(OutputPathError, match="cannot name a file or folder inside"):
         inside(tmp_path / "out", name, "campaign")
@@ -177,8 +208,7 @@ def test_out_f_fmu_writes_that_file_named_after_its_stem(datasheet, tmp_path):
 
 def test_out_name_mo_writes_that_file_even_when_the_stem_is_no_identifier(datasheet, tmp_path):
     path = tmp_path / "my seal-2.mo"
-    result = runner.invoke(app, ["export", str(datasheet), "--to", "modelica", "--out",
-                                 str(path)])
+    result = runner.invoke(app, ["export", str(datasheet), "--to", "modelica", "--out", str(path)])
     assert result.exit_code == 0, result.output
     assert path.is_file() and "package " in path.read_text()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["my seal-2.mo"]
@@ -188,8 +218,9 @@ def test_an_existing_folder_named_like_a_file_stays_a_folder(datasheet, tmp_path
     """Before issue 23 --out f.mo made a folder: such a folder is still written into."""
     folder = tmp_path / "f.mo"
     folder.mkdir()
-    result = runner.invoke(app, ["export", str(datasheet), "--to", "modelica", "--out",
-                                 str(folder), "--name", "rig"])
+    result = runner.invoke(
+        app, ["export", str(datasheet), "--to", "modelica", "--out", str(folder), "--name", "rig"]
+    )
     assert result.exit_code == 0, result.output
     assert (folder / "Rig.mo").is_file()  # the package name, capitalised
 
@@ -204,11 +235,14 @@ def test_folder_targets_refuse_a_file_out(datasheet, tmp_path):
 
 @pytest.mark.parametrize(
     ("glob", "problem"),
-    [("/data/runs/*.txt", "is absolute"), ("C:/runs/*.txt", "is absolute"),
-     ("../other/*.txt", "climbs out"), ("runs/../../*.txt", "climbs out")],
+    [
+        ("/data/runs/*.txt", "is absolute"),
+        ("C:/runs/*.txt", "is absolute"),
+        ("../other/*.txt", "climbs out"),
+        ("runs/../../*.txt", "climbs out"),
+    ],
 )
-def test_a_glob_outside_the_campaign_is_refused_with_its_line(glob, problem, campaigns,
-                                                               tmp_path):
+def test_a_glob_outside_the_campaign_is_refused_with_its_line(glob, problem, campaigns, tmp_path):
     folder = tmp_path / "campaign"
     folder.mkdir()
     for path in (campaigns / "rig1").iterdir():
@@ -222,6 +256,8 @@ def test_a_glob_outside_the_campaign_is_refused_with_its_line(glob, problem, cam
 
 
 def test_a_command_line_glob_outside_the_campaign_is_refused(campaigns, tmp_path):
-    result = runner.invoke(app, ["fit", str(campaigns / "rig1"), "--glob", "/tmp/*.txt",
-                                 "--out", str(tmp_path / "out")])
+    result = runner.invoke(
+        app,
+        ["fit", str(campaigns / "rig1"), "--glob", "/tmp/*.txt", "--out", str(tmp_path / "out")],
+    )
     assert result.exit_code == 2 and "--glob = '/tmp/*.txt' is absolute" in result.output

@@ -175,7 +175,8 @@ def test_plot_delegates_and_labels_units():
 
 def test_simulation_errors_name_the_problem():
     with pytest.raises(
-        ValueError, match=r"unknown method 'rk4'; valid: \['rosenbrock', 'dopri', 'fixed', 'scipy'\]"
+        ValueError,
+        match=r"unknown method 'rk4'; valid: \['rosenbrock', 'dopri', 'fixed', 'scipy'\]",
     ):
         simulate(Cylinder(MASS), _model(), SpringPull(2e4, 5e-3), 1.0, method="rk4")
     with pytest.raises(ValueError, match="need 0 < dt <= duration"):

@@ -48,7 +48,9 @@ def test_raising_the_limit_lets_the_simulation_run():
 def test_the_default_limit_refuses_a_long_fine_simulation_before_allocating():
     # 1e5 s every 1 ms would be 2.56e10 bytes; refused at once (nothing allocated, no run)
     start = time.perf_counter()
-    with pytest.raises(ValueError, match=r"about 23\.8 GiB of memory at its peak .* limit of 1 GiB"):
+    with pytest.raises(
+        ValueError, match=r"about 23\.8 GiB of memory at its peak .* limit of 1 GiB"
+    ):
         simulate(Cylinder(1.0), MODEL, SpringPull(2, 0.1), 1e5)
     assert time.perf_counter() - start < 1.0
     assert MAX_OUTPUT_BYTES == 2**30

@@ -207,9 +207,7 @@ def test_no_mega_spelling_of_a_milli_unit_is_read(key, number):
         ("5 mM²/s", "kinematic viscosity", "mm²/s"),
     ],
 )
-def test_a_mixed_case_milli_unit_is_refused_naming_the_spelling_to_write(
-    text, dimension, written
-):
+def test_a_mixed_case_milli_unit_is_refused_naming_the_spelling_to_write(text, dimension, written):
     unit = text.split()[1]
     with pytest.raises(
         UnitError,

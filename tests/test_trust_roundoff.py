@@ -132,7 +132,6 @@ def test_out_of_range_messages_print_plain_numbers():
     assert "np.float64" not in str(info.value)
 
 
-
 _near_bound = st.one_of(
     st.floats(-1e-6, 1e3),
     st.sampled_from([0.0, -1e-16, -1e-12, -1e-10, -1e-9, -2e-9, -1e-7]),
@@ -149,3 +148,16 @@ def test_scalar_clamp_is_the_array_clamp(F_c, dF, sigma_2):
     for name in params:
         assert isinstance(scalar[name], float)
         assert scalar[name] == float(np.asarray(array[name])[0]), name
+
+
+def test_a_datasheet_without_a_friction_level_is_refused_not_a_type_error():
+    """The schema lets F_c be null (as F_s and sigma_2); a model needs its level (found by
+    mypy in the type work of issue 24: validate raised a bare TypeError)."""
+    import pytest
+
+    from cylfric.model import DatasheetError, FrictionModel, validate
+
+    sheet = FrictionModel().to_datasheet()
+    sheet["parameters"].update(F_c=None, F_s=None, sigma_2=None)
+    with pytest.raises(DatasheetError, match="parameters/F_c: null"):
+        validate(sheet)

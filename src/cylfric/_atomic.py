@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING
 from ._paths import OutputPathError, failed, os_error_message, refuse_link
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from ._typing import StrPath
 
 __all__ = [
@@ -41,7 +43,7 @@ def atomic_write_bytes(path: StrPath, data: bytes) -> Path:
     return atomic_write_chunks(path, (data,))
 
 
-def atomic_write_chunks(path, chunks) -> Path:
+def atomic_write_chunks(path: StrPath, chunks: Iterable[bytes]) -> Path:
     """Write the bytes of the iterable ``chunks`` one after the other to ``path``, through a
     temporary file and a rename (a large file never held whole in memory); errors as
     :func:`atomic_write_bytes`."""

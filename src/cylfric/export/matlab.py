@@ -101,8 +101,7 @@ def _params_file(model, name) -> str:
             key = parameter if law == "constant" else f"{parameter}.{coefficient}"
             p = model.parameters[key]
             lines.append(
-                f"P.{parameter}.{coefficient} = {_number(p.value)};  "
-                f"% [{matlab_comment(p.unit)}]"
+                f"P.{parameter}.{coefficient} = {_number(p.value)};  % [{matlab_comment(p.unit)}]"
             )
     if model.validity is not None:
         lines.append("% range the data covered (outside it the model is extrapolated)")

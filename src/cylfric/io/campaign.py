@@ -210,7 +210,7 @@ def load_config(folder) -> CampaignConfig:
                 raise BenchFileError(
                     path,
                     f"cylinder.{key} = {value:g} m is not a cylinder's diameter; expected at "
-                    f"most {MAX_DIAMETER:g} m, e.g. {key} = \"40 mm\"",
+                    f'most {MAX_DIAMETER:g} m, e.g. {key} = "40 mm"',
                     line=_line_of(path, key),
                 )
         piston = math.pi / 4 * bore**2

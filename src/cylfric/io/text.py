@@ -619,9 +619,7 @@ def _assemble(frames, path, roles, own: bool = False):
                 try:
                     udim = unit_dimension(unit)
                 except UnitError as exc:
-                    raise BenchFileError(
-                        path, f"column {name!r}: {exc}", line=unit_line
-                    ) from None
+                    raise BenchFileError(path, f"column {name!r}: {exc}", line=unit_line) from None
                 if udim != dim:
                     raise BenchFileError(
                         path,

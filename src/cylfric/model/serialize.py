@@ -276,6 +276,8 @@ def _physical(sheet):
     except (ValueError, TypeError) as exc:
         return f"parameters: {exc}"
     F_c = params.get("F_c")
+    if F_c is None:  # the schema allows null for every law; a friction model needs its level
+        return "parameters/F_c: null; a datasheet needs at least the Coulomb level F_c"
     F_s = params.get("F_s", F_c)
     sigma_2 = params.get("sigma_2", 0.0 * p)
     span = f"{p[0] / 1e5:.4g}-{p[-1] / 1e5:.4g} bar"

@@ -100,9 +100,7 @@ def render_report(
     )
     parts.append(offset_by_pressure(extraction))
     for name, reason in model.not_identified.items():
-        parts.append(
-            f"<p class='note'>{html_text(name)} not identified: {html_text(reason)}</p>"
-        )
+        parts.append(f"<p class='note'>{html_text(name)} not identified: {html_text(reason)}</p>")
     dyn = ", ".join(
         f"{name} {status} ({reason})" for name, (status, reason) in model.dynamic_status.items()
     )
