@@ -25,7 +25,17 @@ def main(argv):
     if reading == "serial":
         import cylfric.pipeline as pipeline
 
-        pipeline.fit_campaign = functools.partial(pipeline.fit_campaign, workers=1)
+        original = pipeline.fit_campaign
+
+        @functools.wraps(original)
+        def serial(folder, out, options=None, **keywords):
+            if options is not None:  # a FitOptions (cylfric.options): the same, on one core
+                from dataclasses import replace
+
+                return original(folder, out, replace(options, workers=1), **keywords)
+            return original(folder, out, workers=1, **keywords)
+
+        pipeline.fit_campaign = serial
     from cylfric.cli import main as cylfric_main
 
     sys.argv = ["cylfric", *args]

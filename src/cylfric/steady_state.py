@@ -572,7 +572,19 @@ def extract_campaign(
             progress(infos[index].path.name)
 
     workers = 2 if workers is None else workers
-    results = run(one, len(infos), workers=workers, min_items=PARALLEL_MIN_FILES, done=report)
+    # the first file is read here: it loads the compiled reader (numba, about 0.5 s) once,
+    # and the workers forked for the rest inherit it instead of each loading it again
+    head = 1 if workers >= 2 and len(infos) >= PARALLEL_MIN_FILES else 0
+    results = [one(i) for i in range(head)]
+    for i in range(head):
+        report(i)
+    results += run(
+        lambda i: one(i + head),
+        len(infos) - head,
+        workers=workers,
+        min_items=PARALLEL_MIN_FILES - head,
+        done=lambda i, result: report(i + head, result),
+    )
     for index, info in enumerate(infos):
         rows, summary, error = results[index]
         if error is not None:
