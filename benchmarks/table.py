@@ -46,7 +46,7 @@ def table() -> str:
             f"<= 1x, or <= 1.5x argued ({met})",
         ),
     ]
-    rows += _fit_vs_script_rows() + _later_rows()
+    rows += _fit_vs_script_rows() + _parallel_rows() + _later_rows()
     lines = ["| benchmark | measured | goal |", "|---|---|---|"]
     lines += [f"| {name} | {value} | {goal} |" for name, value, goal in rows]
     return "\n".join(lines)
@@ -128,6 +128,33 @@ def _fit_vs_script_rows():
                 f"<= {c['goal_ratio']:g}x ({'met' if c['met'] else 'not met'})",
             )
         )
+    return rows
+
+
+def _parallel_rows():
+    """bench_parallel.py: `cylfric fit --no-report` idle and busy, against the code before
+    the simplification (issue 24) and against plain serial reading."""
+    if not (RESULTS / "fit_parallel.json").is_file():
+        return []
+    f = load("fit_parallel")
+    rows = []
+    for state in ("idle", "busy"):
+        for size in ("144", "480"):
+            modes = f[f"{state}_{size}_files"]
+            now = modes["pool_quick"]["wall_median_seconds"]
+            serial = modes["serial_quick"]["wall_median_seconds"]
+            before = modes.get("before", {}).get("wall_median_seconds")
+            shown = f"{now:.2f} s vs {before:.2f} s before: {now / before:.2f}x" if before else ""
+            rows.append(
+                (
+                    f"`cylfric fit --no-report`, {size} files, {state} (the other core "
+                    + ("free" if state == "idle" else "spinning")
+                    + "): the standard pool vs the hand-made forked reader before issue 24",
+                    f"{shown}; plain serial reading {serial:.2f} s (median of "
+                    f"{f['rounds']} rounds)",
+                    "<= 1x before (" + ("met" if before and now <= before else "not met") + ")",
+                )
+            )
     return rows
 
 
