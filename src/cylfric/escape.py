@@ -50,7 +50,7 @@ __all__ = [
 COMMENT_LIMIT = 240
 """Longest user text [characters] a generated comment carries; longer text ends in ``[...]``."""
 
-_SAFE_CATEGORIES_EXCLUDED = ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
+_ESCAPED_CATEGORIES = ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
 
 
 def _escape_char(c: str) -> str:
@@ -83,7 +83,7 @@ def printable(text: object, *, limit: int | None = None, ascii_only: bool = Fals
     """
     out = []
     for c in str(text):
-        if (ascii_only and ord(c) > 0x7E) or unicodedata.category(c) in _SAFE_CATEGORIES_EXCLUDED:
+        if (ascii_only and ord(c) > 0x7E) or unicodedata.category(c) in _ESCAPED_CATEGORIES:
             out.append(_escape_char(c))
         else:
             out.append(c)

@@ -277,10 +277,22 @@ def fit_many(
             "run files)"
         )
     target, top = out.resolve(), root.resolve()
-    for folder in campaigns:
-        real = folder.resolve()
-        if (real == target or real in target.parents) and (real == top or top in real.parents):
+    fitted: list[tuple[Path, Path, str]] = []  # (campaign, its output folder, its name)
+    refused: dict[str, dict[str, Any]] = {}
+    for folder in campaigns:  # one campaign that cannot be fitted is a failed row, not fatal
+        name, real = _name(folder, root), folder.resolve()
+        holds_out = real == target or real in target.parents
+        if holds_out and (real == top or top in real.parents):
             raise ValueError(f"--out {out} is inside the campaign folder {folder}")
+        try:  # a link to a campaign elsewhere is followed, a loop back up is not
+            if holds_out or real == top or real in top.parents:
+                raise ValueError(
+                    f"{folder} leads to {real}, which holds {root} or --out {out}: not fitted"
+                )
+            fitted.append((folder, inside(out, name, "campaign"), name))
+        except ValueError as exc:
+            refused[name] = {"campaign": name, "status": "failed", "reason": str(exc)}
+            refused[name].update({"out": "", "catalog": "", "runs [-]": None})
     if workers is not None and workers < 1:
         raise ValueError(f"workers = {workers}; expected at least 1")
     distributed = scheduler not in (None, "local-cluster", "serial")
@@ -294,22 +306,9 @@ def fit_many(
         # fits side by side: each on one core (a fit alone reads files on two)
         options = replace(options, workers=1)
     t0, started = time.perf_counter(), time.time()
-    jobs: list[tuple] = []
-    refused: dict[str, dict[str, Any]] = {}
-    for folder in campaigns:  # one campaign that cannot be fitted is a failed row, not fatal
-        name = _name(folder, root)
-        try:
-            real = folder.resolve()  # a link to a campaign elsewhere is followed, a loop is not
-            if real == top or real in top.parents or real == target or real in target.parents:
-                raise ValueError(
-                    f"{folder} leads to {real}, which holds {root} or --out {out}: not fitted"
-                )
-            jobs.append((folder, inside(out, name, "campaign"), name, options, started))
-        except ValueError as exc:
-            refused[name] = {"campaign": name, "status": "failed", "reason": str(exc)}
-            refused[name].update({"out": "", "catalog": "", "runs [-]": None})
+    jobs = [(folder, folder_out, name, options, started) for folder, folder_out, name in fitted]
     # largest first: a long fit started last would leave the other workers idle at the end
-    order = sorted(range(len(jobs)), key=lambda i: -_size(campaigns[i]))
+    order = sorted(range(len(jobs)), key=lambda i: -_size(jobs[i][0]))
     rows = {}
 
     def done(row):

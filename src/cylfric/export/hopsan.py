@@ -32,12 +32,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..escape import hcom_comment, markdown_text
+from ..escape import hcom_comment, identifier, markdown_text
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import loss_grid, loss_report
 from .result import ExportResult
-from .simscape import _identifier, _num
+from .simscape import _num
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -209,7 +209,7 @@ def export_hopsan(
     speeds, pressures = loss_grid(
         model, velocity_range=velocity_range, pressure_range=pressure_range, **grid
     )
-    stem = _identifier(name or model.record.get("name") or "cylfric")
+    stem = identifier(name or model.record.get("name") or "cylfric")
     params = fit_hopsan(model, speeds, pressures)
     low = model.params_at(model.operating_pressure(pressures[0], pressures[0]))["F_s"]
     high = model.params_at(model.operating_pressure(pressures[-1], pressures[-1]))["F_s"]

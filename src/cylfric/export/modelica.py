@@ -21,12 +21,11 @@ from pathlib import Path
 from string import Template
 from typing import TYPE_CHECKING
 
-from ..escape import html_text, modelica_string
+from ..escape import html_text, identifier, modelica_string
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..io.writers import atomic_write_text
 from ..model.core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 from .result import ExportResult
-from .simscape import _identifier
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
@@ -110,7 +109,7 @@ def _specs(model):
 
 def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[str, str]:
     """(package name, Modelica source text) of the model's friction package."""
-    package = _identifier(name or model.record.get("name") or "cylfric")
+    package = identifier(name or model.record.get("name") or "cylfric")
     package = package[0].upper() + package[1:]
     parameters, variables, laws = [], [], []
     for parameter, law, spec in _specs(model):

@@ -490,7 +490,7 @@ def export_simscape(
     speeds, pressures = loss_grid(
         model, velocity_range=velocity_range, pressure_range=pressure_range, **grid
     )
-    stem = _identifier(name or model.record.get("name") or "cylfric")
+    stem = identifier(name or model.record.get("name") or "cylfric")
     il = fit_cylinder_friction_il(model, speeds, pressures)
     legacy = fit_cylinder_friction(model, speeds, pressures)
     operating = _levels(model, pressure_range, levels)
@@ -559,11 +559,6 @@ def _per_level(velocity, pressure, chamber, per_level):
         sel = np.isclose(pressure, p, rtol=1e-12, atol=1e-9)
         force = np.where(sel, translational_friction(velocity, **params), force)
     return force
-
-
-def _identifier(name: str) -> str:
-    """A MATLAB/Modelica identifier made of ``name`` (letters, digits, underscores)."""
-    return identifier(name, default="cylfric", max_length=48)
 
 
 def _script(stem, model, il, legacy, operating, per_level, reports) -> str:

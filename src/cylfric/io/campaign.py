@@ -14,6 +14,7 @@ from __future__ import annotations
 import codecs
 import csv
 import fnmatch
+import functools
 import io
 import math
 import os
@@ -458,6 +459,18 @@ PATTERN_GROUPS = 30
 """Most groups a ``name_pattern`` may have."""
 
 
+@functools.lru_cache(maxsize=16)
+def _re2(pattern: str) -> object:
+    """``pattern`` compiled by RE2, once per process (load_config checks it, _discover uses
+    it); an RE2 error is raised (and not cached)."""
+    import re2
+
+    options = re2.Options()
+    options.log_errors = False  # the caller raises the error; RE2 prints nothing on stderr
+    options.max_mem = 8 << 20  # RE2's own default: a larger program is refused, not built
+    return re2.compile(pattern, options=options)
+
+
 def compile_name_pattern(pattern: str, path=None):
     """``[files] name_pattern`` compiled by RE2, whose matching time is linear in the name.
 
@@ -491,11 +504,8 @@ def compile_name_pattern(pattern: str, path=None):
             "name the few groups it carries, e.g. '^(?P<seal>.+)_(?P<pressure_bar>[0-9.]+)bar')",
             line=line,
         )
-    options = re2.Options()
-    options.log_errors = False  # the error is raised below, not printed by RE2 on stderr
-    options.max_mem = 8 << 20  # RE2's own default: a larger program is refused, not built
     try:
-        return re2.compile(pattern, options=options)
+        return _re2(pattern)
     except re2.error as exc:
         reason = exc.args[0] if exc.args else exc
         if isinstance(reason, bytes):
