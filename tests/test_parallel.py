@@ -81,3 +81,39 @@ def test_starmap_gives_the_serial_results_in_order():
 
 def test_the_worker_task_is_installed_only_in_workers():
     assert _parallel._task is None
+
+
+@needs_fork
+def test_start_runs_the_tasks_while_the_caller_works_and_close_stops_them(tmp_path):
+    """`start` puts the workers to work at once (pipeline._fit imports the next steps
+    meanwhile); `close` drops what has not started; a serial start runs nothing until
+    `results`."""
+    import time
+
+    from cylfric._parallel import start
+
+    def task(i):
+        (tmp_path / f"{i}.started").touch()
+        time.sleep(0.05)
+        return i
+
+    pending = start(task, 4, workers=2)
+    deadline = time.monotonic() + 20
+    while not list(tmp_path.glob("*.started")) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert list(tmp_path.glob("*.started"))  # started before results() was asked for
+    assert pending.results() == [0, 1, 2, 3]
+    with pytest.raises(RuntimeError, match="collected already"):
+        pending.results()
+
+    for path in tmp_path.glob("*.started"):
+        path.unlink()
+    lazy = start(task, 3, workers=1)
+    assert not list(tmp_path.glob("*.started"))  # serial: nothing runs before results()
+    assert lazy.results() == [0, 1, 2]
+
+    for path in tmp_path.glob("*.started"):
+        path.unlink()
+    dropped = start(task, 200, workers=2)
+    dropped.close()  # the running ones finish, the queued rest is cancelled
+    assert len(list(tmp_path.glob("*.started"))) < 200

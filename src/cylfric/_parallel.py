@@ -29,7 +29,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
-__all__ = ["can_fork", "run", "starmap"]
+__all__ = ["Pending", "can_fork", "run", "start", "starmap"]
 
 
 def can_fork() -> bool:
@@ -50,6 +50,33 @@ def _install(task: Callable[[int], Any]) -> None:
 def _call(index: int) -> Any:
     assert _task is not None  # set by _install in each worker
     return _task(index)
+
+
+def start(
+    task: Callable[[int], Any],
+    n: int,
+    *,
+    workers: int = 1,
+    min_items: int = 2,
+    done: Callable[[int, Any], object] | None = None,
+) -> Pending:
+    """Start ``[task(i) for i in range(n)]`` in ``workers`` forked processes when that pays;
+    :meth:`Pending.results` collects it.
+
+    The workers start now and run while this process goes on with other work (``cylfric
+    fit`` imports the identification meanwhile); without a pool (see :func:`run`) nothing
+    runs until :meth:`Pending.results`, which then runs the tasks here. Parameters as
+    :func:`run`.
+    """
+    pool = None
+    if workers >= 2 and n >= max(min_items, 2) and can_fork():
+        pool = ProcessPoolExecutor(
+            max_workers=min(workers, n),
+            mp_context=multiprocessing.get_context("fork"),
+            initializer=_install,
+            initargs=(task,),  # inherited by the forked workers, not pickled
+        )
+    return Pending(pool, _call, task, [(index,) for index in range(n)], done)
 
 
 def run(
@@ -86,15 +113,7 @@ def run(
         tasks not yet started are cancelled). The tasks a dead worker (a crash, a signal)
         left unfinished are run here.
     """
-    pool = None
-    if workers >= 2 and n >= max(min_items, 2) and can_fork():
-        pool = ProcessPoolExecutor(
-            max_workers=min(workers, n),
-            mp_context=multiprocessing.get_context("fork"),
-            initializer=_install,
-            initargs=(task,),  # inherited by the forked workers, not pickled
-        )
-    return _collect(pool, _call, task, [(index,) for index in range(n)], done)
+    return start(task, n, workers=workers, min_items=min_items, done=done).results()
 
 
 def starmap(
@@ -124,30 +143,51 @@ def starmap(
             max_workers=min(workers, len(arguments)),
             mp_context=multiprocessing.get_context(method),
         )
-    return _collect(pool, function, None if pool else function, list(arguments), done)
+    return Pending(pool, function, None if pool else function, list(arguments), done).results()
 
 
-def _collect(pool, remote, local, arguments, done) -> list:
-    """``remote(*a)`` on ``pool`` (None: no pool) for each ``a``, results in order; what
-    the pool did not finish, ``local(*a)`` here (None: left as None)."""
-    n = len(arguments)
-    results: list = [None] * n
-    finished = [False] * n
-    if pool is not None:
-        try:
-            futures = {pool.submit(remote, *a): index for index, a in enumerate(arguments)}
-            for future in as_completed(futures):
-                index = futures[future]
-                results[index], finished[index] = future.result(), True
+class Pending:
+    """Calls submitted to a pool (or to be run here); :meth:`results` waits for them."""
+
+    def __init__(self, pool, remote, local, arguments, done) -> None:
+        # ``remote(*a)`` on ``pool`` (None: no pool) for each ``a``; what the pool does not
+        # finish, ``local(*a)`` here (None: left as None)
+        self._pool, self._local, self._done = pool, local, done
+        self._arguments = arguments
+        self._futures = (
+            {pool.submit(remote, *a): index for index, a in enumerate(arguments)}
+            if pool is not None
+            else {}
+        )
+
+    def close(self) -> None:
+        """Cancel what has not started and wait for the running calls (after
+        :meth:`results`, nothing to do)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def results(self) -> list:
+        """The results in order (once; a second call is a RuntimeError)."""
+        if self._arguments is None:
+            raise RuntimeError("these results were collected already")
+        arguments, done, self._arguments = self._arguments, self._done, None
+        n = len(arguments)
+        results: list = [None] * n
+        finished = [False] * n
+        if self._pool is not None:
+            try:
+                for future in as_completed(self._futures):
+                    index = self._futures[future]
+                    results[index], finished[index] = future.result(), True
+                    if done is not None:
+                        done(index, results[index])
+            except BrokenProcessPool:
+                pass  # a worker died: what the pool had not finished is run below
+            finally:
+                self._pool.shutdown(wait=True, cancel_futures=True)
+        for index in range(n):
+            if not finished[index] and self._local is not None:
+                results[index] = self._local(*arguments[index])
                 if done is not None:
                     done(index, results[index])
-        except BrokenProcessPool:
-            pass  # a worker died: what the pool had not finished is run below
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
-    for index in range(n):
-        if not finished[index] and local is not None:
-            results[index] = local(*arguments[index])
-            if done is not None:
-                done(index, results[index])
-    return results
+        return results

@@ -19,7 +19,7 @@ from ._paths import failed, make_folder, refuse_link
 from .io.campaign import Campaign, read_run
 from .io.writers import atomic_write_text
 from .options import FitOptions
-from .steady_state import extract_campaign
+from .steady_state import start_extraction
 
 if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
     from collections.abc import Callable
@@ -382,18 +382,25 @@ def _fit(
     campaign = source if isinstance(source, Campaign) else Campaign.open(source, options.glob)
     folder, config = campaign.folder, campaign.config
     dynamic_runs = campaign.dynamic_runs
+    reading = start_extraction(
+        campaign,
+        skip_bad=options.skip_bad,
+        progress=progress,
+        exclude=[info.path.name for info in dynamic_runs],
+        workers=options.workers,
+    )
     try:
-        extraction = extract_campaign(
-            campaign,
-            skip_bad=options.skip_bad,
-            progress=progress,
-            exclude=[info.path.name for info in dynamic_runs],
-            workers=options.workers,
-        )
+        # while a pool reads the files, the libraries of the next steps load here (pandas,
+        # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py)
+        from .datasheet import datasheet_model, write_datasheet
+        from .identify import UnphysicalFrictionError, identify
+        from .quality import assess
+
+        extraction = reading.result()
     finally:
+        reading.close()
         if after_extraction is not None:
             after_extraction()
-    from .quality import assess
 
     quality = assess(extraction)  # the data as measured: the gate looks for data errors
     correction = _correct_viscosity(extraction, config, options.viscosity_correction)
@@ -405,9 +412,6 @@ def _fit(
         raise ValueError(_strict_message(quality.excluded))
     timings["extract"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    from .datasheet import datasheet_model, write_datasheet
-    from .identify import UnphysicalFrictionError, identify
-
     try:
         ident = identify(
             quality.points,

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._parallel import run
+from ._parallel import start
 from .io.campaign import Campaign, CampaignConfig, read_run
 from .io.text import BenchFileError
 
@@ -494,7 +494,7 @@ PARALLEL_MIN_FILES = 16
 (:func:`cylfric._parallel.run`); fewer are read here, one after another."""
 
 
-def extract_campaign(
+def start_extraction(
     folder: Campaign | str | os.PathLike[str],
     config: CampaignConfig | None = None,
     *,
@@ -503,25 +503,14 @@ def extract_campaign(
     workers=None,
     exclude=(),
     **options,
-) -> Extraction:
-    """Read every run of a campaign folder and extract its friction points.
+) -> PendingExtraction:
+    """Start reading every run of a campaign folder; ``.result()`` gives the
+    :class:`Extraction` (see :func:`extract_campaign`).
 
-    Files are read one at a time per core (memory does not grow with the number of files:
-    only each run's points are kept). By default the first bad file raises
-    :class:`~cylfric.io.BenchFileError`; with ``skip_bad`` it is listed in
-    ``Extraction.skipped`` with the reason and the rest goes on. ``progress`` is called with
-    each file name as it is done. ``workers`` (default 2): with 2 or more, and at least
-    ``PARALLEL_MIN_FILES`` files, the files are read on a pool of forked processes
-    (:func:`cylfric._parallel.run`; the per-file work is small numpy calls that hold the
-    GIL, so threads would not help), else here, one after another; the result is the same
-    either way. ``exclude``
-    names files of the campaign that are not constant-velocity runs (the presliding and
-    breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they are not read here.
-    Input files are never modified.
-
-    ``folder`` is a campaign folder (read with ``config``, default its campaign.toml) or a
-    :class:`~cylfric.io.campaign.Campaign` already opened (with its own configuration:
-    then ``config`` must be None), whose campaign.toml and manifest.csv are not read again.
+    With a pool (``workers`` >= 2 and at least ``PARALLEL_MIN_FILES`` files) the first file
+    is read here and the workers start on the rest at once, so the caller can go on with
+    other work (``cylfric fit`` imports the identification meanwhile); else the files are
+    read when ``.result()`` is called.
     """
     if isinstance(folder, Campaign):
         if config is not None:
@@ -542,8 +531,6 @@ def extract_campaign(
             "no constant-velocity runs (only presliding/breakaway tests); the steady-state "
             "fit needs constant-velocity runs",
         )
-    per_run, skipped, runs = [], [], []
-    total = 0
 
     def one(index):
         info = infos[index]
@@ -575,16 +562,82 @@ def extract_campaign(
     # the first file is read here: it loads the compiled reader (numba, about 0.5 s) once,
     # and the workers forked for the rest inherit it instead of each loading it again
     head = 1 if workers >= 2 and len(infos) >= PARALLEL_MIN_FILES else 0
-    results = [one(i) for i in range(head)]
+    first = [one(i) for i in range(head)]
     for i in range(head):
         report(i)
-    results += run(
+    pending = start(
         lambda i: one(i + head),
         len(infos) - head,
         workers=workers,
         min_items=PARALLEL_MIN_FILES - head,
         done=lambda i, result: report(i + head, result),
     )
+    return PendingExtraction(campaign, infos, first, pending, skip_bad)
+
+
+class PendingExtraction:
+    """A campaign's reading, started by :func:`start_extraction`."""
+
+    def __init__(self, campaign, infos, first, pending, skip_bad) -> None:
+        self.campaign = campaign
+        self.files = tuple(info.path.name for info in infos)
+        self._infos, self._first, self._pending, self._skip_bad = infos, first, pending, skip_bad
+
+    def close(self) -> None:
+        """Stop reading (the files being read are finished, the rest dropped)."""
+        self._pending.close()
+
+    def result(self) -> Extraction:
+        """Wait for the files and build the :class:`Extraction` (bad files raise here)."""
+        return _finish(
+            self.campaign, self._infos, self._first + self._pending.results(), self._skip_bad
+        )
+
+
+def extract_campaign(
+    folder: Campaign | str | os.PathLike[str],
+    config: CampaignConfig | None = None,
+    *,
+    skip_bad=False,
+    progress=None,
+    workers=None,
+    exclude=(),
+    **options,
+) -> Extraction:
+    """Read every run of a campaign folder and extract its friction points.
+
+    Files are read one at a time per core (memory does not grow with the number of files:
+    only each run's points are kept). By default the first bad file raises
+    :class:`~cylfric.io.BenchFileError`; with ``skip_bad`` it is listed in
+    ``Extraction.skipped`` with the reason and the rest goes on. ``progress`` is called with
+    each file name as it is done. ``workers`` (default 2): with 2 or more, and at least
+    ``PARALLEL_MIN_FILES`` files, the files are read on a pool of forked processes
+    (:func:`cylfric._parallel.run`; the per-file work is small numpy calls that hold the
+    GIL, so threads would not help), else here, one after another; the result is the same
+    either way. ``exclude``
+    names files of the campaign that are not constant-velocity runs (the presliding and
+    breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they are not read here.
+    Input files are never modified.
+
+    ``folder`` is a campaign folder (read with ``config``, default its campaign.toml) or a
+    :class:`~cylfric.io.campaign.Campaign` already opened (with its own configuration:
+    then ``config`` must be None), whose campaign.toml and manifest.csv are not read again.
+    """
+    return start_extraction(
+        folder,
+        config,
+        skip_bad=skip_bad,
+        progress=progress,
+        workers=workers,
+        exclude=exclude,
+        **options,
+    ).result()
+
+
+def _finish(campaign, infos, results, skip_bad) -> Extraction:
+    """The files' results (rows, summary, error) -> the :class:`Extraction`."""
+    per_run, skipped, runs = [], [], []
+    total = 0
     for index, info in enumerate(infos):
         rows, summary, error = results[index]
         if error is not None:
