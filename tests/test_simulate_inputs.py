@@ -117,3 +117,37 @@ def test_the_literature_set_as_coefficients_keeps_sigma_0_and_sigma_1():
 def test_bad_tolerances_and_batch_inputs_give_a_clear_value_error(run, message):
     with pytest.raises(ValueError, match=message):
         run()
+
+
+@pytest.mark.parametrize("method", ["rosenbrock", "dopri", "fixed", "scipy"])
+@pytest.mark.parametrize(
+    "state, value",
+    [("x0", math.nan), ("v0", math.nan), ("z0", math.nan), ("v0", math.inf), ("x0", -math.inf)],
+)
+def test_non_finite_initial_states_are_named(method, state, value):
+    """Issue 26: a NaN or inf initial state ended in a ZeroDivisionError (rosenbrock) or ran
+    to NaN output (fixed); now a ValueError naming the state, its value and unit."""
+    with pytest.raises(ValueError, match=rf"^{state} = {value!r} m"):
+        simulate(
+            Cylinder(2.5),
+            _canudas(),
+            SpringPull(2e3, 1e-3),
+            duration=0.05,
+            dt=1e-3,
+            method=method,
+            **{state: value},
+        )
+
+
+@pytest.mark.parametrize("state", ["x0", "v0"])
+def test_non_finite_initial_states_are_named_in_a_batch(state):
+    with pytest.raises(ValueError, match=rf"^{state} = nan"):
+        simulate_batch(
+            _canudas(), [SpringPull(2e3, 1e-3)], [Cylinder(2.5)], duration=0.05, dt=1e-3,
+            **{state: math.nan},
+        )  # fmt: skip
+
+
+def test_an_initial_state_that_is_not_a_number_is_named():
+    with pytest.raises(ValueError, match=r"^z0 = 'a'; expected a finite number in m"):
+        simulate(Cylinder(2.5), _canudas(), SpringPull(2e3, 1e-3), duration=0.05, dt=1e-3, z0="a")

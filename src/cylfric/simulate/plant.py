@@ -462,11 +462,28 @@ def _check_output_size(size, limit, how, ways_out) -> None:
     )
 
 
+_STATE_UNITS = {"x0": "m", "v0": "m/s", "z0": "m"}
+
+
+def _check_initial_state(**states: float) -> None:
+    """ValueError naming an initial state (x0 [m], v0 [m/s], z0 [m]) that is not a finite
+    real number (a NaN or inf start ended in a ZeroDivisionError inside the integrator)."""
+    for name, value in states.items():
+        unit = _STATE_UNITS[name]
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} = {value!r}; expected a finite number in {unit}") from None
+        if isinstance(value, bool) or not math.isfinite(number):
+            raise ValueError(f"{name} = {value!r} {unit}; expected a finite number in {unit}")
+
+
 def _simulate(
     cylinder, friction, drive, duration, dt, pressure_a, pressure_b, method, step, rtol,
     x0, v0, z0, strict,
 ):  # fmt: skip
     """The body of :func:`simulate` (arguments as there)."""
+    _check_initial_state(x0=x0, v0=v0, z0=z0)
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; valid: {list(METHODS)}")
     if rtol is None:
@@ -910,6 +927,7 @@ def simulate_batch(
         estimate, the limit and the ways out).
     """
     rtol = ROSENBROCK_RTOL if rtol is None else rtol
+    _check_initial_state(x0=x0, v0=v0)
     if not (0 < rtol < 1):
         raise ValueError(f"rtol = {rtol} is out of range; expected 0 < rtol < 1")
     if isinstance(models, FrictionModel):
