@@ -487,7 +487,7 @@ def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int) -> Non
     decimals = {"Time": 3, "Axial Displacement": 4, "Axial Force": 5 if s.force_unit == "kN" else 2}
     if s.pressure_channel:
         units["Pressure"] = "bar"
-        decimals["Pressure"] = 2
+        decimals["Pressure"] = 2 if s.is_clean else 3  # 1 mbar: the ADC step shows
     segments = []
     for seg in (0, 1):
         sel = run.segment == seg
