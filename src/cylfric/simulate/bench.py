@@ -103,6 +103,34 @@ class BenchSettings:
     ``sigma_0 = 1e6 N/m`` (presliding deflection F_s/sigma_0 of about 0.1 mm, typical of
     hydraulic seals) and ``sigma_1 = sqrt(sigma_0 m)`` = 1.58e3 N*s/m for m = 2.5 kg
     (critically damped bristles); the thesis does not identify them.
+
+    **Rough by default** (issue 22; :meth:`clean` turns it all off, bit for bit the earlier
+    bench). Levels measured on the shared Zillen O-ring257 repeatability data (3 sessions x
+    1, 3, 5, 7 bar x 10 strokes; ``docs/bench_calibration.py``, docs/virtual_bench.md):
+
+    * ``session_scatter`` 9 % and ``pressure_scatter`` 12 % (lognormal s.d.): the s.d. of a
+      pressure's level between sessions is 8.4, 10.9, 17.6, 19.7 % (RMS 14.9 %); its split
+      is weakly determined by 3 sessions (two-way ANOVA of ln level: session x pressure
+      16.8 %, session 0 %, 2 d.o.f.; a MixedLM on the strokes: ~12 % run); 12 % goes to the
+      block of runs at one pressure in one session, sqrt(14.9^2 - 12^2) = 9 % to the session.
+    * ``run_scatter`` 3 %: median s.d. of the 10 stroke levels inside one file 3.6 %
+      (3-9 %), of which part is the drift.
+    * ``warmup_amplitude`` 9 %: the level moves 1.1 %/stroke in a file (0.97 to 1.06 of the
+      mean over 10 strokes, 12 files, t = 3.7); the sign is the thesis' (ch. 5: later, warmer
+      runs gave lower friction; Zillen's pneumatic seal rose). ``warmup_time_constant``
+      900 s and ``run_pause`` 30 s are assumptions (neither source gives a time scale).
+    * ``startup_force_overshoot`` 0.7 x level, peak at ``startup_time_constant`` 40 ms: the
+      force from rest peaks 0.69 x the level above it (median of 12 files) 30-50 ms after
+      the start and is back within 10 % after 50 ms (median). ``startup_velocity_overshoot``
+      8 %: median velocity overshoot at a stroke start (at the resolution of the position).
+    * ``load_cell_offset_std`` 2.1 N: s.d. between sessions of (extend + retract)/2 - pA,
+      0.111 N on a 5.83 N mean level (1.9 %), scaled to this bench's ~110 N mean F_c.
+    * ``force_step`` 0.28 N, ``pressure_step`` 2.3 kPa, ``position_step`` 4 um: smallest
+      value steps 0.015 N (0.26 % of the 5.83 N level, scaled to 110 N), 0.001 bar (of a
+      7 bar range, scaled to 159 bar) and 0.004 mm (absolute).
+
+    Seeds: session effects from ``session_seed``, run effects from ``run_seed``, noise from
+    ``seed`` (see :func:`draw_truth`); the true multiplier of every run is returned.
     """
 
     cylinder: Cylinder = THESIS_CYLINDER
