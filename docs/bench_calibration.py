@@ -67,16 +67,22 @@ def main(folder: Path) -> None:
     df["log_level"] = np.log(df.level)
     table = anova_lm(smf.ols("log_level ~ C(session) + C(bar)", df).fit())
     ms_s, ms_e = table.loc["C(session)", "mean_sq"], table.loc["Residual", "mean_sq"]
-    print(f"two-way ANOVA of ln(level): session x pressure s.d. {100 * np.sqrt(ms_e):.1f} %, "
-          f"session s.d. {100 * np.sqrt(max(0.0, (ms_s - ms_e) / df.bar.nunique())):.1f} %")
+    print(
+        f"two-way ANOVA of ln(level): session x pressure s.d. {100 * np.sqrt(ms_e):.1f} %, "
+        f"session s.d. {100 * np.sqrt(max(0.0, (ms_s - ms_e) / df.bar.nunique())):.1f} %"
+    )
     off = df.pivot(index="session", columns="bar", values="offset")
-    print(f"offset (ext+ret)/2 - pA, s.d. between sessions at one pressure (pooled): "
-          f"{np.sqrt(((off - off.mean()) ** 2).to_numpy().sum() / ((len(off) - 1) * off.shape[1])):.3f} N")
-    print(f"trend of the level with stroke index: {100 * np.mean(slopes):+.2f} %/stroke "
-          f"(s.d. {100 * np.std(slopes, ddof=1):.2f} % over {len(slopes)} files)")
+    pooled = np.sqrt(((off - off.mean()) ** 2).to_numpy().sum() / ((len(off) - 1) * off.shape[1]))
+    print(f"offset (ext+ret)/2 - pA, s.d. between sessions at one pressure: {pooled:.3f} N")
+    print(
+        f"trend of the level with stroke index: {100 * np.mean(slopes):+.2f} %/stroke "
+        f"(s.d. {100 * np.std(slopes, ddof=1):.2f} % over {len(slopes)} files)"
+    )
     peaks, settle = np.array(startup).T
-    print(f"start from rest: force peak above the level {np.median(peaks):.2f} x level "
-          f"(median), back within 10 % after {np.median(settle):.0f} ms (median)")
+    print(
+        f"start from rest: force peak above the level {np.median(peaks):.2f} x level "
+        f"(median), back within 10 % after {np.median(settle):.0f} ms (median)"
+    )
 
 
 DEFAULT = Path("/work/shared/data/zillen2021-pneumatic-seals/repeatability")

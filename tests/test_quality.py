@@ -278,7 +278,8 @@ def test_fine_grids_lose_no_run_and_close_pressure_levels_stay_apart(tmp_path):
     assert list(labels) == [0, 1, 1, 2, 3]
     folder = tmp_path / "fine"
     generate_campaign(
-        folder, BenchSettings.clean(pressures_bar=(140, 147, 154, 161), speeds_mm_s=tuple(range(1, 11)))
+        folder,
+        BenchSettings.clean(pressures_bar=(140, 147, 154, 161), speeds_mm_s=tuple(range(1, 11))),
     )
     assert assess(extract_campaign(folder)).excluded.empty
 

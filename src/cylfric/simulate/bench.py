@@ -721,7 +721,11 @@ def generate_campaign(
         constant = [{**r, "test": "constant-velocity"} for r in truth]
         if dynamic_tests:
             extra = generate_dynamic_tests(
-                out, s, tests=dynamic_tests, dynamic=dynamic, start_index=len(rows),
+                out,
+                s,
+                tests=dynamic_tests,
+                dynamic=dynamic,
+                start_index=len(rows),
                 progress=progress,
             )
             info["files"] += [out / r["file"] for r in extra]
