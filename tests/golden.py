@@ -80,7 +80,7 @@ def run(root: Path) -> dict:
     found = {}
     for name, (settings, arguments) in CAMPAIGNS.items():
         campaign = root / name
-        generate_campaign(campaign, BenchSettings(**settings))
+        generate_campaign(campaign, BenchSettings.clean(**settings))
         out = root / f"{name}-fit"
         result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), *arguments])
         assert result.exit_code == 0, result.output

@@ -31,7 +31,9 @@ load_cell_sign = 1
 def folder(tmp_path_factory):
     """A small virtual campaign with presliding and breakaway tests and a campaign.toml."""
     folder = tmp_path_factory.mktemp("once") / "campaign"
-    settings = BenchSettings(pressures_bar=(20.0, 80.0, 140.0), speeds_mm_s=(5, 20, 100), seed=2)
+    settings = BenchSettings.clean(
+        pressures_bar=(20.0, 80.0, 140.0), speeds_mm_s=(5, 20, 100), seed=2
+    )
     generate_campaign(folder, settings, tests=TESTS)
     (folder / "campaign.toml").write_text(CONFIG, encoding="utf-8")
     return folder

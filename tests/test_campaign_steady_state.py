@@ -18,7 +18,7 @@ from cylfric.simulate.bench import BenchSettings, generate_campaign, run_virtual
 from cylfric.steady_state import extract_campaign, find_windows, smoothed_velocity
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-SMALL = BenchSettings(pressures_bar=(0.1, 83.0), speeds_mm_s=(2, 10, 60, 135))
+SMALL = BenchSettings.clean(pressures_bar=(0.1, 83.0), speeds_mm_s=(2, 10, 60, 135))
 
 
 @pytest.fixture(scope="module")

@@ -304,7 +304,7 @@ def test_predict_acceptance_on_the_virtual_bench(tmp_path):
     cases = {"bore40": (0.040, truth, 1), "bore63": (0.063, _scaled_truth(truth, 63 / 40), 2)}
     cases["area63"] = (0.063, _scaled_truth(truth, (63 / 40) ** 2), 3)
     for name, (bore, model, seed) in cases.items():
-        settings = BenchSettings(
+        settings = BenchSettings.clean(
             cylinder=Cylinder.from_diameters(bore, 0.028, 2.5, double_rod=True, stroke=0.15),
             friction=model,
             pressures_bar=pressures,

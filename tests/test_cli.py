@@ -15,7 +15,9 @@ from cylfric.cli import app
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 
 runner = CliRunner()
-SMALL = BenchSettings(pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135))
+SMALL = BenchSettings.clean(
+    pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135)
+)
 
 
 @pytest.fixture(scope="module")
@@ -158,6 +160,7 @@ def test_generate_with_units(tmp_path):
             "--seed",
             "3",
             "--decimal-comma",
+            "--clean",
         ],
     )
     assert result.exit_code == 0, result.output
@@ -189,7 +192,7 @@ def test_simulate_from_a_datasheet(fitted, tmp_path):
 
 
 def test_demo_prints_recovered_beside_thesis(tmp_path):
-    result = runner.invoke(app, ["demo", "--out", str(tmp_path)])
+    result = runner.invoke(app, ["demo", "--clean", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "Recovered against the thesis" in result.output
     sheet = json.loads((tmp_path / "fit" / "datasheet.json").read_text())

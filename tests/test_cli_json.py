@@ -88,7 +88,7 @@ def test_a_wide_table_is_printed_wider_rather_than_cutting_numbers(tmp_path):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     generate_campaign(
-        tmp_path / "c", BenchSettings(pressures_bar=(10.0, 90.0), speeds_mm_s=(2, 10, 50))
+        tmp_path / "c", BenchSettings.clean(pressures_bar=(10.0, 90.0), speeds_mm_s=(2, 10, 50))
     )
     fitted = runner.invoke(
         app, ["fit", str(tmp_path / "c"), "--out", str(tmp_path / "o"), "--no-report"]

@@ -41,7 +41,7 @@ def _records(folder):
 
 
 def _campaign(folder, friction, pressures, tests=("presliding",), seed=3):
-    settings = BenchSettings(friction=friction, pressures_bar=pressures, seed=seed)
+    settings = BenchSettings.clean(friction=friction, pressures_bar=pressures, seed=seed)
     rows = generate_dynamic_tests(folder, settings, tests=tests)
     write_test_manifest(folder / "manifest.csv", rows)
     return _records(folder)

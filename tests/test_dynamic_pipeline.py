@@ -26,7 +26,7 @@ SPEEDS = (5, 10, 20, 50, 100)  # [mm/s]: enough for the Stribeck fit, short reco
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     folder = tmp_path_factory.mktemp("dyn") / "campaign"
-    settings = BenchSettings(pressures_bar=(20.0, 80.0, 140.0), speeds_mm_s=SPEEDS, seed=11)
+    settings = BenchSettings.clean(pressures_bar=(20.0, 80.0, 140.0), speeds_mm_s=SPEEDS, seed=11)
     generate_campaign(folder, settings, tests=TESTS)
     return folder
 

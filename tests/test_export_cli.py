@@ -84,7 +84,7 @@ def test_fit_export_bad_target_stops_before_fitting(tmp_path):
 def test_fit_with_export_writes_exports_and_report_section(tmp_path):
     campaign = tmp_path / "camp"
     generate_campaign(
-        campaign, BenchSettings(pressures_bar=(0.1, 159.0), speeds_mm_s=(1, 4, 15, 60, 135))
+        campaign, BenchSettings.clean(pressures_bar=(0.1, 159.0), speeds_mm_s=(1, 4, 15, 60, 135))
     )
     out = tmp_path / "out"
     result = runner.invoke(
@@ -108,7 +108,7 @@ def test_fit_export_failure_names_campaign_and_target_and_writes_nothing(tmp_pat
     The error said only 'pressure_range = (5500000.0, 5500000.0) Pa is not a range'."""
     campaign = tmp_path / "camp"
     generate_campaign(
-        campaign, BenchSettings(pressures_bar=(55.0,), speeds_mm_s=(1, 4, 15, 60, 135))
+        campaign, BenchSettings.clean(pressures_bar=(55.0,), speeds_mm_s=(1, 4, 15, 60, 135))
     )
     out = tmp_path / "out"
     result = runner.invoke(
@@ -129,7 +129,7 @@ def test_fit_export_failure_keeps_the_earlier_output(tmp_path, monkeypatch):
     RuntimeError' (exit 1) and never said that the earlier --out was left as it was."""
     campaign = tmp_path / "camp"
     generate_campaign(
-        campaign, BenchSettings(pressures_bar=(0.1, 159.0), speeds_mm_s=(1, 4, 15, 60, 135))
+        campaign, BenchSettings.clean(pressures_bar=(0.1, 159.0), speeds_mm_s=(1, 4, 15, 60, 135))
     )
     out = tmp_path / "out"
     args = ["fit", str(campaign), "--out", str(out), "--no-report"]

@@ -67,7 +67,7 @@ PARAMETER_SETS = {
 @pytest.fixture(scope="module", params=sorted(PARAMETER_SETS))
 def chain(request, tmp_path_factory):
     coefficients, weight = PARAMETER_SETS[request.param]
-    settings = BenchSettings(
+    settings = BenchSettings.clean(
         friction=FrictionModel(coefficients=coefficients),
         pressures_bar=PRESSURES,
         speeds_mm_s=SPEEDS,

@@ -26,7 +26,7 @@ from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.simulate.plant import Cylinder
 
 # small campaigns: 60 mm strokes, 3 pressures x 7 speeds (21 runs, about 0.3 s to fit)
-SMALL = BenchSettings(
+SMALL = BenchSettings.clean(
     cylinder=Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, stroke=0.060),
     pressures_bar=(0.1, 80, 159),
     speeds_mm_s=(2, 4, 8, 15, 30, 60, 100),

@@ -348,7 +348,7 @@ def test_band_holds_the_truth_of_50_virtual_campaigns(tmp_path):
     inside = []
     for seed in range(50):
         folder = tmp_path / f"campaign{seed}"
-        settings = BenchSettings(
+        settings = BenchSettings.clean(
             pressures_bar=(0.1, 55, 103, 159),
             speeds_mm_s=(1, 2, 4, 7, 10, 15, 25, 40, 70, 135),
             seed=seed,

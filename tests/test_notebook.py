@@ -83,7 +83,8 @@ def test_identification_displays_and_plots(tmp_path):
 
     folder = tmp_path / "c"
     generate_campaign(
-        folder, BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(2, 5, 10, 20, 50, 100))
+        folder,
+        BenchSettings.clean(pressures_bar=(10.0, 100.0), speeds_mm_s=(2, 5, 10, 20, 50, 100)),
     )
     ident = identify(extract_campaign(folder).points)
     assert "points at 2 pressure level(s)" in ident._repr_html_()

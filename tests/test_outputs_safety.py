@@ -15,7 +15,9 @@ from cylfric.pipeline import MARKER, fit_campaign
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 
 runner = CliRunner()
-SMALL = BenchSettings(pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135))
+SMALL = BenchSettings.clean(
+    pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135)
+)
 
 
 @pytest.fixture(scope="module")

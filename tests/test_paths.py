@@ -19,7 +19,7 @@ from cylfric.simulate.bench import BenchSettings, generate_campaign
 
 runner = CliRunner()
 VALIDITY = {"pressure_min": 1e4, "pressure_max": 159e5, "velocity_min": 1e-3, "velocity_max": 0.135}
-TINY = BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50))
+TINY = BenchSettings.clean(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50))
 
 
 @pytest.fixture(scope="module")

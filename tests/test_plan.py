@@ -136,13 +136,13 @@ def test_window_noise_interpolates_log_log_and_calibrates_from_points():
 
 
 def test_bench_runs_an_explicit_list_of_points(tmp_path):
-    assert BenchSettings(pressures_bar=(1, 2), speeds_mm_s=(5, 9)).runs() == (
+    assert BenchSettings.clean(pressures_bar=(1, 2), speeds_mm_s=(5, 9)).runs() == (
         (1, 5),
         (1, 9),
         (2, 5),
         (2, 9),
     )
-    settings = BenchSettings(points=((100, 20), (0.1, 3), (100, 20)), seed=1)
+    settings = BenchSettings.clean(points=((100, 20), (0.1, 3), (100, 20)), seed=1)
     info = generate_campaign(tmp_path, settings)
     names = [p.name for p in info["files"]]
     assert names == [
@@ -154,14 +154,14 @@ def test_bench_runs_an_explicit_list_of_points(tmp_path):
     assert manifest.iloc[:, 1:].to_numpy().tolist() == [[100, 20], [0.1, 3], [100, 20]]
     assert settings.slow_speeds() == {3.0, 20.0}  # the two slowest distinct speeds
     with pytest.raises(ValueError, match="does not fit the stroke"):
-        run_plan(0.5, BenchSettings())
+        run_plan(0.5, BenchSettings.clean())
 
 
 def test_plan_for_the_thesis_ranges_beats_a_third_of_the_grid():
     """A 90-run plan against the thesis' 27 x 10 grid (270 runs): a grid a third the size
     has standard errors sqrt(3) = 1.73x larger; the D-optimal plan stays below that for
     every coefficient (measured: 1.01-1.59 with the bench-calibrated noise)."""
-    s = BenchSettings()
+    s = BenchSettings.clean()
     noise = WindowNoise((1e-3, 2e-3, 1e-2, 0.135), (0.054, 0.022, 0.024, 0.08))
     plan = make_plan((0.1e5, 159e5), (1e-3, 0.135), 90, noise=noise)
     grid = grid_uncertainty(
@@ -195,7 +195,7 @@ def test_predicted_uncertainty_matches_monte_carlo_refits(tmp_path):
     (geometric mean 0.98); over these 40 seeds see the assertion message.
     """
     cylinder = Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, stroke=0.060)
-    base = BenchSettings(cylinder=cylinder)
+    base = BenchSettings.clean(cylinder=cylinder)
     noise = WindowNoise.from_bench(base, speeds=np.geomspace(2e-3, 0.1, 7))
     plan = make_plan(
         (0.1e5, 159e5), (2e-3, 0.1), 16, settings=base, noise=noise, n_pressures=5, n_speeds=15

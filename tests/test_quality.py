@@ -22,7 +22,7 @@ from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.steady_state import extract_campaign
 
 runner = CliRunner()
-SETTINGS = BenchSettings(
+SETTINGS = BenchSettings.clean(
     pressures_bar=(0.1, 55.0, 103.0, 159.0), speeds_mm_s=(1, 2, 4, 7, 10, 15, 25, 40, 70, 135)
 )
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -187,7 +187,7 @@ def test_a_measured_pressure_column_is_compared_with_the_nominal_values(tmp_path
     folder = tmp_path / "measured"
     generate_campaign(
         folder,
-        BenchSettings(
+        BenchSettings.clean(
             pressures_bar=(20.0, 80.0), speeds_mm_s=(2, 5, 10, 20), pressure_channel=True
         ),
     )
@@ -278,7 +278,8 @@ def test_fine_grids_lose_no_run_and_close_pressure_levels_stay_apart(tmp_path):
     assert list(labels) == [0, 1, 1, 2, 3]
     folder = tmp_path / "fine"
     generate_campaign(
-        folder, BenchSettings(pressures_bar=(140, 147, 154, 161), speeds_mm_s=tuple(range(1, 11)))
+        folder,
+        BenchSettings.clean(pressures_bar=(140, 147, 154, 161), speeds_mm_s=tuple(range(1, 11))),
     )
     assert assess(extract_campaign(folder)).excluded.empty
 
@@ -310,7 +311,7 @@ def test_a_flipped_sign_with_one_speed_per_direction_names_the_key(tmp_path):
     """Regression (issue 11 audit): the level-only model (two speeds) wrote F_c < 0 and
     only the datasheet check in the staging folder stopped it, naming a temporary file."""
     folder = tmp_path / "campaign"
-    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50)))
+    generate_campaign(folder, BenchSettings.clean(pressures_bar=(10.0, 100.0), speeds_mm_s=(5, 50)))
     (folder / "campaign.toml").write_text("[force_balance]\nload_cell_sign = -1\n")
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2, result.output

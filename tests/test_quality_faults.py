@@ -26,7 +26,7 @@ GRID = dict(pressures_bar=(10.0, 55.0, 103.0, 159.0), speeds_mm_s=(1, 2, 5, 10, 
 def seed1(tmp_path_factory):
     """`cylfric generate --pressures 10,55,103,159 --speeds 1,2,5,10,20,50,100 --seed 1`."""
     folder = tmp_path_factory.mktemp("seed1")
-    generate_campaign(folder, BenchSettings(**GRID, seed=1))
+    generate_campaign(folder, BenchSettings.clean(**GRID, seed=1))
     return folder
 
 
@@ -183,7 +183,7 @@ def test_two_levels_1000x_apart_cannot_be_told_apart():
 def seed3_pressure(tmp_path_factory):
     """The grid with a measured pressure column (`--pressure-channel --seed 3`)."""
     folder = tmp_path_factory.mktemp("seed3")
-    generate_campaign(folder, BenchSettings(**GRID, seed=3, pressure_channel=True))
+    generate_campaign(folder, BenchSettings.clean(**GRID, seed=3, pressure_channel=True))
     return folder
 
 
@@ -285,7 +285,7 @@ def test_a_deliberate_0_bar_level_is_kept(tmp_path):
     """Four runs at 0 bar (half the median runs per level, and at least 3): a level."""
     folder = tmp_path / "zero"
     generate_campaign(
-        folder, BenchSettings(pressures_bar=(0.0, 50.0, 100.0), speeds_mm_s=(2, 5, 10, 20))
+        folder, BenchSettings.clean(pressures_bar=(0.0, 50.0, 100.0), speeds_mm_s=(2, 5, 10, 20))
     )
     extraction = extract_campaign(folder, workers=1)
     assert {info["pressure [Pa]"] for info in extraction.runs} == {0.0, 50e5, 100e5}

@@ -18,7 +18,9 @@ def test_readme_tour_runs(tmp_path):
     code = re.search(r"```python\n(.*?)```", tour, re.S).group(1)
     generate_campaign(
         tmp_path / "my_campaign",
-        BenchSettings(pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135)),
+        BenchSettings.clean(
+            pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135)
+        ),
     )
     script = "import matplotlib\nmatplotlib.use('Agg')\n" + code
     done = subprocess.run(

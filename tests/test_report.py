@@ -18,7 +18,9 @@ from cylfric.report import figures as F
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 from cylfric.steady_state import extract_campaign
 
-SMALL = BenchSettings(pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135))
+SMALL = BenchSettings.clean(
+    pressures_bar=(0.1, 80.0, 159.0), speeds_mm_s=(1, 3, 8, 15, 30, 60, 135)
+)
 STEMS = ["fit", "parameters", "directions", "residuals", "sensitivity", "sensitivity_curves"]
 
 

@@ -266,7 +266,9 @@ def test_fit_of_a_hostile_campaign_folder_exports_text_as_data(tmp_path):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     folder = tmp_path / f"rig\n{MARKER}_f(); */ \" ' % ; [bold] \x1b[31m é"
-    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 80.0), speeds_mm_s=(2, 10, 50)))
+    generate_campaign(
+        folder, BenchSettings.clean(pressures_bar=(10.0, 80.0), speeds_mm_s=(2, 10, 50))
+    )
     (folder / "manifest.csv").unlink()
     first = sorted(folder.glob("*.txt"))[0]
     first.rename(folder / f"run\n{MARKER}_r(); */{first.name}".replace("/", "|"))

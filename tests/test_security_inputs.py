@@ -26,7 +26,7 @@ SMALL = {"pressures_bar": (10.0, 80.0), "speeds_mm_s": (2, 10, 50)}
 def _campaign(folder: Path) -> Path:
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
-    generate_campaign(folder, BenchSettings(**SMALL))
+    generate_campaign(folder, BenchSettings.clean(**SMALL))
     return folder
 
 

@@ -85,7 +85,9 @@ def test_fit_of_a_campaign_folder_with_a_hostile_name(tmp_path):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     folder = tmp_path / HOSTILE.replace("/", "|")  # a folder name holds no slash
-    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 50.0), speeds_mm_s=(5, 20, 80)))
+    generate_campaign(
+        folder, BenchSettings.clean(pressures_bar=(10.0, 50.0), speeds_mm_s=(5, 20, 80))
+    )
     result = _run("fit", folder, "--out", tmp_path / "out", "--no-report")
     assert result.exit_code == 0, result.output
     assert "\x1b" not in result.output and "\x07" not in result.output

@@ -17,7 +17,7 @@ import sys, warnings
 warnings.simplefilter("ignore")
 from cylfric.pipeline import fit_campaign
 from cylfric.simulate.bench import BenchSettings, generate_campaign
-generate_campaign(sys.argv[1], BenchSettings(pressures_bar=(0.1, 80.0), speeds_mm_s=(2, 5, 10, 30, 80)))
+generate_campaign(sys.argv[1], BenchSettings.clean(pressures_bar=(0.1, 80.0), speeds_mm_s=(2, 5, 10, 30, 80)))
 fit_campaign(sys.argv[1], sys.argv[2], report=False)
 loaded = [m for m in ("matplotlib", "scipy.stats", "scipy.io") if m in sys.modules]
 print("LOADED", loaded)

@@ -47,7 +47,7 @@ def _flat(text: str) -> str:
 def test_strict_names_every_flagged_run_and_writes_nothing(tmp_path):
     folder = tmp_path / "campaign"
     generate_campaign(
-        folder, BenchSettings(pressures_bar=(10.0, 100.0), speeds_mm_s=(2, 5, 10, 20, 50))
+        folder, BenchSettings.clean(pressures_bar=(10.0, 100.0), speeds_mm_s=(2, 5, 10, 20, 50))
     )
     names = sorted(p.name for p in folder.glob("run_*.txt"))
     flagged = [names[1], names[7]]

@@ -199,7 +199,7 @@ def _campaign_with(tmp_path, name, text):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     folder = tmp_path / "camp"
-    generate_campaign(folder, BenchSettings(pressures_bar=(10.0,), speeds_mm_s=(5, 50)))
+    generate_campaign(folder, BenchSettings.clean(pressures_bar=(10.0,), speeds_mm_s=(5, 50)))
     (folder / name).write_text(text)
     return folder
 
@@ -267,7 +267,7 @@ def test_catastrophic_name_pattern_cannot_hang_a_fit(tmp_path):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     folder = tmp_path / "campaign"
-    generate_campaign(folder, BenchSettings(pressures_bar=(10.0, 20.0), speeds_mm_s=(5, 50)))
+    generate_campaign(folder, BenchSettings.clean(pressures_bar=(10.0, 20.0), speeds_mm_s=(5, 50)))
     (folder / "manifest.csv").unlink(missing_ok=True)
     for k, path in enumerate(sorted(folder.glob("*.txt"))):
         path.rename(folder / ("a" * 40 + f"!_p{10 * (1 + k // 2)}bar_v{(5, 50)[k % 2]}mms.txt"))

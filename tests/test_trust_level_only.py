@@ -21,7 +21,7 @@ from cylfric.simulate.bench import BenchSettings, generate_campaign
 
 runner = CliRunner()
 # two speeds per pressure: the Stribeck shape is not identifiable, the level against pressure is
-LEVELS = BenchSettings(pressures_bar=(10.0, 50.0, 100.0, 150.0), speeds_mm_s=(5, 50))
+LEVELS = BenchSettings.clean(pressures_bar=(10.0, 50.0, 100.0, 150.0), speeds_mm_s=(5, 50))
 
 
 @pytest.fixture(scope="module")

@@ -36,7 +36,7 @@ OIL_TOML = '[oil]\nviscosity_40C = "46 mm2/s"\nviscosity_100C = "6.8 cSt"\n'
 PRESSURES_BAR = (20, 80, 150)
 SPEEDS_MM_S = (2, 4, 7, 12, 20, 35, 60, 100)  # 24 runs, 60 mm strokes: about 1 s to fit
 TEMPERATURES_C = (30.0, 40.0, 55.0)  # speed ratios nu(T)/nu(40 degC) about 1.6, 1, 0.5
-BENCH = BenchSettings(
+BENCH = BenchSettings.clean(
     cylinder=Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, stroke=0.060),
     pressures_bar=PRESSURES_BAR,
     speeds_mm_s=SPEEDS_MM_S,

@@ -28,6 +28,21 @@ def generate(
         None, "--speeds", help="Speeds, mm/s or with units (default: 27 speeds 1-135 mm/s)."
     ),
     seed: int = typer.Option(0, "--seed", help="Random seed (deterministic output)."),
+    clean: bool = typer.Option(
+        False,
+        "--clean",
+        help="A clean bench (cylfric's bench before issue 22): no run, pressure or session "
+        "scatter, warm-up, start-up transients, load-cell offset or quantisation.",
+    ),
+    sessions: int = typer.Option(
+        1, "--sessions", help="Sessions (remounts), each a full pass of the runs: s1_..., s2_..."
+    ),
+    session_seed: int = typer.Option(
+        None, "--session-seed", help="Seed of the session effects (default: --seed)."
+    ),
+    run_seed: int = typer.Option(
+        None, "--run-seed", help="Seed of the run-to-run effects (default: --seed)."
+    ),
     decimal_comma: bool = typer.Option(False, "--decimal-comma", help="Write 0,017 not 0.017."),
     pressure_channel: bool = typer.Option(
         False, "--pressure-channel", help="Add a measured pressure column."
@@ -42,7 +57,13 @@ def generate(
         "(force-controlled, for sigma_0 and sigma_1), or all.",
     ),
 ):
-    """Virtual test bench: write a campaign of raw files and manifest.csv."""
+    """Virtual test bench: write a campaign of raw files and manifest.csv.
+
+    By default the bench is as rough as a real rig (levels measured on the shared Zillen
+    data, see docs/simulation.md): run, pressure-block and session scatter, warm-up drift,
+    start-up transients, a load-cell offset and quantisation; manifest.csv then names each
+    run's session and its true friction multiplier. --clean writes the earlier clean bench.
+    """
     from .._paths import refuse_link
 
     refuse_link(out_dir, "OUT_DIR")  # a symbolic link is refused, not written through
@@ -60,8 +81,15 @@ def generate(
         raise BadInput(
             f"--tests {tests!r}: unknown test(s) {unknown}; valid: {', '.join(TESTS)}, all"
         )
+    if sessions < 1:
+        raise BadInput(f"--sessions {sessions}: expected a whole number >= 1")
+    if clean and sessions > 1:
+        raise BadInput("--clean writes one session (the earlier bench); drop --sessions")
     kwargs: dict[str, Any] = {
         "seed": seed,
+        "sessions": sessions,
+        "session_seed": session_seed,
+        "run_seed": run_seed,
         "decimal_comma": decimal_comma,
         "pressure_channel": pressure_channel,
     }
@@ -73,8 +101,9 @@ def generate(
         raise BadInput("--speeds must be > 0")
     if any(p < 0 for p in kwargs.get("pressures_bar", (0,))):
         raise BadInput("--pressures must be >= 0")
-    settings = BenchSettings(**kwargs)
+    settings = BenchSettings.clean(**kwargs) if clean else BenchSettings(**kwargs)
     n = len(settings.pressures_bar) * len(settings.speeds_mm_s) * ("constant-velocity" in chosen)
+    n *= settings.sessions
     rates = len(DynamicTestSettings().breakaway_rates)
     n += len(settings.pressures_bar) * (("presliding" in chosen) + rates * ("breakaway" in chosen))
     with _progress() as progress:

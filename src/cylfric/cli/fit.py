@@ -180,22 +180,28 @@ THESIS_VALUES = {
 def demo(
     out: Path = typer.Option(Path("cylfric-demo"), "--out", "-o", help="Output folder."),
     seed: int = typer.Option(0, "--seed", help="Seed of the virtual campaign."),
+    clean: bool = typer.Option(
+        False, "--clean", help="The clean virtual bench (no rig scatter, drift or transients)."
+    ),
 ):
     """Generate the thesis' virtual campaign (10 pressures x 27 speeds) and fit it.
 
     Writes the raw files to OUT/campaign (regenerated on every run) and the fit to OUT/fit.
+    The bench is as rough as a real rig unless --clean: its friction is the thesis law times
+    each run's drawn multiplier (OUT/campaign/manifest.csv, column friction_scale).
     """
     from .._paths import refuse_link
     from ..simulate.bench import BenchSettings, generate_campaign
 
     refuse_link(out)  # a symbolic link is refused (exit 2), not written through
-    settings = BenchSettings(seed=seed)
+    settings = BenchSettings.clean(seed=seed) if clean else BenchSettings(seed=seed)
     campaign = out / "campaign"
     n = len(settings.pressures_bar) * len(settings.speeds_mm_s)
     with _progress() as progress:
         task = progress.add_task("virtual bench", total=n)
         generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
-    console.print(terminal(f"virtual campaign: {n} files in {campaign}"))
+    rough = "" if clean else " (rough bench: the truth is the thesis law x friction_scale)"
+    console.print(terminal(f"virtual campaign: {n} files in {campaign}{rough}"))
     result = run_fit(campaign, out / "fit", FitOptions(), quiet=True)
     sheet = result.datasheet
     print_table(_summary_table(sheet, "Recovered from the virtual campaign"))

@@ -52,6 +52,8 @@ __all__ = [
     "generate_dynamic_tests",
     "write_test_manifest",
     "run_plan",
+    "draw_truth",
+    "TRUTH_COLUMNS",
 ]
 
 THESIS_PRESSURES_BAR = (0.1, 20.7, 38.0, 55.0, 69.0, 83.0, 103.0, 124.0, 141.0, 159.0)
@@ -101,6 +103,34 @@ class BenchSettings:
     ``sigma_0 = 1e6 N/m`` (presliding deflection F_s/sigma_0 of about 0.1 mm, typical of
     hydraulic seals) and ``sigma_1 = sqrt(sigma_0 m)`` = 1.58e3 N*s/m for m = 2.5 kg
     (critically damped bristles); the thesis does not identify them.
+
+    **Rough by default** (issue 22; :meth:`clean` turns it all off, bit for bit the earlier
+    bench). Levels measured on the shared Zillen O-ring257 repeatability data (3 sessions x
+    1, 3, 5, 7 bar x 10 strokes; ``docs/bench_calibration.py``, docs/virtual_bench.md):
+
+    * ``session_scatter`` 9 % and ``pressure_scatter`` 12 % (lognormal s.d.): the s.d. of a
+      pressure's level between sessions is 8.4, 10.9, 17.6, 19.7 % (RMS 14.9 %); its split
+      is weakly determined by 3 sessions (two-way ANOVA of ln level: session x pressure
+      16.8 %, session 0 %, 2 d.o.f.; a MixedLM on the strokes: ~12 % run); 12 % goes to the
+      block of runs at one pressure in one session, sqrt(14.9^2 - 12^2) = 9 % to the session.
+    * ``run_scatter`` 3 %: median s.d. of the 10 stroke levels inside one file 3.6 %
+      (3-9 %), of which part is the drift.
+    * ``warmup_amplitude`` 9 %: the level moves 1.1 %/stroke in a file (0.97 to 1.06 of the
+      mean over 10 strokes, 12 files, t = 3.7); the sign is the thesis' (ch. 5: later, warmer
+      runs gave lower friction; Zillen's pneumatic seal rose). ``warmup_time_constant``
+      900 s and ``run_pause`` 30 s are assumptions (neither source gives a time scale).
+    * ``startup_force_overshoot`` 0.7 x level, peak at ``startup_time_constant`` 40 ms: the
+      force from rest peaks 0.69 x the level above it (median of 12 files) 30-50 ms after
+      the start and is back within 10 % after 50 ms (median). ``startup_velocity_overshoot``
+      8 %: median velocity overshoot at a stroke start (at the resolution of the position).
+    * ``load_cell_offset_std`` 2.1 N: s.d. between sessions of (extend + retract)/2 - pA,
+      0.111 N on a 5.83 N mean level (1.9 %), scaled to this bench's ~110 N mean F_c.
+    * ``force_step`` 0.28 N, ``pressure_step`` 2.3 kPa, ``position_step`` 4 um: smallest
+      value steps 0.015 N (0.26 % of the 5.83 N level, scaled to 110 N), 0.001 bar (of a
+      7 bar range, scaled to 159 bar) and 0.004 mm (absolute).
+
+    Seeds: session effects from ``session_seed``, run effects from ``run_seed``, noise from
+    ``seed`` (see :func:`draw_truth`); the true multiplier of every run is returned.
     """
 
     cylinder: Cylinder = THESIS_CYLINDER
@@ -129,6 +159,63 @@ class BenchSettings:
     crlf: bool = False
     seed: int = 0
     points: tuple | None = None  # explicit ((pressure [bar], speed [mm/s]), ...) in run order
+    # --- roughness of a real rig (on by default; BenchSettings.clean() turns it all off) ---
+    sessions: int = 1  # [-] sessions (remount, another day), each a full pass of the runs
+    session_scatter: float = 0.09  # [-] s.d. of ln(friction multiplier) per session
+    pressure_scatter: float = 0.12  # [-] s.d. of ln(multiplier) per pressure block/session
+    run_scatter: float = 0.03  # [-] s.d. of ln(multiplier) per run (file)
+    warmup_amplitude: float = 0.09  # [-] extra friction of a cold rig (falls as it warms)
+    warmup_time_constant: float = 900.0  # [s] of the exponential warm-up
+    run_pause: float = 30.0  # [s] between two runs (elapsed time of the warm-up)
+    startup_force_overshoot: float = 0.7  # [-] peak force transient / steady friction level
+    startup_velocity_overshoot: float = 0.08  # [-] peak velocity overshoot / speed
+    startup_time_constant: float = 0.04  # [s] rise time to the transient's peak
+    load_cell_offset_std: float = 2.1  # [N] s.d. of the load-cell offset of a session
+    force_step: float = 0.28  # [N] ADC step of the force channel (0: none)
+    position_step: float = 4e-6  # [m] ADC step of the position channel (0: none)
+    pressure_step: float = 2.3e3  # [Pa] ADC step of the pressure channel (0: none)
+    session_seed: int | None = None  # seed of the session effects (None: ``seed``)
+    run_seed: int | None = None  # seed of the run effects (None: ``seed``)
+
+    ROUGH_FIELDS = (
+        "session_scatter",
+        "pressure_scatter",
+        "run_scatter",
+        "warmup_amplitude",
+        "startup_force_overshoot",
+        "startup_velocity_overshoot",
+        "load_cell_offset_std",
+        "force_step",
+        "position_step",
+        "pressure_step",
+    )
+    """Settings a clean bench sets to 0 (see :meth:`clean`)."""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.sessions, int) and self.sessions >= 1):
+            raise ValueError(f"sessions = {self.sessions!r}; expected a whole number >= 1")
+        for name in (*self.ROUGH_FIELDS, "run_pause"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"bench setting {name} = {value}; expected a number >= 0")
+        for name in ("warmup_time_constant", "startup_time_constant"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"bench setting {name} = {value} s; expected a time > 0 s")
+
+    @classmethod
+    def clean(cls, **changes: Any) -> BenchSettings:
+        """The clean bench of cylfric before issue 22: no session, pressure or run scatter,
+        no warm-up, no start-up transient, no load-cell offset, no quantisation (the output
+        is bit for bit that of the earlier bench). ``changes`` set any field, a rough one
+        included (e.g. ``BenchSettings.clean(run_scatter=0.05)``)."""
+        return cls(**{**dict.fromkeys(cls.ROUGH_FIELDS, 0.0), **changes})
+
+    @property
+    def is_clean(self) -> bool:
+        """True when no roughness is on and there is one session: the files, their names
+        and manifest.csv are those of the clean bench."""
+        return self.sessions == 1 and not any(getattr(self, f) for f in self.ROUGH_FIELDS)
 
     def runs(self) -> tuple:
         """(pressure [bar], speed [mm/s]) of every run in run order: ``points`` when given,
@@ -191,6 +278,8 @@ def _bench_kernel(
     sigma_2,
     v_r,
     alpha,
+    overshoot=0.0,
+    settle_tau=1.0,
 ):
     t_acc = speed / accel
     t_move = length / speed + t_acc  # trapezoid: accelerate, cruise, decelerate
@@ -208,6 +297,9 @@ def _bench_kernel(
                 s = t - starts[seg]
                 if 0.0 <= s <= t_move:
                     shape = min(1.0, s / t_acc, (t_move - s) / t_acc)
+                    if overshoot > 0.0 and s > t_acc:  # start-up overshoot of the servo
+                        u = (s - t_acc) / settle_tau
+                        shape *= 1.0 + overshoot * u * math.exp(1.0 - u)
                     v_ref = speed * shape if seg == 1 else -speed * shape
             v_old = v
             v = v + (v_ref - v) * lag
@@ -273,11 +365,17 @@ def run_virtual_test(
     *,
     rng: np.random.Generator | None = None,
     slow: bool | None = None,
+    friction_scale: float = 1.0,
+    load_cell_offset: float = 0.0,
 ) -> VirtualRun:
     """Simulate one run of the virtual bench at ``pressure_bar`` [bar] and ``speed_mm_s`` [mm/s].
 
     ``slow`` forces the 20 ms sample interval (default: the slowest ``slow_speed_count``
-    speeds of ``settings.speeds_mm_s``).
+    speeds of ``settings.speeds_mm_s``). ``friction_scale`` [-] multiplies the friction law
+    (F_c, F_s and sigma_2: the whole steady-state curve) of this run, and
+    ``load_cell_offset`` [N] is added to the load-cell reading (both drawn per run and per
+    session by :func:`generate_campaign`). The start-up transients and the quantisation of
+    ``settings`` act here.
     """
     s = settings or BenchSettings()
     rng = rng if rng is not None else np.random.default_rng(s.seed)
@@ -296,6 +394,13 @@ def run_virtual_test(
     stroke = s.cylinder.stroke
     x_top = stroke / 2 + length / 2
     params = s.friction.params_at(s.friction.operating_pressure(pressure))
+    if not (math.isfinite(friction_scale) and friction_scale > 0):
+        raise ValueError(f"friction_scale = {friction_scale}; expected a number > 0")
+    if friction_scale != 1.0:
+        params = {
+            k: v * friction_scale if k in ("F_c", "F_s", "sigma_2") else v
+            for k, v in params.items()
+        }
     raw = _bench_kernel(
         h,
         n_sub,
@@ -316,21 +421,33 @@ def run_virtual_test(
         params["sigma_2"],
         params["v_r"],
         params["alpha"],
+        s.startup_velocity_overshoot,
+        s.startup_time_constant,
     )
     position, velocity, acceleration, friction, cushion = raw[:5]
+    time = np.arange(n) * interval
+    steady = raw[5].astype(bool)
     force = s.cylinder.mass * acceleration + friction + cushion + s.weight_offset
+    if load_cell_offset:
+        force = force + load_cell_offset
+    if s.startup_force_overshoot:
+        transient, settled = _startup_force(time, s, params, speed, length)
+        force = force + transient
+        steady &= settled
     force = force + rng.normal(0.0, s.force_noise, n)
     spikes = rng.random(n) < s.spike_probability
     force[spikes] += rng.choice([-1.0, 1.0], spikes.sum()) * s.spike_amplitude
+    position = position + rng.normal(0.0, s.position_noise, n)
+    measured_pressure = pressure + rng.normal(0.0, s.pressure_noise, n)
     return VirtualRun(
-        time=np.arange(n) * interval,
-        position=position + rng.normal(0.0, s.position_noise, n),
-        force=force,
+        time=time,
+        position=_quantise(position, s.position_step),
+        force=_quantise(force, s.force_step),
         velocity=velocity,
         friction=friction,
         cushion=cushion,
-        pressure=pressure + rng.normal(0.0, s.pressure_noise, n),
-        steady=raw[5].astype(bool),
+        pressure=_quantise(measured_pressure, s.pressure_step),
+        steady=steady,
         segment=raw[6].astype(np.int8),
         pressure_nominal=pressure,
         speed=speed,
@@ -339,9 +456,54 @@ def run_virtual_test(
     )
 
 
-def run_file_name(index: int, pressure_bar: float, speed_mm_s: float) -> str:
-    """``run_007_p55bar_v10mms.txt``: file-name tokens the campaign reader understands."""
-    return f"run_{index:03d}_p{pressure_bar:g}bar_v{speed_mm_s:g}mms.txt"
+def _quantise(values: np.ndarray, step: float) -> np.ndarray:
+    """``values`` rounded to whole ADC steps of ``step`` (same unit; 0: unchanged)."""
+    return np.round(values / step) * step if step else values
+
+
+STARTUP_SETTLED = 7.6
+"""The start-up force transient ``a (u) e^(1-u)``, ``u = t / startup_time_constant``, is
+below 1 % of its peak for ``u`` > 7.6: a sample is steady only after that."""
+
+
+def _startup_force(time, s: BenchSettings, params, speed: float, length: float):
+    """Force transient [N] at the start of each stroke and the mask of samples past it.
+
+    Each stroke starts from rest (the dwell) with a breakaway-and-settling force in the
+    direction of motion: ``sign * a * F_ss * u e^(1-u)``, ``u = (t - t_start) / tau``, with
+    ``a = startup_force_overshoot``, ``F_ss`` the run's steady friction at ``speed`` [N]
+    and ``tau = startup_time_constant`` [s] (peak at ``tau``).
+    """
+    from ..friction import stribeck
+
+    level = float(
+        stribeck(
+            speed,
+            params["F_c"],
+            params["F_s"],
+            params["v_r"],
+            params["sigma_2"],
+            alpha=params["alpha"],
+        )
+    )
+    t_move = length / speed + speed / s.acceleration
+    transient = np.zeros_like(time)
+    settled = np.ones(time.size, dtype=bool)
+    for sign, start in ((-1.0, s.dwell), (1.0, 2 * s.dwell + t_move)):
+        u = (time - start) / s.startup_time_constant
+        on = (u > 0) & (u < 50)
+        transient[on] += sign * s.startup_force_overshoot * level * u[on] * np.exp(1 - u[on])
+        settled &= ~((u > 0) & (u < STARTUP_SETTLED))
+    return transient, settled
+
+
+def run_file_name(
+    index: int, pressure_bar: float, speed_mm_s: float, session: int | None = None
+) -> str:
+    """``run_007_p55bar_v10mms.txt``: file-name tokens the campaign reader understands;
+    with ``session`` the session group first: ``s2_run_007_p55bar_v10mms.txt``."""
+    prefix = "" if session is None else f"s{session}_"
+    return f"{prefix}run_{index:03d}_p{pressure_bar:g}bar_v{speed_mm_s:g}mms.txt"
 
 
 _FORCE_SCALE = {"N": 1.0, "kN": 1e-3}
@@ -353,7 +515,7 @@ def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int) -> Non
     decimals = {"Time": 3, "Axial Displacement": 4, "Axial Force": 5 if s.force_unit == "kN" else 2}
     if s.pressure_channel:
         units["Pressure"] = "bar"
-        decimals["Pressure"] = 2
+        decimals["Pressure"] = 2 if s.is_clean else 3  # 1 mbar: the ADC step shows
     segments = []
     for seg in (0, 1):
         sel = run.segment == seg
@@ -382,6 +544,82 @@ def _write_run(path: Path, run: VirtualRun, s: BenchSettings, index: int) -> Non
         decimal_comma=s.decimal_comma,
         newline="\r\n" if s.crlf else "\n",
     )
+
+
+TRUTH_COLUMNS = ("session", "friction_scale", "load_cell_offset_N")
+"""Columns manifest.csv of a rough campaign adds: the session (``s1``, ``s2``, ...), the
+friction multiplier the run was simulated with [-] and the session's load-cell offset [N]."""
+
+SESSION_STREAM, RUN_STREAM = 0x5E55, 0x2A17
+"""Entropy added to ``session_seed`` and ``run_seed`` (independent streams of the noise)."""
+
+
+def draw_truth(settings: BenchSettings) -> list[dict[str, Any]]:
+    """The rough bench's random effects of every constant-velocity run, in run order.
+
+    Seeding scheme (three independent streams): the session effects (session multiplier,
+    the pressure-block multipliers of that session, load-cell offset) come from
+    ``SeedSequence([session_seed, SESSION_STREAM])``; the run multipliers from
+    ``SeedSequence([run_seed, RUN_STREAM])``; the measurement noise of each file from
+    ``SeedSequence(seed)`` (as the clean bench). ``session_seed`` and ``run_seed`` default to
+    ``seed``. The same ``session_seed`` with a new ``run_seed`` and ``seed`` draws new runs
+    of the same sessions; a new ``session_seed`` draws new sessions.
+
+    Each multiplier is ``exp(N(0, sd))`` (lognormal, median 1; ``sd`` is about the relative
+    s.d.). The warm-up multiplier is ``1 + warmup_amplitude exp(-t / warmup_time_constant)``,
+    ``t`` [s] the session's elapsed time at the middle of the run (run durations plus
+    ``run_pause`` between runs; each session starts cold).
+
+    Returns one dict per run: ``index`` (within its session), ``file``, ``session``
+    (``"s1"``, ...; None on a clean bench), ``session_index``, ``pressure_bar``,
+    ``velocity_mm_s``, ``elapsed_s`` [s], ``session_scale``, ``pressure_scale``,
+    ``run_scale``, ``warmup_scale`` and their product ``friction_scale`` [-] (the TRUE
+    multiplier of the friction law in that run), and ``load_cell_offset_N`` [N].
+    """
+    s = settings
+    runs = s.runs()
+    slow = s.slow_speeds()
+    pressures = sorted({p for p, _ in runs})
+    session_seed = s.seed if s.session_seed is None else s.session_seed
+    run_seed = s.seed if s.run_seed is None else s.run_seed
+    session_streams = np.random.SeedSequence([session_seed, SESSION_STREAM]).spawn(s.sessions)
+    run_streams = np.random.SeedSequence([run_seed, RUN_STREAM]).spawn(s.sessions)
+    durations = []
+    for _, v in runs:
+        _, interval, n = run_plan(v * 1e-3, s, slow=v in slow)
+        durations.append((n - 1) * interval)
+    truth = []
+    for k in range(s.sessions):
+        srng = np.random.default_rng(session_streams[k])
+        session_scale = math.exp(srng.normal(0.0, s.session_scatter))
+        offset = float(srng.normal(0.0, s.load_cell_offset_std))
+        block = {p: math.exp(srng.normal(0.0, s.pressure_scatter)) for p in pressures}
+        rrng = np.random.default_rng(run_streams[k])
+        run_scales = np.exp(rrng.normal(0.0, s.run_scatter, len(runs)))
+        elapsed = 0.0
+        for i, ((p, v), duration) in enumerate(zip(runs, durations, strict=True)):
+            middle = elapsed + duration / 2
+            warm = 1.0 + s.warmup_amplitude * math.exp(-middle / s.warmup_time_constant)
+            elapsed += duration + s.run_pause
+            scale = session_scale * block[p] * float(run_scales[i]) * warm
+            truth.append(
+                {
+                    "index": i,
+                    "file": run_file_name(i, p, v, None if s.is_clean else k + 1),
+                    "session": None if s.is_clean else f"s{k + 1}",
+                    "session_index": k,
+                    "pressure_bar": p,
+                    "velocity_mm_s": v,
+                    "elapsed_s": middle,
+                    "session_scale": session_scale,
+                    "pressure_scale": block[p],
+                    "run_scale": float(run_scales[i]),
+                    "warmup_scale": warm,
+                    "friction_scale": 1.0 if s.is_clean else scale,
+                    "load_cell_offset_N": offset if offset else 0.0,
+                }
+            )
+    return truth
 
 
 def generate_campaign(
@@ -446,14 +684,24 @@ def generate_campaign(
             "dynamic": dynamic_rows,
         }
     slow = s.slow_speeds()
-    jobs = [(i, p, v) for i, (p, v) in enumerate(s.runs())]
+    truth = draw_truth(s)
+    jobs = [(j, row) for j, row in enumerate(truth)]
     seeds = np.random.SeedSequence(s.seed).spawn(len(jobs))
 
     def one(job):
-        i, p, v = job
-        run = run_virtual_test(p, v, s, rng=np.random.default_rng(seeds[i]), slow=v in slow)
-        path = out / run_file_name(i, p, v)
-        _write_run(path, run, s, i)
+        j, row = job
+        p, v = row["pressure_bar"], row["velocity_mm_s"]
+        run = run_virtual_test(
+            p,
+            v,
+            s,
+            rng=np.random.default_rng(seeds[j]),
+            slow=v in slow,
+            friction_scale=row["friction_scale"],
+            load_cell_offset=row["load_cell_offset_N"],
+        )
+        path = out / row["file"]
+        _write_run(path, run, s, row["index"])
         if progress is not None:
             progress(path.name)
         return path, run.steps, run.time.size
@@ -461,13 +709,31 @@ def generate_campaign(
     workers = workers or min(2, os.cpu_count() or 1)
     with ThreadPoolExecutor(max_workers=workers) as pool:
         results = list(pool.map(one, jobs))
-    rows = [(path.name, p, v) for (path, _, _), (_, p, v) in zip(results, jobs, strict=True)]
+    rows = [(r["file"], r["pressure_bar"], r["velocity_mm_s"]) for r in truth]
     info: dict[str, Any] = {
         "files": [r[0] for r in results],
         "steps": int(sum(r[1] for r in results)),
         "samples": int(sum(r[2] for r in results)),
         "settings": s,
+        "truth": truth,
     }
+    if not s.is_clean:
+        constant = [{**r, "test": "constant-velocity"} for r in truth]
+        if dynamic_tests:
+            extra = generate_dynamic_tests(
+                out,
+                s,
+                tests=dynamic_tests,
+                dynamic=dynamic,
+                start_index=len(rows),
+                progress=progress,
+            )
+            info["files"] += [out / r["file"] for r in extra]
+            info["samples"] += int(sum(r["run"].time.size for r in extra))
+            info["dynamic"] = extra
+            constant += extra
+        write_test_manifest(out / "manifest.csv", constant, truth_columns=True)
+        return info
     if not dynamic_tests:
         write_manifest(out / "manifest.csv", rows)
         return info
@@ -796,28 +1062,37 @@ def generate_dynamic_tests(
     return rows
 
 
-def write_test_manifest(path: StrPath, rows: Iterable[Mapping[str, Any]]) -> Path:
+def write_test_manifest(
+    path: StrPath, rows: Iterable[Mapping[str, Any]], *, truth_columns: bool = False
+) -> Path:
     """``manifest.csv`` with the test kind: ``file,pressure_bar,velocity_mm_s,test,force_rate_N_s``.
 
     ``rows`` are dicts with ``file``, ``pressure_bar`` [bar], and ``velocity_mm_s`` [mm/s]
     (constant-velocity runs) or ``force_rate`` [N/s] (breakaway runs); ``test`` names the
     kind. Readers that know only the first three columns keep the others as extra metadata.
+    With ``truth_columns`` the columns :data:`TRUTH_COLUMNS` follow (``session``,
+    ``friction_scale`` [-], ``load_cell_offset_N`` [N]; empty for a row without them).
     """
     from ..io.writers import atomic_write_text
 
-    lines = ["file,pressure_bar,velocity_mm_s,test,force_rate_N_s"]
+    header = ["file", "pressure_bar", "velocity_mm_s", "test", "force_rate_N_s"]
+    lines = [",".join(header + list(TRUTH_COLUMNS if truth_columns else ()))]
     for row in rows:
         velocity = row.get("velocity_mm_s")
         rate = row.get("force_rate")
-        lines.append(
-            ",".join(
-                (
-                    row["file"],
-                    f"{row['pressure_bar']:g}",
-                    "" if velocity is None else f"{velocity:g}",
-                    row["test"],
-                    "" if rate is None or math.isnan(rate) else f"{rate:g}",
-                )
-            )
-        )
+        cells = [
+            row["file"],
+            f"{row['pressure_bar']:g}",
+            "" if velocity is None else f"{velocity:g}",
+            row["test"],
+            "" if rate is None or math.isnan(rate) else f"{rate:g}",
+        ]
+        if truth_columns:
+            scale, offset = row.get("friction_scale"), row.get("load_cell_offset_N")
+            cells += [
+                row.get("session") or "",
+                "" if scale is None else f"{scale:.6g}",
+                "" if offset is None else f"{offset:.4g}",
+            ]
+        lines.append(",".join(cells))
     return atomic_write_text(path, "\n".join(lines) + "\n")
