@@ -133,7 +133,7 @@ def _timed(run, interval=0.02):
 def _generate(root: Path):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
-    base = BenchSettings(pressures_bar=PRESSURES_BAR, speeds_mm_s=SPEEDS_MM_S)
+    base = BenchSettings.clean(pressures_bar=PRESSURES_BAR, speeds_mm_s=SPEEDS_MM_S)
     for i in range(CAMPAIGNS):
         generate_campaign(root / f"cyl{i:02d}", replace(base, seed=i))
 

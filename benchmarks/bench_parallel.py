@@ -107,7 +107,9 @@ def bench_fit_parallel():
     with tempfile.TemporaryDirectory() as tmp:
         for name, (pressures, speeds) in FIT_VS_SCRIPT_CAMPAIGNS.items():
             campaign = Path(tmp) / name
-            generate_campaign(campaign, BenchSettings(pressures_bar=pressures, speeds_mm_s=speeds))
+            generate_campaign(
+                campaign, BenchSettings.clean(pressures_bar=pressures, speeds_mm_s=speeds)
+            )
             for mode in modes:  # warm the file cache and numba's on-disk cache
                 _time(mode, campaign, Path(tmp) / "out", None)
             for state in ("idle", "busy"):

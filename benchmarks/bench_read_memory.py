@@ -39,7 +39,7 @@ def _big_run(folder: Path) -> tuple[Path, Path]:
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     info = generate_campaign(
-        folder / "campaign", BenchSettings(pressures_bar=(50.0,), speeds_mm_s=(1,))
+        folder / "campaign", BenchSettings.clean(pressures_bar=(50.0,), speeds_mm_s=(1,))
     )
     small = sorted(info["files"])[0]
     lines = small.read_bytes().split(b"\n")

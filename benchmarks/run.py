@@ -73,12 +73,12 @@ def _thesis_params(p):
 
 
 def bench_virtual_bench():
-    from cylfric.simulate.bench import generate_campaign
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     with tempfile.TemporaryDirectory() as tmp:
         generate_campaign(Path(tmp) / "warm", _small_settings())
         t0 = time.perf_counter()
-        info = generate_campaign(Path(tmp) / "campaign")
+        info = generate_campaign(Path(tmp) / "campaign", BenchSettings.clean())
         elapsed = time.perf_counter() - t0
         size = sum(f.stat().st_size for f in info["files"])
     return _save(
@@ -98,7 +98,7 @@ def bench_virtual_bench():
 def _small_settings():
     from cylfric.simulate.bench import BenchSettings
 
-    return BenchSettings(pressures_bar=(50.0,), speeds_mm_s=(10, 100))
+    return BenchSettings.clean(pressures_bar=(50.0,), speeds_mm_s=(10, 100))
 
 
 def bench_parse():
@@ -111,7 +111,7 @@ def bench_parse():
         messy = Path(tmp) / "messy"
         clean = Path(tmp) / "clean"
         clean.mkdir()
-        info = generate_campaign(messy, BenchSettings(decimal_comma=True, force_unit="kN"))
+        info = generate_campaign(messy, BenchSettings.clean(decimal_comma=True, force_unit="kN"))
         for path in info["files"]:
             data, _ = read_bench_text(path)
             data.iloc[:, :3].to_csv(clean / (path.stem + ".csv"), index=False)
@@ -158,7 +158,9 @@ def bench_memory():
     with tempfile.TemporaryDirectory() as tmp:
         for n_pressures in (1, 10):
             folder = Path(tmp) / f"c{n_pressures}"
-            settings = BenchSettings(pressures_bar=BenchSettings().pressures_bar[:n_pressures])
+            settings = BenchSettings.clean(
+                pressures_bar=BenchSettings().pressures_bar[:n_pressures]
+            )
             info = generate_campaign(folder, settings)
             raw_bytes = sum(f.stat().st_size for f in info["files"])
             extract_campaign(folder)  # warm-up (compilation)
@@ -186,11 +188,11 @@ def bench_memory():
 
 def bench_pipeline():
     from cylfric.pipeline import fit_campaign
-    from cylfric.simulate.bench import generate_campaign
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     with tempfile.TemporaryDirectory() as tmp:
         campaign = Path(tmp) / "campaign"
-        info = generate_campaign(campaign)
+        info = generate_campaign(campaign, BenchSettings.clean())
         size = sum(f.stat().st_size for f in info["files"])
         fit_campaign(campaign, Path(tmp) / "warm", report=True)  # warm caches and compilation
         t_core, core = _best(lambda: fit_campaign(campaign, Path(tmp) / "core", report=False), 3)
@@ -273,7 +275,7 @@ def bench_fit_vs_script():
         for name, (pressures, speeds) in FIT_VS_SCRIPT_CAMPAIGNS.items():
             campaign = Path(tmp) / name
             info = generate_campaign(
-                campaign, BenchSettings(pressures_bar=pressures, speeds_mm_s=speeds)
+                campaign, BenchSettings.clean(pressures_bar=pressures, speeds_mm_s=speeds)
             )
             size = sum(f.stat().st_size for f in info["files"])
             fit = [cylfric, "fit", str(campaign), "--out", str(Path(tmp) / "out"), "--no-report"]
