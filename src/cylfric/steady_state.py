@@ -132,7 +132,7 @@ def operating_pressure_signal(data, config: CampaignConfig, file="") -> np.ndarr
             f'"{sorted(chambers)[0]}" (or kind = "single-acting" for a cylinder with one '
             "working chamber)",
         )
-    pa = chambers.get("a", chambers.get("b"))
+    pa = chambers["a"] if "a" in chambers else chambers["b"]  # a rule of chamber B: unused
     pb = chambers.get("b", pa)
     return np.asarray(operating_pressure(pa, pb, reference=rule), dtype=float)
 
@@ -450,7 +450,7 @@ def _point_rows(data, metadata, config, run, options):
             p = pressure[w.start : w.stop][keep]
             p_mean, p_std = float(p.mean()), float(p.std())
         else:  # the nominal pressure is the chambers' (both, or the working one)
-            nominal = float(metadata.get("pressure", math.nan))
+            nominal = np.asarray(float(metadata.get("pressure", math.nan)))
             p_mean = float(PRESSURE_REFERENCES[config.pressure_reference](nominal, nominal))
             p_std = 0.0
         nan = math.nan

@@ -115,7 +115,9 @@ def fit_hopsan(model: FrictionModel, speeds: ArrayLike, pressures: ArrayLike) ->
     design = np.column_stack([np.ones(V.size), V.ravel() * 1e3])  # N, N per mm/s
     solution = lsq_linear(design, target, bounds=(0.0, np.inf), method="bvls").x
     middle = 0.5 * (pressures[0] + pressures[-1])
-    breakaway = float(model.params_at(model.operating_pressure(*chamber_pressures(model, middle)))["F_s"])
+    breakaway = float(
+        model.params_at(model.operating_pressure(*chamber_pressures(model, middle)))["F_s"]
+    )
     return {
         "B_p": float(solution[1] * 1e3),
         "f_s": max(breakaway, float(solution[0])),
@@ -214,9 +216,8 @@ def export_hopsan(
     )
     stem = identifier(name or model.record.get("name") or "cylfric")
     params = fit_hopsan(model, speeds, pressures)
-    low, high = model.params_at(
-        model.operating_pressure(*chamber_pressures(model, pressures[[0, -1]]))
-    )["F_s"]
+    ends = model.params_at(model.operating_pressure(*chamber_pressures(model, pressures[[0, -1]])))
+    low, high = np.broadcast_to(np.asarray(ends["F_s"], dtype=float), (2,))
     report = loss_report(
         model,
         lambda v, pa, pb: hopsan_friction(v, **params),

@@ -156,7 +156,7 @@ def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[
         example_comment = f"Pressure of the working chamber {working.upper()} (gauge)"
         example_connect = (
             f"      connect(pressure.y, friction.p_{working});\n"
-            f"      friction.p_{other} = 0 \"chamber {other.upper()} at atmosphere (gauge)\";"
+            f'      friction.p_{other} = 0 "chamber {other.upper()} at atmosphere (gauge)";'
         )
     else:
         example_comment = "Chamber pressure (both chambers)"

@@ -260,8 +260,11 @@ def pressure_reference_basis(
         if stated
         else (
             f"default: {where} states "
-            + (f"{said} and " if kind is not None else "no [cylinder] kind (double-acting "
-               "assumed) and ")
+            + (
+                f"{said} and "
+                if kind is not None
+                else "no [cylinder] kind (double-acting assumed) and "
+            )
             + f'no pressure_reference, so the laws see the "{rule}" of the chamber pressures '
             "(the common pressure when both chambers are held at one pressure)"
         )
