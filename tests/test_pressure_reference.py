@@ -260,6 +260,16 @@ def test_double_acting_stated_rule_round_trips_through_the_datasheet(tmp_path):
     assert model.pressure_reference_basis == basis and model.reference == "b"
     params = (tmp_path / "out" / "export" / "matlab" / "cylfric_params.m").read_text()
     assert "P.reference = 'b';" in params
+    assert not any("is a default" in note for note in sheet["notes"])
+    # the same campaign without campaign.toml: "mean", and a note in the datasheet says so
+    (campaign / "campaign.toml").unlink()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit_campaign(campaign, tmp_path / "default", report=False)
+    sheet = read_datasheet(tmp_path / "default" / "datasheet.json")
+    assert sheet["model"]["pressure_reference_basis"]["rule"] == "mean"
+    assert sheet["model"]["pressure_reference_basis"]["stated_by"].startswith("default")
+    assert any(note.startswith('pressure reference "mean" is a default') for note in sheet["notes"])
 
 
 def test_double_acting_default_is_mean_and_says_so(tmp_path):

@@ -541,10 +541,11 @@ def _with_pressure_reference(ident, basis):
     model = ident.model.replace(reference=basis["rule"], pressure_reference_basis=basis)
     notes = list(ident.notes)
     if basis["stated_by"].startswith("default"):
+        reason = basis["stated_by"].removeprefix("default: ")
         notes.append(
-            f'pressure reference "{basis["rule"]}" is a default ({basis["stated_by"]}); '
-            "state [cylinder] pressure_reference in campaign.toml if the laws should see "
-            'another pressure ("a", "b", "sum", "mean" or "max")'
+            f'pressure reference "{basis["rule"]}" is a default: {reason}; state [cylinder] '
+            "pressure_reference in campaign.toml if the laws should see another pressure "
+            '("a", "b", "sum", "mean" or "max")'
         )
     return replace(ident, model=model, notes=notes)
 
