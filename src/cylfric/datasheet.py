@@ -64,6 +64,7 @@ def build_datasheet(
     campaign: str | None = None,
     name: str | None = None,
     pressure_reference: str | None = None,
+    pressure_reference_basis: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Datasheet dict from an :class:`~cylfric.identify.Identification`.
 
@@ -76,6 +77,7 @@ def build_datasheet(
         campaign=campaign,
         name=name,
         pressure_reference=pressure_reference,
+        pressure_reference_basis=pressure_reference_basis,
     ).to_datasheet()
 
 
@@ -87,6 +89,7 @@ def datasheet_model(
     campaign: str | None = None,
     name: str | None = None,
     pressure_reference: str | None = None,
+    pressure_reference_basis: Mapping[str, Any] | None = None,
 ) -> FrictionModel:
     """The identified model with the campaign's record: what the datasheet holds.
 
@@ -107,6 +110,10 @@ def datasheet_model(
         A name for the cylinder or campaign.
     pressure_reference : str, optional
         Which chamber pressure the laws see (default: the model's rule, ``"mean"``).
+    pressure_reference_basis : mapping, optional
+        Why (``kind``, ``rule``, ``chamber``, ``stated_by``;
+        :func:`cylfric.friction.pressure.pressure_reference_basis`); its ``rule`` is the
+        reference when ``pressure_reference`` is not given. Default: the model's.
     """
     ident = identification
     model = ident.model
@@ -154,7 +161,10 @@ def datasheet_model(
         "record": clean(record),
         "provenance": {**model.provenance, "source": source},
     }
-    if pressure_reference is not None:
+    if pressure_reference_basis is not None:
+        changes["pressure_reference_basis"] = dict(pressure_reference_basis)
+        changes["reference"] = pressure_reference or pressure_reference_basis["rule"]
+    elif pressure_reference is not None:
         changes["reference"] = pressure_reference
     return model.replace(**changes)
 

@@ -421,6 +421,7 @@ def _fit(
         )
     except UnphysicalFrictionError as exc:
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder)}") from None
+    ident = _with_pressure_reference(ident, config.pressure_basis)
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
     if correction.note:
@@ -535,6 +536,22 @@ def _export_summary(out: Path, result) -> dict:
             for report in result.loss
         ],
     }
+
+
+def _with_pressure_reference(ident, basis):
+    """The identification with the campaign's pressure reference recorded in its model (the
+    points were formed in it, steady_state.operating_pressure_signal), and a note when the
+    reference is a default rather than stated by campaign.toml."""
+    model = ident.model.replace(reference=basis["rule"], pressure_reference_basis=basis)
+    notes = list(ident.notes)
+    if basis["stated_by"].startswith("default"):
+        reason = basis["stated_by"].removeprefix("default: ")
+        notes.append(
+            f'pressure reference "{basis["rule"]}" is a default: {reason}; state [cylinder] '
+            "pressure_reference in campaign.toml if the laws should see another pressure "
+            '("a", "b", "sum", "mean" or "max")'
+        )
+    return replace(ident, model=model, notes=notes)
 
 
 def _correct_viscosity(extraction, config, enabled):

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ._parallel import start
+from .friction.pressure import PRESSURE_REFERENCES, REFERENCE_CHAMBERS, operating_pressure
 from .io.campaign import Campaign, CampaignConfig, read_run
 from .io.text import BenchFileError
 
@@ -60,7 +61,9 @@ POINT_COLUMNS = [
 ]
 """Columns of the points table. ``force`` is the mean force-balance signal (with the offset),
 ``friction`` the friction magnitude after removing the run's offset, ``flag`` is ``"ok"``,
-``"short_window"``, ``"unsettled"`` or ``"no_offset"``."""
+``"short_window"``, ``"unsettled"`` or ``"no_offset"``. ``pressure`` is the pressure the laws
+see: the chamber pressures combined by the campaign's pressure reference
+(:func:`operating_pressure_signal`; a single-acting cylinder's working chamber)."""
 
 
 def friction_signal(data, config: CampaignConfig, velocity=None) -> np.ndarray:
@@ -84,6 +87,54 @@ def friction_signal(data, config: CampaignConfig, velocity=None) -> np.ndarray:
         acceleration = np.gradient(velocity, np.asarray(data["time [s]"]))
         signal = signal - config.moving_mass * acceleration
     return signal
+
+
+def chamber_signals(data) -> dict:
+    """The chamber pressures a file measures [Pa]: ``{"a": array, "b": array}``.
+
+    ``pressure_a [Pa]`` and ``pressure_b [Pa]`` are the chambers; a single ``pressure [Pa]``
+    column is the pressure of both (a rig that holds both chambers at one pressure, or the
+    working chamber of a single-acting cylinder). A chamber the file does not measure is
+    left out.
+    """
+    common = data.get("pressure [Pa]")
+    found = {
+        "a": data.get("pressure_a [Pa]", common),
+        "b": data.get("pressure_b [Pa]", common),
+    }
+    return {chamber: np.asarray(p) for chamber, p in found.items() if p is not None}
+
+
+def operating_pressure_signal(data, config: CampaignConfig, file="") -> np.ndarray | None:
+    """The pressure the laws see [Pa], from the file's chamber pressures by the campaign's
+    reference (``config.pressure_basis``); None when the file measures no pressure.
+
+    Raises
+    ------
+    BenchFileError
+        The reference needs a chamber the file does not measure (e.g. ``"mean"`` with a
+        ``pressure_a`` column only): the message names the file, the rule, who stated it and
+        what to write in campaign.toml.
+    """
+    chambers = chamber_signals(data)
+    if not chambers:
+        return None
+    basis = config.pressure_basis
+    rule = basis["rule"]
+    missing = [c for c in REFERENCE_CHAMBERS[rule] if c not in chambers]
+    if missing:
+        has = ", ".join(f"pressure_{c}" for c in sorted(chambers))
+        raise BenchFileError(
+            file,
+            f'the pressure reference "{rule}" ({basis["stated_by"]}) needs the pressure of '
+            f"chamber {missing[0].upper()}, but this file measures only {has}; state which "
+            "pressure the laws see in campaign.toml, e.g. [cylinder] pressure_reference = "
+            f'"{sorted(chambers)[0]}" (or kind = "single-acting" for a cylinder with one '
+            "working chamber)",
+        )
+    pa = chambers["a"] if "a" in chambers else chambers["b"]  # a rule of chamber B: unused
+    pb = chambers.get("b", pa)
+    return np.asarray(operating_pressure(pa, pb, reference=rule), dtype=float)
 
 
 def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
@@ -368,8 +419,8 @@ def _point_rows(data, metadata, config, run, options):
     position = (
         config.position_sign * np.asarray(data["position [m]"]) if "position [m]" in data else None
     )
-    pressure_col = data.get("pressure [Pa]", data.get("pressure_a [Pa]"))
-    if math.isnan(metadata.get("pressure", math.nan)) and pressure_col is None:
+    pressure = operating_pressure_signal(data, config, file)
+    if math.isnan(metadata.get("pressure", math.nan)) and pressure is None:
         listed = metadata.get("manifest_line")
         manifest = (
             f"a pressure_bar value in manifest.csv (line {listed} gives none)"
@@ -382,7 +433,6 @@ def _point_rows(data, metadata, config, run, options):
             "'Pressure: 55 bar' header line, a file-name token such as "
             "55bar, or a pressure column",
         )
-    pressure = None if pressure_col is None else np.asarray(pressure_col)
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
     extra = metadata.get("extra", {})
@@ -399,8 +449,10 @@ def _point_rows(data, metadata, config, run, options):
         if pressure is not None and n:
             p = pressure[w.start : w.stop][keep]
             p_mean, p_std = float(p.mean()), float(p.std())
-        else:
-            p_mean, p_std = float(metadata.get("pressure", math.nan)), 0.0
+        else:  # the nominal pressure is the chambers' (both, or the working one)
+            nominal = np.asarray(float(metadata.get("pressure", math.nan)))
+            p_mean = float(PRESSURE_REFERENCES[config.pressure_reference](nominal, nominal))
+            p_std = 0.0
         nan = math.nan
         rows.append(
             {

@@ -366,12 +366,16 @@ _DEFAULT_MASS = 2.5
 
 def _variables(model, element):
     """Variable rows (name, vr, causality, variability, initial, unit, start, description)."""
+    from .loss import chamber_pressures
+
+    # both chambers at the start pressure, or a single-acting cylinder's working chamber
     pressure = _start_pressure(model)
+    pressure_a, pressure_b = (float(p) for p in chamber_pressures(model, pressure))
     starts = {
         "velocity": 0.0,
         "force": 0.0,
-        "pressure_a": pressure,
-        "pressure_b": pressure,
+        "pressure_a": pressure_a,
+        "pressure_b": pressure_b,
         "z": 0.0,
         "max_substep": 1e-4,
         "position": 0.0,

@@ -35,7 +35,7 @@ import numpy as np
 from ..escape import hcom_comment, identifier, markdown_text
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
-from .loss import loss_grid, loss_report
+from .loss import chamber_pressures, loss_grid, loss_report
 from .result import ExportResult
 from .simscape import _num
 
@@ -103,18 +103,21 @@ def fit_hopsan(model: FrictionModel, speeds: ArrayLike, pressures: ArrayLike) ->
 
     ``f_k`` [N] and ``B_p`` [N*s/m] by bounded linear least squares of
     ``f_k + B_p |v|`` against the model at the grid's speeds [m/s] and chamber pressures
-    [Pa] (``p_A = p_B``); ``f_s`` [N] is the model's breakaway force ``F_s`` at the middle
-    chamber pressure; ``b = 0``.
+    [Pa] (``p_A = p_B``, or a single-acting cylinder's working chamber with the other at 0
+    gauge: :func:`~cylfric.export.loss.chamber_pressures`); ``f_s`` [N] is the model's
+    breakaway force ``F_s`` at the middle chamber pressure; ``b = 0``.
     """
     from scipy.optimize import lsq_linear
 
     speeds, pressures = np.asarray(speeds, float), np.asarray(pressures, float)
     P, V = np.meshgrid(pressures, speeds, indexing="ij")
-    target = model.friction(V, model.operating_pressure(P, P)).ravel()
+    target = model.friction(V, model.operating_pressure(*chamber_pressures(model, P))).ravel()
     design = np.column_stack([np.ones(V.size), V.ravel() * 1e3])  # N, N per mm/s
     solution = lsq_linear(design, target, bounds=(0.0, np.inf), method="bvls").x
     middle = 0.5 * (pressures[0] + pressures[-1])
-    breakaway = float(model.params_at(model.operating_pressure(middle, middle))["F_s"])
+    breakaway = float(
+        model.params_at(model.operating_pressure(*chamber_pressures(model, middle)))["F_s"]
+    )
     return {
         "B_p": float(solution[1] * 1e3),
         "f_s": max(breakaway, float(solution[0])),
@@ -155,8 +158,10 @@ def fit_hopsan_pressure_signal(
 
     speeds, pressures = np.asarray(speeds, float), np.asarray(pressures, float)
     P, V = np.meshgrid(pressures, speeds, indexing="ij")
-    target = model.friction(V, model.operating_pressure(P, P)).ravel()
-    design = np.column_stack([np.ones(V.size), 2 * P.ravel() / 1e5, V.ravel() * 1e3])
+    PA, PB = chamber_pressures(model, P)
+    target = model.friction(V, model.operating_pressure(PA, PB)).ravel()
+    total = (PA + PB).ravel()  # the block's f_k sees p_1 + p_2
+    design = np.column_stack([np.ones(V.size), total / 1e5, V.ravel() * 1e3])
     solution = lsq_linear(design, target, bounds=(0.0, np.inf), method="bvls").x
     return {
         "f_k0": float(solution[0]),
@@ -211,8 +216,8 @@ def export_hopsan(
     )
     stem = identifier(name or model.record.get("name") or "cylfric")
     params = fit_hopsan(model, speeds, pressures)
-    low = model.params_at(model.operating_pressure(pressures[0], pressures[0]))["F_s"]
-    high = model.params_at(model.operating_pressure(pressures[-1], pressures[-1]))["F_s"]
+    ends = model.params_at(model.operating_pressure(*chamber_pressures(model, pressures[[0, -1]])))
+    low, high = np.broadcast_to(np.asarray(ends["F_s"], dtype=float), (2,))
     report = loss_report(
         model,
         lambda v, pa, pb: hopsan_friction(v, **params),

@@ -8,8 +8,12 @@ difference is largest. It is written beside every lossy export as CSV (the grid,
 units), a text summary and a figure.
 
 Pressures: the grid runs over the chamber pressure with both chambers at the same pressure
-(``p_A = p_B``, as on the thesis rig); cylfric sees ``model.operating_pressure(p_A, p_B)``,
-the target block its own combination (Simscape's Cylinder Friction: ``p_A + p_B``).
+(``p_A = p_B``, as on the thesis rig), or, for a single-acting cylinder (the datasheet's
+``model.pressure_reference_basis``), with the working chamber at it and the other at
+atmosphere (0 bar gauge), as the cylinder runs (:func:`chamber_pressures`); cylfric sees
+``model.operating_pressure(p_A, p_B)``, the target block its own combination (Simscape's
+Cylinder Friction: ``p_A + p_B``), so the block's parameters are fitted where the cylinder
+works.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ __all__ = [
     "loss_grid",
     "loss_report",
     "chamber_pressure",
+    "chamber_pressures",
     "N_VELOCITY",
     "N_PRESSURE",
 ]
@@ -60,6 +65,31 @@ def chamber_pressure(model: FrictionModel, operating: ArrayLike) -> np.ndarray:
     chamber pressures: ``operating / rule(1, 1)``.
     """
     return np.asarray(operating, dtype=float) / float(model.operating_pressure(1.0, 1.0))
+
+
+def chamber_pressures(model: FrictionModel, pressure: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Chamber pressures ``(p_A, p_B)`` [Pa] of the grid's chamber pressure [Pa].
+
+    A single-acting cylinder (``model.pressure_reference_basis`` kind ``"single-acting"``):
+    its working chamber at ``pressure`` and the other at atmosphere, 0 gauge. Any other:
+    both chambers at ``pressure`` (``p_A = p_B``).
+    """
+    p = np.asarray(pressure, dtype=float)
+    basis = model.pressure_reference_basis
+    if basis is not None and basis["kind"] == "single-acting":
+        zero = np.zeros_like(p)
+        return (zero, p) if basis.get("chamber") == "b" else (p, zero)
+    return p, p
+
+
+def chambers_text(model: FrictionModel) -> str:
+    """How the grid sets the chambers, in words (for the loss reports)."""
+    basis = model.pressure_reference_basis
+    if basis is not None and basis["kind"] == "single-acting":
+        working = str(basis.get("chamber") or "a").upper()
+        other = "A" if working == "B" else "B"
+        return f"single-acting: p_{working} = the chamber pressure, p_{other} = 0 gauge"
+    return "p_A = p_B"
 
 
 def _range(model, given, low, high, what, unit):
@@ -137,7 +167,8 @@ class LossReport:
     velocity : ndarray
         Velocity of each grid point [m/s] (both signs).
     pressure : ndarray
-        Chamber pressure of each grid point [Pa] (``p_A = p_B``).
+        Chamber pressure of each grid point [Pa] (``p_A = p_B``, or the working chamber's:
+        ``chambers``).
     cylfric : ndarray
         Steady-state friction of the cylfric model [N].
     approximation : ndarray
@@ -146,6 +177,8 @@ class LossReport:
         The exported parameters: name -> (value, SI unit).
     notes : tuple of str
         Where the equations come from, and what the block cannot represent.
+    chambers : str
+        How the grid sets the chambers (:func:`chambers_text`).
     """
 
     target: str
@@ -156,6 +189,7 @@ class LossReport:
     approximation: np.ndarray
     parameters: dict = field(default_factory=dict)
     notes: tuple = ()
+    chambers: str = "p_A = p_B"
 
     @property
     def difference(self) -> np.ndarray:
@@ -213,7 +247,7 @@ class LossReport:
             f"({speeds.min() * 1e3:.4g} to {speeds.max() * 1e3:.4g} mm/s, both directions, "
             f"log-spaced) x {np.unique(self.pressure).size} chamber pressures "
             f"({self.pressure.min() / 1e5:.4g} to {self.pressure.max() / 1e5:.4g} bar, "
-            "p_A = p_B)",
+            f"{self.chambers})",
             "difference = target block - cylfric, steady-state friction [N]",
             "",
             "exported parameters (SI):",
@@ -327,7 +361,7 @@ def loss_report(
     speeds : array_like
         Positive speeds [m/s]; the grid uses each with both signs.
     pressures : array_like
-        Chamber pressures [Pa] (``p_A = p_B``).
+        Chamber pressures [Pa] (:func:`chamber_pressures` sets both chambers from them).
     parameters : dict, optional
         Name -> (value, SI unit) of the exported parameters, for the text report.
     notes : sequence of str
@@ -339,10 +373,11 @@ def loss_report(
         np.asarray(pressures, dtype=float), velocity_axis, indexing="ij"
     )
     velocity, pressure = velocity.ravel(), pressure.ravel()
+    pressure_a, pressure_b = chamber_pressures(model, pressure)
     cylfric = np.asarray(
-        model.friction(velocity, model.operating_pressure(pressure, pressure)), dtype=float
+        model.friction(velocity, model.operating_pressure(pressure_a, pressure_b)), dtype=float
     )
-    block = np.asarray(block_force(velocity, pressure, pressure), dtype=float)
+    block = np.asarray(block_force(velocity, pressure_a, pressure_b), dtype=float)
     block = np.broadcast_to(block, velocity.shape).copy()
     if not np.all(np.isfinite(block)):
         raise ValueError(f"{title}: the block's force is not finite on the grid")
@@ -355,4 +390,5 @@ def loss_report(
         approximation=block,
         parameters=dict(parameters or {}),
         notes=tuple(notes),
+        chambers=chambers_text(model),
     )

@@ -148,6 +148,21 @@ def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[
         else 0.5 * (model.validity["pressure_min"] + model.validity["pressure_max"])
     )
     example_p = example_p / float(model.operating_pressure(1.0, 1.0))
+    basis = model.pressure_reference_basis
+    if basis is not None and basis["kind"] == "single-acting":
+        # the working chamber at p, the other at atmosphere (0 gauge), as the cylinder runs
+        working = "b" if basis.get("chamber") == "b" else "a"
+        other = "a" if working == "b" else "b"
+        example_comment = f"Pressure of the working chamber {working.upper()} (gauge)"
+        example_connect = (
+            f"      connect(pressure.y, friction.p_{working});\n"
+            f'      friction.p_{other} = 0 "chamber {other.upper()} at atmosphere (gauge)";'
+        )
+    else:
+        example_comment = "Chamber pressure (both chambers)"
+        example_connect = (
+            "      connect(pressure.y, friction.p_a);\n      connect(pressure.y, friction.p_b);"
+        )
     template = Template(
         (Path(__file__).parent / "templates" / "modelica.mo.tmpl").read_text(encoding="utf-8")
     )
@@ -163,6 +178,8 @@ def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[
         validity=validity,
         example_velocity=_num(0.025),
         example_pressure=_num(example_p),
+        example_pressure_comment=example_comment,
+        example_connect=example_connect,
     )
     return package, text
 

@@ -49,7 +49,7 @@ from ..escape import identifier, matlab_comment
 from ..friction import simscape_cylinder_friction, stribeck
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
-from .loss import chamber_pressure, loss_grid, loss_report
+from .loss import chamber_pressure, chamber_pressures, loss_grid, loss_report
 from .result import ExportResult
 
 if TYPE_CHECKING:
@@ -221,22 +221,25 @@ def _least_squares(residual, starts, lower, upper):
 
 
 def _grid_and_start(model, speeds, pressures):
-    """(P, V) grid [Pa, m/s], the model's friction there [N] (equal chamber pressures), and
-    starting values from its levels: slope [N/Pa] and preload [N] of F_c against p_A + p_B,
-    the mean F_s/F_c [-], sigma_2 [N*s/m] and v_r [m/s]."""
+    """(p_A, p_B, V) grid [Pa, Pa, m/s] (:func:`~cylfric.export.loss.chamber_pressures`), the
+    model's friction there [N], and starting values from its levels: slope [N/Pa] and
+    preload [N] of F_c against p_A + p_B, the mean F_s/F_c [-], sigma_2 [N*s/m] and v_r [m/s]."""
     P, V = np.meshgrid(pressures, speeds, indexing="ij")
-    target = model.friction(V, model.operating_pressure(P, P))
+    PA, PB = chamber_pressures(model, P)
+    target = model.friction(V, model.operating_pressure(PA, PB))
     levels = _model_levels(model, pressures)
-    slope, preload = np.polyfit(2 * pressures, np.broadcast_to(levels["F_c"], pressures.shape), 1)
+    total = np.add(*chamber_pressures(model, pressures))
+    slope, preload = np.polyfit(total, np.broadcast_to(levels["F_c"], pressures.shape), 1)
     ratio = float(np.mean(np.asarray(levels["F_s"]) / np.asarray(levels["F_c"])))
     viscous = float(np.mean(levels["sigma_2"]))
     v_r = float(np.mean(levels["v_r"]))
-    return P, V, target, (slope, preload, ratio, viscous, v_r)
+    return (PA, PB), V, target, (slope, preload, ratio, viscous, v_r)
 
 
 def _model_levels(model, pressures):
-    """Parameters of the cylfric model at chamber pressures [Pa] (p_A = p_B)."""
-    return model.params_at(model.operating_pressure(pressures, pressures))
+    """Parameters of the cylfric model at chamber pressures [Pa] (p_A = p_B, or the working
+    chamber's: :func:`~cylfric.export.loss.chamber_pressures`)."""
+    return model.params_at(model.operating_pressure(*chamber_pressures(model, pressures)))
 
 
 def fit_cylinder_friction_il(
@@ -251,7 +254,8 @@ def fit_cylinder_friction_il(
     speeds : array_like
         Positive speeds [m/s] (the block and the model are odd in velocity).
     pressures : array_like
-        Chamber pressures [Pa] with ``p_A = p_B``.
+        Chamber pressures [Pa]: both chambers at them, or a single-acting cylinder's working
+        chamber with the other at 0 gauge (:func:`~cylfric.export.loss.chamber_pressures`).
 
     Returns
     -------
@@ -272,7 +276,7 @@ def fit_cylinder_friction_il(
         }
 
     def residual(x):
-        return (cylinder_friction_il(V, P, P, **unpack(x)) - target).ravel()
+        return (cylinder_friction_il(V, *P, **unpack(x)) - target).ravel()
 
     starts = [
         [max(preload, 0.0), max(slope, 0.0) * 1e5, max(ratio, 1.0), v * 1e3, viscous * 1e-3]
@@ -312,7 +316,7 @@ def fit_cylinder_friction(
         }
 
     def residual(x):
-        force = cylinder_friction(V, P, P, velocity_threshold=velocity_threshold, **unpack(x))
+        force = cylinder_friction(V, *P, velocity_threshold=velocity_threshold, **unpack(x))
         return (force - target).ravel()
 
     starts = [
@@ -334,7 +338,7 @@ def fit_translational_friction(
     [N*s/m], ``breakaway_velocity`` [m/s] (least squares over ``speeds`` [m/s]).
     """
     speeds = np.asarray(speeds, float)
-    target = model.friction(speeds, model.operating_pressure(pressure, pressure))
+    target = model.friction(speeds, model.operating_pressure(*chamber_pressures(model, pressure)))
     level = _model_levels(model, pressure)
 
     def unpack(x):  # optimizer units: N, N, N*s/mm, mm/s; x[1] is F_brk - F_C

@@ -29,6 +29,10 @@ __all__ = [
     "PRESSURE_LAW_COEFFICIENTS",
     "constant",
     "PRESSURE_REFERENCES",
+    "CYLINDER_ACTION",
+    "DEFAULT_PRESSURE_REFERENCE",
+    "REFERENCE_CHAMBERS",
+    "pressure_reference_basis",
     "linear",
     "quadratic",
     "exponential",
@@ -153,6 +157,120 @@ def operating_pressure(
     pa = check_signal("pressure_a", pressure_a)
     pb = pa if pressure_b is None else check_signal("pressure_b", pressure_b)
     return PRESSURE_REFERENCES[reference](pa, pb)
+
+
+CYLINDER_ACTION = {
+    "single-acting": "single-acting",
+    "single-rod": "double-acting",
+    "double-rod": "double-acting",
+}
+"""How each ``[cylinder] kind`` of campaign.toml acts: one working chamber or two."""
+
+DEFAULT_PRESSURE_REFERENCE = "mean"
+"""The reference of a double-acting cylinder whose campaign states none: the mean of the
+chamber pressures, which is the common pressure when both chambers are held at one pressure
+(the thesis rig, ch. 3)."""
+
+WORKING_CHAMBER = "a"
+"""The working chamber of a single-acting cylinder: A, the cap side, whose area is the bore's
+(campaign.toml's single-acting kind gives chamber A the piston area and chamber B none)."""
+
+REFERENCE_CHAMBERS = {
+    "a": ("a",),
+    "b": ("b",),
+    "sum": ("a", "b"),
+    "mean": ("a", "b"),
+    "max": ("a", "b"),
+}
+"""The chambers whose pressure each reference needs."""
+
+
+def pressure_reference_basis(
+    kind: str | None, stated: str | None = None, *, where: str = "campaign.toml"
+) -> dict[str, Any]:
+    """The pressure reference a cylinder's laws are fitted and evaluated in, and why.
+
+    A single-acting cylinder has one working chamber (:data:`WORKING_CHAMBER`, A); its laws
+    see that chamber's gauge pressure (rule ``"a"``), so that a simulation fed the working
+    pressure and an atmospheric other chamber (0 bar gauge) gives the datasheet's friction.
+    A double-acting cylinder (``single-rod``, ``double-rod``) uses the rule the campaign
+    states, else :data:`DEFAULT_PRESSURE_REFERENCE` (``"mean"``), recorded as a default.
+
+    Parameters
+    ----------
+    kind : {"single-acting", "single-rod", "double-rod"} or None
+        ``[cylinder] kind`` of campaign.toml; None when the campaign states none (a
+        double-acting cylinder is assumed, as campaign.toml's default kind is ``double-rod``).
+    stated : {"a", "b", "sum", "mean", "max"} or None
+        ``[cylinder] pressure_reference`` when the campaign states one.
+    where : str
+        The file that states them, for the record and the errors.
+
+    Returns
+    -------
+    dict
+        ``kind`` (``"single-acting"``, ``"double-acting"``), ``rule`` (a key of
+        :data:`PRESSURE_REFERENCES`), ``chamber`` (``"a"``, ``"b"`` or None when the rule
+        combines both) and ``stated_by`` (who decided it, in words): the datasheet's
+        ``model.pressure_reference_basis``.
+
+    Raises
+    ------
+    ValueError
+        An unknown kind or rule, or a recipe that contradicts itself (a single-acting
+        cylinder with a rule other than its working chamber's).
+
+    Examples
+    --------
+    >>> pressure_reference_basis("single-acting")["rule"]
+    'a'
+    >>> pressure_reference_basis("single-rod", "sum")["chamber"] is None
+    True
+    """
+    if kind is not None and kind not in CYLINDER_ACTION:
+        raise ValueError(f"unknown cylinder kind {kind!r}; valid: {sorted(CYLINDER_ACTION)}")
+    if stated is not None and stated not in PRESSURE_REFERENCES:
+        raise ValueError(
+            f"unknown pressure reference {stated!r}; valid: {sorted(PRESSURE_REFERENCES)}"
+        )
+    action = CYLINDER_ACTION[kind] if kind is not None else "double-acting"
+    said = f'[cylinder] kind = "{kind}"' if kind is not None else "no [cylinder] kind"
+    if action == "single-acting":
+        if stated not in (None, WORKING_CHAMBER):
+            raise ValueError(
+                f'pressure_reference = "{stated}" contradicts kind = "single-acting": a '
+                f"single-acting cylinder has one working chamber, "
+                f"{WORKING_CHAMBER.upper()} (the bore's area; the other chamber is at "
+                f'atmosphere, 0 bar gauge), so its laws see that chamber (rule "'
+                f'{WORKING_CHAMBER}"); remove pressure_reference or write "{WORKING_CHAMBER}"'
+            )
+        return {
+            "kind": action,
+            "rule": WORKING_CHAMBER,
+            "chamber": WORKING_CHAMBER,
+            "stated_by": (
+                f"{where}: {said}"
+                + (f' and pressure_reference = "{stated}"' if stated else "")
+                + f": the working chamber {WORKING_CHAMBER.upper()}'s gauge pressure"
+            ),
+        }
+    rule = stated or DEFAULT_PRESSURE_REFERENCE
+    stated_by = (
+        f'{where}: {said} and pressure_reference = "{stated}"'
+        if stated
+        else (
+            f"default: {where} states "
+            + (
+                f"{said} and "
+                if kind is not None
+                else "no [cylinder] kind (double-acting assumed) and "
+            )
+            + f'no pressure_reference, so the laws see the "{rule}" of the chamber pressures '
+            "(the common pressure when both chambers are held at one pressure)"
+        )
+    )
+    chamber = rule if rule in ("a", "b") else None
+    return {"kind": action, "rule": rule, "chamber": chamber, "stated_by": stated_by}
 
 
 def params_at_pressure(

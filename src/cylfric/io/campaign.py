@@ -24,6 +24,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from ..friction.pressure import PRESSURE_REFERENCES, pressure_reference_basis
 from ..units import UnitError, parse_quantity, parse_temperature
 from .matfile import read_mat
 from .text import BenchFileError, read_bench_arrays, si_columns
@@ -125,6 +126,10 @@ class CampaignConfig:
         Quantity -> column name chosen in ``[columns]`` (``force = "Axial Force"``).
     oil : OilSettings or None
         The ``[oil]`` table (viscosity correction), None without it.
+    pressure_basis : dict
+        The pressure reference the laws are fitted and evaluated in and why
+        (:func:`cylfric.friction.pressure.pressure_reference_basis`: ``kind``, ``rule``,
+        ``chamber``, ``stated_by``), from ``[cylinder] kind`` and ``pressure_reference``.
     """
 
     glob: str = "*"
@@ -142,6 +147,12 @@ class CampaignConfig:
     source: str | None = None
     roles: dict = field(default_factory=dict)
     oil: OilSettings | None = None
+    pressure_basis: dict = field(default_factory=lambda: pressure_reference_basis(None))
+
+    @property
+    def pressure_reference(self) -> str:
+        """The rule the laws see the chamber pressures by (``"a"``, ``"mean"``, ...)."""
+        return str(self.pressure_basis["rule"])
 
 
 @dataclass(frozen=True)
@@ -184,7 +195,10 @@ def load_config(folder) -> CampaignConfig:
 
     The file has the tables ``[files]`` (``glob``, ``name_pattern``), ``[columns]``
     (``names``, ``units``, ``delimiter``, ``decimal``), ``[cylinder]`` (``bore``, ``rod``,
-    ``kind`` = ``"double-rod"``, ``"single-rod"`` or ``"single-acting"``), ``[force_balance]``
+    ``kind`` = ``"double-rod"``, ``"single-rod"`` or ``"single-acting"``,
+    ``pressure_reference`` = ``"a"``, ``"b"``, ``"sum"``, ``"mean"`` or ``"max"``: the
+    pressure the laws see; a single-acting cylinder's is its working chamber A, a
+    double-acting one's defaults to ``"mean"``), ``[force_balance]``
     (``load_cell_sign``, ``position_sign``, ``moving_mass``), ``[extraction]`` and ``[oil]``
     (``viscosity_40C``, ``viscosity_100C``, ``reference_temperature``, ``temperature``).
     Values with units are strings such as ``"25 mm"``, ``"46 mm2/s"``, ``"40 degC"``.
@@ -202,6 +216,12 @@ def load_config(folder) -> CampaignConfig:
     files, cols = doc.get("files", {}), doc.get("columns", {})
     cyl, fb = doc.get("cylinder", {}), doc.get("force_balance", {})
     area_a = area_b = 0.0
+    try:
+        pressure_basis = pressure_reference_basis(
+            cyl.get("kind"), cyl.get("pressure_reference"), where=CONFIG_NAME
+        )
+    except ValueError as exc:
+        raise BenchFileError(path, str(exc), line=_line_of(path, "pressure_reference")) from None
     if cyl:
         bore = _quantity(cyl.get("bore", "0 mm"), "length", "mm", path)
         rod = _quantity(cyl.get("rod", "0 mm"), "length", "mm", path)
@@ -275,6 +295,7 @@ def load_config(folder) -> CampaignConfig:
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
         oil=_oil(doc["oil"], path) if "oil" in doc else None,
+        pressure_basis=pressure_basis,
     )
 
 
@@ -361,6 +382,7 @@ CONFIG_SCHEMA = {
                 "bore": _QUANTITY_TEXT,
                 "rod": _QUANTITY_TEXT,
                 "kind": {"enum": ["double-rod", "single-rod", "single-acting"]},
+                "pressure_reference": {"enum": sorted(PRESSURE_REFERENCES)},
             },
         },
         "force_balance": {

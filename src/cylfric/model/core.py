@@ -156,6 +156,23 @@ def _stderr_items(spec, law):
     return {"intercept": float(spec)} if law == "constant" else {}
 
 
+def _reference_basis(basis, reference):
+    """The pressure reference's basis as a read-only mapping (checked against ``reference``)."""
+    if basis is None:
+        return None
+    basis = dict(basis)
+    missing = {"kind", "rule", "stated_by"} - set(basis)
+    if missing:
+        raise ValueError(f"pressure_reference_basis lacks {sorted(missing)}")
+    if basis["rule"] != reference:
+        raise ValueError(
+            f"pressure_reference_basis says rule {basis['rule']!r} but the model's reference is "
+            f"{reference!r}; give both the same rule"
+        )
+    basis.setdefault("chamber", None)
+    return MappingProxyType(basis)
+
+
 class FrictionModel:
     """Pressure-dependent friction of a cylinder: steady-state law, LuGre dynamics, uncertainty.
 
@@ -183,6 +200,11 @@ class FrictionModel:
         (with the reason for the default) otherwise, and ``assumed`` for explicit keywords.
     reference : {"a", "b", "sum", "mean", "max"}
         Which chamber pressure the pressure laws see (:func:`cylfric.friction.operating_pressure`).
+    pressure_reference_basis : mapping, optional
+        Why the laws see that pressure: ``kind`` (``"single-acting"``, ``"double-acting"``),
+        ``rule`` (= ``reference``), ``chamber`` (``"a"``, ``"b"`` or None) and ``stated_by``
+        (:func:`cylfric.friction.pressure.pressure_reference_basis`); None when unknown.
+        Replacing ``reference`` alone drops it.
     simulation_law : str
         Registered friction law that :func:`cylfric.simulate.simulate` integrates
         (``"lugre"`` for the compiled integrators; others with ``method="scipy"``).
@@ -236,6 +258,7 @@ class FrictionModel:
         not_identified: Mapping[str, Any] | None = None,
         record: Mapping[str, Any] | None = None,
         influence: tuple[Sequence[str], np.ndarray] | None = None,
+        pressure_reference_basis: Mapping[str, Any] | None = None,
     ) -> None:
         if coefficients is None:
             coefficients = THESIS_2016.coefficients
@@ -260,6 +283,7 @@ class FrictionModel:
         self.pressure_law = pressure_law
         self.friction_law = friction_law
         self.reference = reference
+        self.pressure_reference_basis = _reference_basis(pressure_reference_basis, reference)
         self.simulation_law = simulation_law
         not_identified = dict(not_identified or {})
         needed = FRICTION_LAWS[friction_law][0]
@@ -376,6 +400,7 @@ class FrictionModel:
             "sigma_1": self.coefficients()["sigma_1"],
             "dynamic_status": dict(self.dynamic_status),
             "reference": self.reference,
+            "pressure_reference_basis": self.pressure_reference_basis,
             "simulation_law": self.simulation_law,
             "stderr": self.stderr(),
             "fixed": fixed,
@@ -408,6 +433,8 @@ class FrictionModel:
                 kwargs["dynamic_status"].pop(name, None)
         if "friction_law" in changes:
             kwargs["not_identified"] = {}
+        if "reference" in changes and "pressure_reference_basis" not in changes:
+            kwargs["pressure_reference_basis"] = None  # the basis said why the old rule
         kwargs.update(changes)
         if kwargs["covariance"] is None or ("covariance" in changes and "influence" not in changes):
             kwargs["influence"] = None  # the runs' influence belongs to its covariance

@@ -165,6 +165,11 @@ def to_datasheet(model: FrictionModel) -> dict[str, Any]:
             "pressure_law": model.pressure_law,
             "pressure_reference": model.reference,
             "stribeck_identifiable": model.friction_law == "stribeck",
+            **(
+                {"pressure_reference_basis": dict(model.pressure_reference_basis)}
+                if model.pressure_reference_basis is not None
+                else {}
+            ),
         },
         "parameters": model.coefficients(include_dynamic=False),
         "stderr": model.stderr(),
@@ -214,6 +219,7 @@ def from_datasheet(cls: type[_M], source: StrPath | Mapping[str, Any]) -> _M:
             dynamic_status={k: (v["status"], v.get("reason", "")) for k, v in dynamic.items()}
             or None,
             reference=model_part["pressure_reference"],
+            pressure_reference_basis=model_part.get("pressure_reference_basis"),
             stderr={k: v for k, v in (sheet.get("stderr") or {}).items() if v is not None},
             fixed=fixed,
             bounds=bounds,
