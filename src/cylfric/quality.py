@@ -21,8 +21,8 @@ those that would mislead the fit:
   looser limit (``measured_tolerance``, ``measured_floor``: 20 % and 2 bar), so a column in
   psi or MPa whose unit says bar is found. A nominal pressure of 0, below 0 or not finite
   on a run without a pressure column is a conflict by itself unless it belongs to a 0-bar
-  level (at least ``zero_level_runs`` runs, and half the median number of runs per level,
-  at 0 bar).
+  level (at least ``zero_level_runs`` runs, or as many as the median level has when that
+  is fewer (a sparse grid), and half the median number of runs per level, at 0 bar).
 
 The gate refuses (:class:`QualityError`, a ValueError: exit 2) rather than pick a side when
 the data contradict each other: when the ``scale`` check would flag more than a quarter of
@@ -234,6 +234,14 @@ def _pressure_cause(measured, nominal):
     return "check the pressure column's unit and the run's nominal pressure"
 
 
+def _zero_level_size(per_level, zero_level_runs):
+    """Fewest runs at 0 bar that make a deliberate 0-bar level [-]: half the median number
+    of runs per level ``per_level``, and ``zero_level_runs`` unless the levels have fewer
+    (on a sparse grid of two speeds a 0-bar level of two runs is a level like the others;
+    a lone 0-bar run among levels of two is not)."""
+    return max(math.ceil(per_level / 2), min(zero_level_runs, per_level))
+
+
 def _deliberate_zero(runs, pressures, min_runs):
     """Runs whose nominal pressure is <= 0 or not finite and not one of a 0-bar level."""
     bad = [run for run, p in zip(runs, pressures, strict=True) if not p > 0]
@@ -429,8 +437,9 @@ def assess(
         [Pa] (2 bar: an unpressurised run may read 1 bar of back pressure).
     zero_level_runs : int
         A nominal pressure of 0 (or below, or not finite) on a run without a pressure column
-        is a metadata conflict unless at least this many runs, and at least half the median
-        number of runs per level, share 0 bar (a deliberate unpressurised level) [-].
+        is a metadata conflict unless at least this many runs (or, on a sparse grid whose
+        median level has fewer, that many), and at least half the median number of runs
+        per level, share 0 bar (a deliberate unpressurised level) [-].
     max_scale_fraction : float
         When the ``scale`` check would flag more than this fraction of the runs [-], the
         runs' friction falls in groups about 10^3 apart without a clear majority: raise
@@ -466,7 +475,7 @@ def assess(
     nonpositive = _deliberate_zero(
         [info.get("run") for info in unmeasured],
         [info.get("pressure [Pa]", math.nan) for info in unmeasured],
-        max(zero_level_runs, math.ceil(per_level / 2)),
+        _zero_level_size(per_level, zero_level_runs),
     )
     for info in extraction.runs:
         texts = [_conflicts(info, metadata_tolerance, floors)]
