@@ -32,7 +32,9 @@ right ones would be the ones left out) or when more than half of the runs would 
 Flagged runs are kept in the points table with the flag ``"excluded: <check>"``, so that
 :func:`cylfric.identify.identify` leaves them out, and listed in :attr:`QualityReport.excluded`
 (written as ``excluded.csv``, file names relative to the campaign folder). Files that
-``manifest.csv`` does not list are listed too. Nothing is dropped silently.
+``manifest.csv`` does not list are listed too, and so are files with the same bytes as an
+earlier run (``duplicate``: :attr:`cylfric.io.campaign.Campaign.duplicates`, never read, so
+counted once). Nothing is dropped silently.
 """
 
 from __future__ import annotations
@@ -48,11 +50,14 @@ import pandas as pd
 from .levels import pressure_levels
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from cylfric.io.campaign import Duplicate
     from cylfric.steady_state import Extraction
 
 __all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
-CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted")
+CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted", "duplicate")
 """Names of the checks, as they appear in ``excluded.csv``."""
 
 
@@ -395,6 +400,7 @@ def assess(
     zero_level_runs: int = 3,
     max_scale_fraction: float = 0.25,
     max_excluded_fraction: float = 0.5,
+    duplicates: Iterable[Duplicate] = (),
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -447,6 +453,11 @@ def assess(
     max_excluded_fraction : float
         When the gate would exclude more than this fraction of the runs [-], the data
         contradict each other: raise :class:`QualityError` rather than fit the remainder.
+    duplicates : iterable of Duplicate
+        Files left out because their bytes repeat an earlier run's
+        (:attr:`cylfric.io.campaign.Campaign.duplicates`): listed with the check
+        ``duplicate`` and the file they repeat (they are not runs: never counted against
+        ``max_excluded_fraction``).
 
     Returns
     -------
@@ -584,6 +595,10 @@ def assess(
                 "check": "unlisted",
                 "reason": "in the folder but not in manifest.csv: not read",
             }
+        )
+    for duplicate in duplicates:
+        excluded.append(
+            {"file": duplicate.file, "run": -1, "check": "duplicate", "reason": duplicate.reason}
         )
     frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
     _refuse_most(frame, len(extraction.runs), max_excluded_fraction, extraction)
