@@ -126,9 +126,10 @@ def test_the_python_api_never_pools_seals(two_seals, tmp_path):
     assert list(result.seals) == ["A", "B"]
     assert result.seals["B"].out == tmp_path / "each" / "B"
     assert result.seals["B"].files["datasheet"] == tmp_path / "each" / "B" / "datasheet.json"
-    assert result.summary["F_c at pressure max [N]"].iloc[1] > result.summary[
-        "F_c at pressure max [N]"
-    ].iloc[0]
+    assert (
+        result.summary["F_c at pressure max [N]"].iloc[1]
+        > result.summary["F_c at pressure max [N]"].iloc[0]
+    )
 
 
 def test_json_lists_the_seals(two_seals, tmp_path):

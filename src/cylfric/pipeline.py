@@ -683,7 +683,8 @@ def _seal_folders(campaign: Campaign, out: Path) -> dict[str, str]:
             "campaign.toml's name_pattern, or manifest.csv's 'seal' column) or leave those "
             "files out (--glob)"
         )
-    folders, seen = {}, {}
+    folders: dict[str, str] = {}
+    seen: dict[str, str] = {}
     for name in campaign.seals:
         if "/" in name or name.startswith(".") or name.casefold() == SEALS_NAME:
             raise OutputPathError(
@@ -794,8 +795,8 @@ def seal_summary(results: dict[str, FitOutputs], folders: dict[str, str]) -> pd.
         p_min, p_max = validity.get("pressure_min"), validity.get("pressure_max")
         levels = [math.nan, math.nan]
         if p_min is not None and p_max is not None:
-            coefficients = FrictionModel.from_datasheet(sheet).params_at([p_min, p_max])
-            levels = [float(value) for value in coefficients["F_c"]]
+            model = FrictionModel.from_datasheet(sheet)
+            levels = [float(model.params_at(p)["F_c"]) for p in (p_min, p_max)]
 
         def scaled(value, scale):
             return math.nan if value is None else value / scale
