@@ -232,7 +232,8 @@ def test_every_file_bad_with_skip_bad_says_why(tmp_path):
     folder = tmp_path / "camp"
     folder.mkdir()
     for i in range(3):
-        (folder / f"run{i}_p10bar_v5mms.txt").write_text("not a bench file at all\n" * 3)
+        # distinct bytes: files with the same bytes are one run (issue 22, duplicates)
+        (folder / f"run{i}_p10bar_v5mms.txt").write_text(f"not a bench file at all {i}\n" * 3)
     with pytest.raises(
         BenchFileError, match=r"none of the 3 run file\(s\) could be read; the first"
     ):

@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
     from .identify.steady import Identification
     from .steady_state import Extraction
 
-__all__ = ["fit_campaign", "FitOptions", "FitOutputs"]
+__all__ = ["fit_campaign", "fit_seals", "FitOptions", "FitOutputs", "SealOutputs", "SealFitError"]
 
 
 @dataclass
@@ -68,11 +68,17 @@ def fit_campaign(
     out: str | os.PathLike[str],
     options: FitOptions | None = None,
     *,
+    seal: str | None = None,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
     **keywords: Any,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
+
+    One model per seal: a campaign whose runs carry several seal labels (a ``seal`` group
+    of ``name_pattern`` or a manifest.csv column ``seal``) is never pooled; it is refused
+    (ValueError naming the seals) unless ``seal`` picks one, whose runs are then fitted
+    into ``out`` as a campaign of their own. :func:`fit_seals` fits every seal.
 
     Every output is written into a staging folder beside ``out`` and swapped in only when
     all succeeded: an earlier ``out`` is replaced whole (no stale files of another campaign)
@@ -102,6 +108,9 @@ def fit_campaign(
         How to fit (:class:`~cylfric.options.FitOptions`: fixed parameters, pressure law,
         per direction, skip bad files, report, name, glob, strict, export targets, workers,
         viscosity correction); default ``FitOptions(**keywords)``.
+    seal : str, optional
+        Fit only the runs of this seal (ValueError listing the seals for a name no run
+        carries); the datasheet's name is the campaign's followed by the seal's.
     progress : callable, optional
         Called with each file name as it is read.
     after_extraction : callable, optional
@@ -112,17 +121,37 @@ def fit_campaign(
         a ValueError, and so is an unknown keyword.
     """
     options = FitOptions.from_keywords(options, **keywords)
-    source = folder if isinstance(folder, Campaign) else Path(folder)
-    if isinstance(source, Campaign):
-        folder = source.folder
-        if options.glob is not None and options.glob != source.config.glob:
+    source, folder = _source(folder, options)
+    out = Path(out)
+    _check_out(folder, out)
+    campaign = source if isinstance(source, Campaign) else Campaign.open(folder, options.glob)
+    if seal is not None:
+        campaign = campaign.for_seal(seal)
+        options = replace(options, name=_seal_name(options, folder, seal))
+    elif len(campaign.seals) > 1:
+        raise ValueError(_several_seals(campaign))
+    staged = _staged(
+        folder, out, lambda staging: _fit(campaign, staging, options, progress, after_extraction)
+    )
+    return _moved(staged, out, out)
+
+
+def _source(folder, options: FitOptions) -> tuple[Campaign | Path, Path]:
+    """(the campaign or its folder, the folder); a Campaign's glob must be ``options.glob``."""
+    if isinstance(folder, Campaign):
+        if options.glob is not None and options.glob != folder.config.glob:
             raise ValueError(
                 f"options.glob = {options.glob!r} but the campaign was opened with glob "
-                f"{source.config.glob!r}; open it with Campaign.open(folder, glob=...)"
+                f"{folder.config.glob!r}; open it with Campaign.open(folder, glob=...)"
             )
-    assert not isinstance(folder, Campaign)  # replaced by its folder above
-    folder, out = Path(folder), Path(out)
-    _check_out(folder, out)
+        return folder, Path(folder.folder)
+    return Path(folder), Path(folder)
+
+
+def _staged(folder: Path, out: Path, write: Callable[[Path], Any]):
+    """``write(staging)`` into a staging folder beside ``out``, swapped in whole under the
+    lock (see :func:`fit_campaign`); returns what ``write`` returned, its paths still in the
+    staging folder (:func:`_moved` maps them)."""
     make_folder(out.parent, f"--out {out}: its folder")
     with _lock(out):
         _remove_leftovers(out)
@@ -135,7 +164,7 @@ def fit_campaign(
         os.umask(mask)
         staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
         try:
-            result = _fit(source, staging, options, progress, after_extraction)
+            result = write(staging)
             _write_marker(staging)
             _check_reusable(out)  # again: a file may have been added during the fit
             _swap_in(staging, out)
@@ -150,7 +179,14 @@ def fit_campaign(
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
             raise
-    result.out = out
+    return staging, result
+
+
+def _moved(staged, out: Path, result_out: Path) -> FitOutputs:
+    """The :class:`FitOutputs` of ``staged`` = (staging folder, result) with its paths
+    moved from the staging folder to ``out`` (and ``result.out`` = ``result_out``)."""
+    staging, result = staged
+    result.out = result_out
     result.files = {k: out / Path(v).relative_to(staging) for k, v in result.files.items()}
     result.exports = {
         target: replace(
@@ -402,7 +438,8 @@ def _fit(
         if after_extraction is not None:
             after_extraction()
 
-    quality = assess(extraction)  # the data as measured: the gate looks for data errors
+    # the data as measured: the gate looks for data errors (and lists the duplicate files)
+    quality = assess(extraction, duplicates=campaign.duplicates)
     correction = _correct_viscosity(extraction, config, options.viscosity_correction)
     if correction.record is not None:  # the points the gate passed, at the reference temperature
         gated = _correct_viscosity(replace(extraction, points=quality.points), config, True)
@@ -589,3 +626,218 @@ def _identify_dynamic(infos, config, model):
         ]
     dynamic = identify_dynamic(records, model)
     return dynamic, list(dynamic.notes)
+
+
+# ---- one model per seal --------------------------------------------------------------------
+
+SEALS_NAME = "seals.csv"
+"""The summary table of :func:`fit_seals`: one row per seal (:data:`SEAL_COLUMNS`)."""
+
+SEAL_COLUMNS = (
+    "seal",
+    "folder",
+    "runs [-]",
+    "points [-]",
+    "excluded [-]",
+    "friction law",
+    "pressure min [bar]",
+    "pressure max [bar]",
+    "speed min [mm/s]",
+    "speed max [mm/s]",
+    "F_c at pressure min [N]",
+    "F_c at pressure max [N]",
+    "RMSE [N]",
+)
+"""Columns of ``seals.csv``: the seal label, its output folder (relative to ``out``), the
+runs read, the points fitted, the files the data-quality gate left out, the friction law
+of its datasheet, its validity range, its Coulomb level at both ends of the pressure range
+and the RMS residual of its fit."""
+
+
+class SealFitError(ValueError):
+    """One seal of :func:`fit_seals` could not be fitted, so nothing was written; the
+    message names the seal and the cause (chained as ``__cause__``)."""
+
+
+@dataclass
+class SealOutputs:
+    """What :func:`fit_seals` wrote: one :class:`FitOutputs` per seal (``out/<seal>/``),
+    the summary table (``summary``, :data:`SEAL_COLUMNS`; ``out/seals.csv``) and its path
+    (``files["seals"]``)."""
+
+    out: Path
+    seals: dict[str, FitOutputs]
+    summary: pd.DataFrame
+    files: dict = field(default_factory=dict)
+
+
+def _seal_name(options: FitOptions, folder: Path, seal: str) -> str:
+    """The datasheet name of one seal's fit: the campaign's name (``options.name`` or the
+    folder's) and the seal's."""
+    base = options.name or Path(folder).resolve().name or "campaign"
+    return f"{base}: {seal}"
+
+
+def _several_seals(campaign: Campaign) -> str:
+    seals = ", ".join(campaign.seals)
+    return (
+        f"{campaign.folder} holds {len(campaign.seals)} seals ({seals}); a model pools no "
+        "seals: pick one with seal=NAME (cylfric fit --seal NAME), or fit each into its own "
+        "folder with fit_seals (cylfric fit without --seal writes OUT/<seal>/)"
+    )
+
+
+def _seal_folders(campaign: Campaign, out: Path) -> dict[str, str]:
+    """seal -> its folder name inside ``out``; ValueError for runs without a label beside
+    labelled ones, and OutputPathError for a label that cannot name a folder of its own
+    inside ``out`` (``..``, a ``/``, a leading ``.``, the summary's name, two labels that
+    differ only in case)."""
+    from ._paths import OutputPathError, inside
+
+    unlabelled = [info.path.name for info in campaign.runs if info.seal is None]
+    if unlabelled:
+        shown = _named(unlabelled, 3)
+        raise ValueError(
+            f"{campaign.folder}: {len(unlabelled)} run(s) carry no seal label ({shown}) "
+            f"while the others name the seals {', '.join(campaign.seals)}; runs of different "
+            "seals are never pooled: give every run a seal (the 'seal' group of "
+            "campaign.toml's name_pattern, or manifest.csv's 'seal' column) or leave those "
+            "files out (--glob)"
+        )
+    folders: dict[str, str] = {}
+    seen: dict[str, str] = {}
+    for name in campaign.seals:
+        if "/" in name or name.startswith(".") or name.casefold() == SEALS_NAME:
+            raise OutputPathError(
+                f"seal {name!r} cannot name a folder of its own inside {out}: expected a "
+                f"name without '/', not starting with '.' and other than {SEALS_NAME}; "
+                "rename the files or the manifest.csv 'seal' cells"
+            )
+        inside(out, name, what="seal")  # no '..', '\', control characters; stays inside
+        key = name.casefold()
+        if key in seen:
+            raise OutputPathError(
+                f"seals {seen[key]!r} and {name!r} differ only in case: their folders would "
+                "be one on some file systems; give them distinct names"
+            )
+        seen[key] = name
+        folders[name] = name
+    return folders
+
+
+def fit_seals(
+    folder: Campaign | str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    options: FitOptions | None = None,
+    *,
+    progress: Callable[[str], object] | None = None,
+    after_extraction: Callable[[], object] | None = None,
+    **keywords: Any,
+) -> SealOutputs:
+    """Fit each seal of a campaign into ``out/<seal>/``, and the summary ``out/seals.csv``.
+
+    The runs are split by their seal label (a ``seal`` group of ``name_pattern`` or the
+    manifest.csv column ``seal``; :attr:`~cylfric.io.campaign.RunInfo.seal`) and each seal
+    is fitted as a campaign of its own (:func:`fit_campaign`'s outputs, the datasheet named
+    after the campaign and the seal): no seal's runs enter another's model. The whole
+    ``out`` is written as :func:`fit_campaign` writes it (one staging folder swapped in
+    whole, the lock, the marker listing every file), so a seal that fails leaves ``out`` as
+    it was (:class:`SealFitError` naming the seal).
+
+    Seal labels come from file names and manifest cells: a label that would leave ``out``
+    or collide with another output is refused (:class:`~cylfric._paths.OutputPathError`).
+    Runs without a label beside labelled ones are refused (ValueError naming them), and so
+    is a campaign without labels (fit it with :func:`fit_campaign`).
+
+    Parameters are those of :func:`fit_campaign`; ``after_extraction`` is called once,
+    after the last seal's files are read.
+    """
+    options = FitOptions.from_keywords(options, **keywords)
+    source, folder = _source(folder, options)
+    out = Path(out)
+    _check_out(folder, out)
+    campaign = source if isinstance(source, Campaign) else Campaign.open(folder, options.glob)
+    if not campaign.seals:
+        raise ValueError(
+            f"{folder}: no run carries a seal label (the 'seal' group of campaign.toml's "
+            "name_pattern, or manifest.csv's 'seal' column); fit it as one campaign "
+            "(fit_campaign)"
+        )
+    folders = _seal_folders(campaign, out)
+
+    def write(staging: Path):
+        from ._paths import inside
+
+        results = {}
+        for index, name in enumerate(campaign.seals):
+            last = index == len(campaign.seals) - 1
+            target = make_folder(inside(staging, folders[name], what="seal"))
+            named = replace(options, name=_seal_name(options, folder, name))
+            try:
+                results[name] = _fit(
+                    campaign.for_seal(name),
+                    target,
+                    named,
+                    progress,
+                    after_extraction if last else None,
+                )
+            except ExportFailed as failure:
+                raise ExportFailed(f"seal {name}: {failure}", failure.target) from (
+                    failure.__cause__
+                )
+            except ValueError as exc:
+                raise SealFitError(
+                    f"seal {name}: {exc} (the other seals alone: --seal NAME)"
+                ) from exc
+        summary = seal_summary(results, folders)
+        _csv(staging / SEALS_NAME, summary)
+        return results, summary
+
+    staging, (results, summary) = _staged(folder, out, write)
+    fits = {
+        name: _moved((staging, result), out, out / folders[name])
+        for name, result in results.items()
+    }
+    return SealOutputs(out, fits, summary, {"seals": out / SEALS_NAME})
+
+
+def seal_summary(results: dict[str, FitOutputs], folders: dict[str, str]) -> pd.DataFrame:
+    """The table of :func:`fit_seals`: one row per seal, :data:`SEAL_COLUMNS`."""
+    import math
+
+    import pandas as pd
+
+    from .model import FrictionModel
+
+    rows = []
+    for name, result in results.items():
+        sheet = result.datasheet
+        validity = sheet.get("validity") or {}
+        p_min, p_max = validity.get("pressure_min"), validity.get("pressure_max")
+        levels = [math.nan, math.nan]
+        if p_min is not None and p_max is not None:
+            model = FrictionModel.from_datasheet(sheet)
+            levels = [float(model.params_at(p)["F_c"]) for p in (p_min, p_max)]
+
+        def scaled(value, scale):
+            return math.nan if value is None else value / scale
+
+        excluded = result.excluded
+        rows.append(
+            {
+                "seal": name,
+                "folder": folders[name],
+                "runs [-]": len(result.extraction.runs),
+                "points [-]": sheet["fit"].get("n_points"),
+                "excluded [-]": 0 if excluded is None else len(excluded),
+                "friction law": sheet["model"].get("friction_law"),
+                "pressure min [bar]": scaled(p_min, 1e5),
+                "pressure max [bar]": scaled(p_max, 1e5),
+                "speed min [mm/s]": scaled(validity.get("velocity_min"), 1e-3),
+                "speed max [mm/s]": scaled(validity.get("velocity_max"), 1e-3),
+                "F_c at pressure min [N]": levels[0],
+                "F_c at pressure max [N]": levels[1],
+                "RMSE [N]": sheet["fit"].get("rmse"),
+            }
+        )
+    return pd.DataFrame(rows, columns=list(SEAL_COLUMNS))

@@ -21,8 +21,8 @@ those that would mislead the fit:
   looser limit (``measured_tolerance``, ``measured_floor``: 20 % and 2 bar), so a column in
   psi or MPa whose unit says bar is found. A nominal pressure of 0, below 0 or not finite
   on a run without a pressure column is a conflict by itself unless it belongs to a 0-bar
-  level (at least ``zero_level_runs`` runs, and half the median number of runs per level,
-  at 0 bar).
+  level (at least ``zero_level_runs`` runs, or as many as the median level has when that
+  is fewer (a sparse grid), and half the median number of runs per level, at 0 bar).
 
 The gate refuses (:class:`QualityError`, a ValueError: exit 2) rather than pick a side when
 the data contradict each other: when the ``scale`` check would flag more than a quarter of
@@ -32,7 +32,9 @@ right ones would be the ones left out) or when more than half of the runs would 
 Flagged runs are kept in the points table with the flag ``"excluded: <check>"``, so that
 :func:`cylfric.identify.identify` leaves them out, and listed in :attr:`QualityReport.excluded`
 (written as ``excluded.csv``, file names relative to the campaign folder). Files that
-``manifest.csv`` does not list are listed too. Nothing is dropped silently.
+``manifest.csv`` does not list are listed too, and so are files with the same bytes as an
+earlier run (``duplicate``: :attr:`cylfric.io.campaign.Campaign.duplicates`, never read, so
+counted once). Nothing is dropped silently.
 """
 
 from __future__ import annotations
@@ -48,11 +50,14 @@ import pandas as pd
 from .levels import pressure_levels
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from cylfric.io.campaign import Duplicate
     from cylfric.steady_state import Extraction
 
 __all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
-CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted")
+CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted", "duplicate")
 """Names of the checks, as they appear in ``excluded.csv``."""
 
 
@@ -234,6 +239,14 @@ def _pressure_cause(measured, nominal):
     return "check the pressure column's unit and the run's nominal pressure"
 
 
+def _zero_level_size(per_level, zero_level_runs):
+    """Fewest runs at 0 bar that make a deliberate 0-bar level [-]: half the median number
+    of runs per level ``per_level``, and ``zero_level_runs`` unless the levels have fewer
+    (on a sparse grid of two speeds a 0-bar level of two runs is a level like the others;
+    a lone 0-bar run among levels of two is not)."""
+    return max(math.ceil(per_level / 2), min(zero_level_runs, per_level))
+
+
 def _deliberate_zero(runs, pressures, min_runs):
     """Runs whose nominal pressure is <= 0 or not finite and not one of a 0-bar level."""
     bad = [run for run, p in zip(runs, pressures, strict=True) if not p > 0]
@@ -387,6 +400,7 @@ def assess(
     zero_level_runs: int = 3,
     max_scale_fraction: float = 0.25,
     max_excluded_fraction: float = 0.5,
+    duplicates: Iterable[Duplicate] = (),
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -429,8 +443,9 @@ def assess(
         [Pa] (2 bar: an unpressurised run may read 1 bar of back pressure).
     zero_level_runs : int
         A nominal pressure of 0 (or below, or not finite) on a run without a pressure column
-        is a metadata conflict unless at least this many runs, and at least half the median
-        number of runs per level, share 0 bar (a deliberate unpressurised level) [-].
+        is a metadata conflict unless at least this many runs (or, on a sparse grid whose
+        median level has fewer, that many), and at least half the median number of runs
+        per level, share 0 bar (a deliberate unpressurised level) [-].
     max_scale_fraction : float
         When the ``scale`` check would flag more than this fraction of the runs [-], the
         runs' friction falls in groups about 10^3 apart without a clear majority: raise
@@ -438,6 +453,11 @@ def assess(
     max_excluded_fraction : float
         When the gate would exclude more than this fraction of the runs [-], the data
         contradict each other: raise :class:`QualityError` rather than fit the remainder.
+    duplicates : iterable of Duplicate
+        Files left out because their bytes repeat an earlier run's
+        (:attr:`cylfric.io.campaign.Campaign.duplicates`): listed with the check
+        ``duplicate`` and the file they repeat (they are not runs: never counted against
+        ``max_excluded_fraction``).
 
     Returns
     -------
@@ -466,7 +486,7 @@ def assess(
     nonpositive = _deliberate_zero(
         [info.get("run") for info in unmeasured],
         [info.get("pressure [Pa]", math.nan) for info in unmeasured],
-        max(zero_level_runs, math.ceil(per_level / 2)),
+        _zero_level_size(per_level, zero_level_runs),
     )
     for info in extraction.runs:
         texts = [_conflicts(info, metadata_tolerance, floors)]
@@ -575,6 +595,10 @@ def assess(
                 "check": "unlisted",
                 "reason": "in the folder but not in manifest.csv: not read",
             }
+        )
+    for duplicate in duplicates:
+        excluded.append(
+            {"file": duplicate.file, "run": -1, "check": "duplicate", "reason": duplicate.reason}
         )
     frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
     _refuse_most(frame, len(extraction.runs), max_excluded_fraction, extraction)

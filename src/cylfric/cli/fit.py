@@ -26,65 +26,163 @@ from .common import (
 )
 
 if TYPE_CHECKING:
-    from ..pipeline import FitOutputs
+    from ..io.campaign import Campaign
+    from ..pipeline import FitOutputs, SealOutputs
 
 __all__ = ["run_fit"]
 
 
-def run_fit(
-    campaign: Path, out: Path, options: FitOptions | None = None, *, quiet: bool = False
-) -> FitOutputs:
-    """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary
-    (``quiet``: no summary)."""
+def _open(campaign: Path, options: FitOptions):
+    """The campaign, opened once (its --glob checked first) and passed down to every step."""
     from ..io.campaign import Campaign, check_glob
-    from ..pipeline import fit_campaign
 
-    options = options or FitOptions()
     if options.glob is not None:
         check_glob(options.glob, campaign, key="--glob")
-    opened = Campaign.open(campaign, options.glob)  # read once, passed down to every step
-    n_files = len(opened.steady_runs)  # the bar counts these (not presliding/breakaway tests)
+    return Campaign.open(campaign, options.glob)
+
+
+def _fit_with_progress(campaign: Path, n_files: int, call):
+    """``call(progress, after_extraction)`` with a progress bar over ``n_files`` run files;
+    warnings reach the user once, as the notes printed after it (not as Python's lines)."""
     progress = _progress()
     task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
-    # warnings reach the user once, as the notes printed below (not as Python's own lines)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         progress.start()
         try:
-            result = fit_campaign(
-                opened,
-                out,
-                options,
-                progress=lambda _: progress.advance(task),
-                after_extraction=progress.stop,
-            )
+            return call(lambda _: progress.advance(task), progress.stop)
         finally:
             progress.stop()
+
+
+def run_fit(
+    campaign: Path,
+    out: Path,
+    options: FitOptions | None = None,
+    *,
+    quiet: bool = False,
+    seal: str | None = None,
+    opened: Campaign | None = None,
+) -> FitOutputs:
+    """Shared by ``fit`` and ``demo``: the pipeline with a progress bar and a summary
+    (``quiet``: no summary); ``seal`` fits only that seal's runs into ``out``."""
+    from ..pipeline import fit_campaign
+
+    options = options or FitOptions()
+    opened = opened or _open(campaign, options)
+    chosen = opened.for_seal(seal) if seal is not None else opened  # an unknown seal: exit 2
+    result = _fit_with_progress(
+        campaign,
+        len(chosen.steady_runs),  # the bar counts these (not presliding/breakaway tests)
+        lambda progress, stop: fit_campaign(
+            opened, out, options, seal=seal, progress=progress, after_extraction=stop
+        ),
+    )
     if not quiet:
         print_table(_summary_table(result.datasheet))
-        skipped = result.extraction.skipped
-        if skipped:
-            console.print(f"[yellow]{len(skipped)} file(s) skipped[/yellow] (see skipped.csv):")
-            for item in skipped[:10]:
-                console.print(terminal(f"  {item['reason']}", markup=False), markup=False)
-        excluded = result.excluded
-        if excluded is not None and len(excluded):
-            console.print(f"[yellow]{len(excluded)} run(s) excluded[/yellow] (see excluded.csv):")
-            for _, item in excluded.head(10).iterrows():
-                console.print(
-                    terminal(f"  {item['file']}: {item['reason']}", markup=False), markup=False
-                )
-        for note in result.identification.notes:
-            console.print(f"[yellow]note:[/yellow] {terminal(note)}")
-        for exported in result.exports.values():
-            console.print(
-                terminal(exported.summary(), markup=False, multiline=True),
-                markup=False,
-                highlight=False,
-            )
+        _print_outcome(result)
         shown = f"; open {out / 'report.html'}" if options.report else ""
         console.print(terminal(f"outputs in {out}{shown}", markup=False), markup=False)
     return result
+
+
+def _print_outcome(result: FitOutputs, seal: str | None = None) -> None:
+    """The files skipped and excluded, the notes and the exports of one fit (of ``seal``)."""
+    where = "" if seal is None else f"{seal}/"
+    label = "" if seal is None else terminal(f"seal {seal}: ")
+    skipped = result.extraction.skipped
+    if skipped:
+        console.print(
+            f"{label}[yellow]{len(skipped)} file(s) skipped[/yellow] "
+            f"(see {terminal(where)}skipped.csv):"
+        )
+        for item in skipped[:10]:
+            console.print(terminal(f"  {item['reason']}", markup=False), markup=False)
+    excluded = result.excluded
+    if excluded is not None and len(excluded):
+        console.print(
+            f"{label}[yellow]{len(excluded)} run(s) excluded[/yellow] "
+            f"(see {terminal(where)}excluded.csv):"
+        )
+        for _, item in excluded.head(10).iterrows():
+            console.print(
+                terminal(f"  {item['file']}: {item['reason']}", markup=False), markup=False
+            )
+    for note in result.identification.notes:
+        console.print(f"{label}[yellow]note:[/yellow] {terminal(note)}")
+    for exported in result.exports.values():
+        console.print(
+            terminal(exported.summary(), markup=False, multiline=True),
+            markup=False,
+            highlight=False,
+        )
+
+
+def run_seals(
+    campaign: Path, out: Path, options: FitOptions, opened: Campaign, *, quiet: bool = False
+) -> SealOutputs:
+    """``fit`` of a campaign with several seals: one fit per seal into OUT/<seal>/, the
+    summary table printed (``quiet``: not) and written as OUT/seals.csv."""
+    from ..pipeline import fit_seals
+
+    result = _fit_with_progress(
+        campaign,
+        len(opened.steady_runs),
+        lambda progress, stop: fit_seals(
+            opened, out, options, progress=progress, after_extraction=stop
+        ),
+    )
+    if not quiet:
+        names = ", ".join(result.seals)
+        console.print(
+            terminal(f"{len(result.seals)} seals, one model each: {names}", markup=False),
+            markup=False,
+        )
+        print_table(_seals_table(result.summary))
+        for name, fitted in result.seals.items():
+            _print_outcome(fitted, name)
+        shown = " and report.html" if options.report else ""
+        console.print(
+            terminal(f"outputs in {out}/<seal>/: datasheet.json{shown}", markup=False),
+            markup=False,
+        )
+    return result
+
+
+def _seals_table(summary) -> Table:
+    """The seals summary (:data:`cylfric.pipeline.SEAL_COLUMNS`) as printed: ranges in one
+    column each, every name escaped."""
+    table = Table(title="One datasheet per seal (OUT/<seal>/; the table: seals.csv)")
+    columns = {
+        "seal": ("seal",),
+        "runs": ("runs [-]",),
+        "points": ("points [-]",),
+        "excluded": ("excluded [-]",),
+        "friction law": ("friction law",),
+        "pressure [bar]": ("pressure min [bar]", "pressure max [bar]"),
+        "speed [mm/s]": ("speed min [mm/s]", "speed max [mm/s]"),
+        "F_c [N] at min-max pressure": ("F_c at pressure min [N]", "F_c at pressure max [N]"),
+        "RMSE [N]": ("RMSE [N]",),
+    }
+    for title in columns:
+        text = title in ("seal", "friction law")
+        table.add_column(terminal(title), justify="left" if text else "right")
+    for row in summary.to_dict("records"):
+        table.add_row(*("-".join(_cell(row[key]) for key in keys) for keys in columns.values()))
+    return table
+
+
+def _cell(value) -> str:
+    """A cell of the seals table: text escaped, numbers to 4 significant digits."""
+    import math
+
+    if isinstance(value, str):
+        return terminal(value)
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
 
 
 @app.command()
@@ -124,11 +222,22 @@ def fit(
         help="Identify at campaign.toml [oil] reference_temperature, each run's speeds "
         "mapped by its oil viscosity (default: on when [oil] and run temperatures are given).",
     ),
+    seal: str = typer.Option(
+        None,
+        "--seal",
+        help="Fit only this seal's runs, into OUT (a campaign of several seals, labelled by "
+        "a 'seal' group of name_pattern or a manifest.csv 'seal' column, is otherwise "
+        "fitted seal by seal into OUT/<seal>/ with the summary OUT/seals.csv).",
+    ),
     json_output: bool = typer.Option(
         False, "--json", help=JSON_HELP + " The outputs are written as without it."
     ),
 ):
-    """Raw bench files -> datasheet.json, tables, figures and report.html."""
+    """Raw bench files -> datasheet.json, tables, figures and report.html.
+
+    One model per seal: a folder of several seals gives OUT/<seal>/datasheet.json and
+    report for each and the table OUT/seals.csv; --seal NAME fits one into OUT.
+    """
     if not campaign.is_dir():
         raise BadInput(f"{campaign}: not a folder; expected a campaign folder of run files")
     targets: list[str] = []
@@ -152,7 +261,13 @@ def fit(
         export=tuple(targets),
         viscosity_correction=viscosity_correction,
     )
-    result = run_fit(campaign, out, options, quiet=json_output)
+    opened = _open(campaign, options)
+    if seal is None and len(opened.seals) > 1:
+        seals = run_seals(campaign, out, options, opened, quiet=json_output)
+        if json_output:
+            print_json(_seals_document(out, seals))
+        return
+    result = run_fit(campaign, out, options, quiet=json_output, seal=seal, opened=opened)
     if json_output:
         excluded = result.excluded
         print_json(
@@ -166,6 +281,26 @@ def fit(
                 "exports": {k: list(v.files) for k, v in result.exports.items()},
             }
         )
+
+
+def _seals_document(out: Path, seals: SealOutputs) -> dict:
+    """``fit --json`` of a campaign of several seals: the summary rows and, per seal, its
+    datasheet, model, files skipped and excluded, and notes."""
+    rows = seals.summary.to_dict("records")
+    document: dict = {"out": out, "summary": seals.files["seals"], "seals": {}}
+    for row, (name, result) in zip(rows, seals.seals.items(), strict=True):
+        excluded = result.excluded
+        document["seals"][name] = {
+            "out": result.out,
+            "datasheet": result.out / "datasheet.json",
+            "summary": row,
+            **model_document(result.identification.model),
+            "skipped": list(result.extraction.skipped),
+            "excluded": [] if excluded is None else excluded.to_dict("records"),
+            "notes": list(result.identification.notes),
+            "exports": {k: list(v.files) for k, v in result.exports.items()},
+        }
+    return document
 
 
 THESIS_VALUES = {

@@ -23,6 +23,7 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import NamedTuple
 
 from ..friction.pressure import PRESSURE_REFERENCES, pressure_reference_basis
 from ..units import UnitError, parse_quantity, parse_temperature
@@ -32,6 +33,8 @@ from .text import BenchFileError, read_bench_arrays, si_columns
 __all__ = [
     "Campaign",
     "CampaignConfig",
+    "Duplicate",
+    "find_duplicates",
     "OilSettings",
     "RunInfo",
     "load_config",
@@ -172,6 +175,74 @@ class RunInfo:
     nominal: dict = field(default_factory=dict)
     manifest_line: int | None = None  # the run's row in manifest.csv (1 = the header)
     manifest: Path | None = None  # the manifest.csv that lists the run
+
+    @property
+    def seal(self) -> str | None:
+        """The run's seal label: a ``seal`` group of ``name_pattern`` or the manifest.csv
+        column ``seal`` (the manifest wins); None when the campaign does not say."""
+        return _label(self.extra.get("seal"))
+
+
+def _label(value) -> str | None:
+    """A label cell or name group as text, None when empty or missing (NaN)."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return None
+    text = str(value).strip()
+    return text or None
+
+
+class Duplicate(NamedTuple):
+    """A run file whose bytes equal an earlier run's (same SHA-256): not read, counted once.
+
+    ``file`` and ``original`` are relative to the campaign folder; ``seal`` is the label of
+    ``file`` (None without one)."""
+
+    file: str
+    original: str
+    seal: str | None = None
+
+    @property
+    def reason(self) -> str:
+        """The line excluded.csv and the command line give for it."""
+        return f"duplicate of {self.original} (the same bytes, SHA-256): counted once, not read"
+
+
+def file_sha256(path) -> str:
+    """SHA-256 of a file's bytes (hex), read in blocks."""
+    import hashlib
+
+    with open(path, "rb") as handle:
+        return hashlib.file_digest(handle, "sha256").hexdigest()
+
+
+def find_duplicates(paths) -> dict[Path, Path]:
+    """Files whose bytes equal an earlier file's of ``paths``, each -> that first file.
+
+    Files are grouped by size first and only files that share a size are hashed
+    (SHA-256), so a campaign whose files all differ in size is not read here. Files that
+    cannot be read are left to the reader (which names them).
+    """
+    by_size: dict[int, list[Path]] = {}
+    for path in paths:
+        try:
+            by_size.setdefault(os.stat(path).st_size, []).append(Path(path))
+        except OSError:
+            continue
+    copies: dict[Path, Path] = {}
+    for group in by_size.values():
+        if len(group) < 2:
+            continue
+        first: dict[str, Path] = {}
+        for path in group:
+            try:
+                digest = file_sha256(path)
+            except OSError:
+                continue
+            if digest in first:
+                copies[path] = first[digest]
+            else:
+                first[digest] = path
+    return copies
 
 
 class _Manifest(dict):
@@ -970,6 +1041,9 @@ class Campaign:
     unlisted : tuple of str
         Files matching the glob that ``manifest.csv`` does not list (not read;
         :func:`unlisted_files`).
+    duplicates : tuple of Duplicate
+        Run files whose bytes equal an earlier run's (:func:`find_duplicates`): left out of
+        ``runs`` (counted once), each with the file it repeats.
     """
 
     folder: Path
@@ -977,6 +1051,7 @@ class Campaign:
     manifest: Mapping[str, tuple[float, float, dict]]
     runs: tuple[RunInfo, ...]
     unlisted: tuple[str, ...]
+    duplicates: tuple[Duplicate, ...] = ()
 
     @classmethod
     def open(
@@ -990,9 +1065,10 @@ class Campaign:
         and ``manifest.csv`` once each, and list its runs.
 
         ``glob`` (e.g. a ``--glob``) replaces ``campaign.toml [files] glob``; a glob that
-        reaches outside the folder is refused (:func:`check_glob`). Raises BenchFileError
-        for a missing folder, a campaign without run files, or a bad campaign.toml or
-        manifest.csv (naming the file and line).
+        reaches outside the folder is refused (:func:`check_glob`). A run file with the
+        same bytes as an earlier one is left out of ``runs`` and listed in ``duplicates``.
+        Raises BenchFileError for a missing folder, a campaign without run files, or a bad
+        campaign.toml or manifest.csv (naming the file and line).
         """
         path = _campaign_folder(folder)
         _check_encodable(path)
@@ -1002,7 +1078,40 @@ class Campaign:
         check_glob(config.glob, path, key="glob")
         manifest = _read_manifest(path)
         runs = _discover(path, config, manifest)
-        return cls(path, config, manifest, tuple(runs), tuple(_unlisted(path, config, manifest)))
+        copies = find_duplicates(info.path for info in runs)
+
+        def relative(file: Path) -> str:
+            return file.relative_to(path).as_posix()
+
+        duplicates = tuple(
+            Duplicate(relative(info.path), relative(copies[info.path]), info.seal)
+            for info in runs
+            if info.path in copies
+        )
+        runs = [info for info in runs if info.path not in copies]
+        unlisted = tuple(_unlisted(path, config, manifest))
+        return cls(path, config, manifest, tuple(runs), unlisted, duplicates)
+
+    @property
+    def seals(self) -> tuple[str, ...]:
+        """The seal labels of the runs, sorted (a ``seal`` group of ``name_pattern`` or
+        the manifest.csv column ``seal``; :attr:`RunInfo.seal`); empty when none says."""
+        return tuple(sorted({info.seal for info in self.runs if info.seal is not None}))
+
+    def for_seal(self, name: str) -> Campaign:
+        """The campaign of one seal: its runs and its duplicates (the other attributes
+        as they are). ValueError for a name no run carries, listing the seals found."""
+        if name not in self.seals:
+            found = ", ".join(self.seals) if self.seals else "none (no run has a seal label)"
+            raise ValueError(
+                f"no seal {name!r} in {self.folder}; the seals found: {found} (from the "
+                "'seal' group of campaign.toml's name_pattern or manifest.csv's 'seal' column)"
+            )
+        return replace(
+            self,
+            runs=tuple(info for info in self.runs if info.seal == name),
+            duplicates=tuple(d for d in self.duplicates if d.seal == name),
+        )
 
     @property
     def dynamic_runs(self) -> tuple[RunInfo, ...]:
