@@ -54,12 +54,14 @@ def test_a_lone_0_bar_run_on_a_sparse_grid_is_still_a_conflict(sparse, tmp_path)
     folder = copy_campaign(sparse["loaded"], tmp_path)
     manifest = folder / "manifest.csv"
     lines = manifest.read_text().splitlines(keepends=True)
-    name, _, speed = lines[1].strip().split(",")
-    source = folder / name
+    header = lines[0].strip().split(",")  # file, pressure_bar, velocity_mm_s, and the
+    row = lines[1].strip().split(",")  # rough bench's session and truth columns
+    source = folder / row[header.index("file")]
     shutil.move(source, folder / "run_x.txt")
     text = (folder / "run_x.txt").read_text().replace("Pressure: 20 bar\n", "")
     (folder / "run_x.txt").write_text(text)
-    lines[1] = f"run_x.txt,0,{speed}\n"
+    row[header.index("file")], row[header.index("pressure_bar")] = "run_x.txt", "0"
+    lines[1] = ",".join(row) + "\n"
     manifest.write_text("".join(lines))
     excluded = assess(extract_campaign(folder, workers=1)).excluded
     assert list(excluded["file"]) == ["run_x.txt"]

@@ -243,7 +243,7 @@ def test_double_acting_stated_rule_round_trips_through_the_datasheet(tmp_path):
 
     campaign = tmp_path / "campaign"
     generate_campaign(
-        campaign, BenchSettings(pressures_bar=(20.0, 80.0), speeds_mm_s=(3, 30, 90), seed=5)
+        campaign, BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=(3, 30, 90), seed=5)
     )
     # both chambers at the bench's one pressure: equal areas cancel in the force balance
     (campaign / "campaign.toml").write_text(

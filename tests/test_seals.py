@@ -27,7 +27,7 @@ from cylfric.simulate.plant import Cylinder
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 # small campaigns (as tests/test_many.py): 60 mm strokes, 2 pressures x 6 speeds
-SMALL = BenchSettings(
+SMALL = BenchSettings.clean(
     cylinder=Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, stroke=0.060),
     pressures_bar=(20.0, 120.0),
     speeds_mm_s=(2, 4, 8, 15, 30, 60),
