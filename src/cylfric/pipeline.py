@@ -70,6 +70,7 @@ def fit_campaign(
     *,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
+    step: Callable[[str, int], Callable[[str], object]] | None = None,
     **keywords: Any,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
@@ -106,6 +107,10 @@ def fit_campaign(
         Called with each file name as it is read.
     after_extraction : callable, optional
         Called once every file is read (e.g. to stop a progress display).
+    step : callable, optional
+        ``step(description, total)`` as each later step that can take seconds starts (the
+        sigma_0/sigma_1 identification, the report); it returns the callable the step then
+        calls with each item's name as it is done, ``total`` times (a progress display).
     **keywords
         The fields of :class:`~cylfric.options.FitOptions` (``fixed=``,
         ``pressure_law=``, ``report=``, ...) when no ``options`` is given; both at once is
@@ -135,7 +140,7 @@ def fit_campaign(
         os.umask(mask)
         staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
         try:
-            result = _fit(source, staging, options, progress, after_extraction)
+            result = _fit(source, staging, options, progress, after_extraction, step)
             _write_marker(staging)
             _check_reusable(out)  # again: a file may have been added during the fit
             _swap_in(staging, out)
@@ -374,6 +379,7 @@ def _fit(
     options: FitOptions,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
+    step: Callable[[str, int], Callable[[str], object]] | None = None,
 ) -> FitOutputs:
     """Fit the campaign (opened here from a folder) into ``out`` (the staging folder) as
     ``options`` say; campaign.toml and manifest.csv are read once, by :meth:`Campaign.open`."""
@@ -423,7 +429,7 @@ def _fit(
         ident.notes.insert(0, correction.note)
     dynamic = None
     if dynamic_runs:
-        dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model)
+        dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model, step)
         model = ident.model if dynamic is None else dynamic.model
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
@@ -474,6 +480,12 @@ def _fit(
 
         t0 = time.perf_counter()
         summaries = [_export_summary(out, result) for result in exports.values()]
+        advance = None
+        if step is not None:
+            from .report import all_figures
+
+            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
+            advance = step("drawing the figures", shown)
         files.update(
             write_report_folder(
                 out,
@@ -484,6 +496,7 @@ def _fit(
                 exports=summaries,
                 dynamic=dynamic,
                 workers=2 if options.workers is None else options.workers,
+                progress=advance,
             )
         )
         timings["report"] = time.perf_counter() - t0
@@ -540,7 +553,7 @@ def _correct_viscosity(extraction, config, enabled):
     return correct_campaign(extraction.points, extraction.runs, config.oil, enabled=enabled)
 
 
-def _identify_dynamic(infos, config, model):
+def _identify_dynamic(infos, config, model, step=None):
     """sigma_0 and sigma_1 from the presliding tests, validated on the breakaway ramps.
 
     Returns (DynamicIdentification or None, notes): without a presliding test the
@@ -566,5 +579,9 @@ def _identify_dynamic(infos, config, model):
             f"{len(records)} breakaway test(s) but no presliding test: sigma_0 and sigma_1 "
             "stay assumed (they are identified from presliding tests)"
         ]
-    dynamic = identify_dynamic(records, model)
+    tests = [r for r in records if r.test in ("presliding", "breakaway")]
+    advance = None
+    if step is not None:
+        advance = step(f"sigma_0, sigma_1 from {len(tests)} presliding/breakaway tests", len(tests))
+    dynamic = identify_dynamic(records, model, progress=advance)
     return dynamic, list(dynamic.notes)

@@ -46,6 +46,16 @@ def run_fit(
     n_files = len(opened.steady_runs)  # the bar counts these (not presliding/breakaway tests)
     progress = _progress()
     task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
+
+    def step(description: str, total: int):
+        """A new bar for a later step of the fit (the earlier ones hidden); its advance."""
+        for earlier in progress.task_ids:
+            progress.update(earlier, visible=False)
+        shown = progress.add_task(terminal(description), total=total)
+        progress.start()
+        progress.refresh()
+        return lambda _: progress.advance(shown)
+
     # warnings reach the user once, as the notes printed below (not as Python's own lines)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -57,6 +67,7 @@ def run_fit(
                 options,
                 progress=lambda _: progress.advance(task),
                 after_extraction=progress.stop,
+                step=step,
             )
         finally:
             progress.stop()
