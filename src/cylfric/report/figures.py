@@ -446,17 +446,16 @@ def figure_parameters(ident):
                 ax.axhline(values * k, ls="--", lw=1, label="global surface fit")
         ax.set_xlabel("pressure p [bar]")
         ax.set_ylabel(label)
-    handles, labels = {}, {}
+    handles: dict[str, Any] = {}
     for ax in axes[: len(shown)]:
         for handle, text in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(text, handle)
-    labels = list(handles)
     fig.legend(
-        [handles[t] for t in labels],
-        labels,
+        list(handles.values()),
+        list(handles),
         loc="lower center",
         bbox_to_anchor=(0.5, 0.02),
-        ncol=len(labels),
+        ncol=len(handles),
         fontsize=7,
         frameon=False,
     )
