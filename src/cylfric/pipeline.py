@@ -71,6 +71,7 @@ def fit_campaign(
     seal: str | None = None,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
+    step: Callable[[str, int], Callable[[str], object]] | None = None,
     **keywords: Any,
 ) -> FitOutputs:
     """Read a campaign, extract the points, identify the model, write the outputs.
@@ -115,6 +116,10 @@ def fit_campaign(
         Called with each file name as it is read.
     after_extraction : callable, optional
         Called once every file is read (e.g. to stop a progress display).
+    step : callable, optional
+        ``step(description, total)`` as each later step that can take seconds starts (the
+        sigma_0/sigma_1 identification, the report); it returns the callable the step then
+        calls with each item's name as it is done, ``total`` times (a progress display).
     **keywords
         The fields of :class:`~cylfric.options.FitOptions` (``fixed=``,
         ``pressure_law=``, ``report=``, ...) when no ``options`` is given; both at once is
@@ -131,7 +136,7 @@ def fit_campaign(
     elif len(campaign.seals) > 1:
         raise ValueError(_several_seals(campaign))
     staged = _staged(
-        folder, out, lambda staging: _fit(campaign, staging, options, progress, after_extraction)
+        folder, out, lambda staging: _fit(campaign, staging, options, progress, after_extraction, step)
     )
     return _moved(staged, out, out)
 
@@ -410,6 +415,7 @@ def _fit(
     options: FitOptions,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
+    step: Callable[[str, int], Callable[[str], object]] | None = None,
 ) -> FitOutputs:
     """Fit the campaign (opened here from a folder) into ``out`` (the staging folder) as
     ``options`` say; campaign.toml and manifest.csv are read once, by :meth:`Campaign.open`."""
@@ -465,7 +471,7 @@ def _fit(
         ident.notes.insert(0, correction.note)
     dynamic = None
     if dynamic_runs:
-        dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model)
+        dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model, step)
         model = ident.model if dynamic is None else dynamic.model
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
@@ -516,6 +522,12 @@ def _fit(
 
         t0 = time.perf_counter()
         summaries = [_export_summary(out, result) for result in exports.values()]
+        advance = None
+        if step is not None:
+            from .report import all_figures
+
+            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
+            advance = step("drawing the figures", shown)
         files.update(
             write_report_folder(
                 out,
@@ -526,6 +538,7 @@ def _fit(
                 exports=summaries,
                 dynamic=dynamic,
                 workers=2 if options.workers is None else options.workers,
+                progress=advance,
             )
         )
         timings["report"] = time.perf_counter() - t0
@@ -598,7 +611,7 @@ def _correct_viscosity(extraction, config, enabled):
     return correct_campaign(extraction.points, extraction.runs, config.oil, enabled=enabled)
 
 
-def _identify_dynamic(infos, config, model):
+def _identify_dynamic(infos, config, model, step=None):
     """sigma_0 and sigma_1 from the presliding tests, validated on the breakaway ramps.
 
     Returns (DynamicIdentification or None, notes): without a presliding test the
@@ -624,7 +637,11 @@ def _identify_dynamic(infos, config, model):
             f"{len(records)} breakaway test(s) but no presliding test: sigma_0 and sigma_1 "
             "stay assumed (they are identified from presliding tests)"
         ]
-    dynamic = identify_dynamic(records, model)
+    tests = [r for r in records if r.test in ("presliding", "breakaway")]
+    advance = None
+    if step is not None:
+        advance = step(f"sigma_0, sigma_1 from {len(tests)} presliding/breakaway tests", len(tests))
+    dynamic = identify_dynamic(records, model, progress=advance)
     return dynamic, list(dynamic.notes)
 
 
@@ -732,6 +749,7 @@ def fit_seals(
     *,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
+    step: Callable[[str, int], Callable[[str], object]] | None = None,
     **keywords: Any,
 ) -> SealOutputs:
     """Fit each seal of a campaign into ``out/<seal>/``, and the summary ``out/seals.csv``.
@@ -780,6 +798,7 @@ def fit_seals(
                     named,
                     progress,
                     after_extraction if last else None,
+                    step,
                 )
             except ExportFailed as failure:
                 raise ExportFailed(f"seal {name}: {failure}", failure.target) from (

@@ -42,15 +42,26 @@ def _open(campaign: Path, options: FitOptions):
 
 
 def _fit_with_progress(campaign: Path, n_files: int, call):
-    """``call(progress, after_extraction)`` with a progress bar over ``n_files`` run files;
+    """``call(progress, after_extraction, step)`` with a progress bar over ``n_files`` run
+    files and one for each later step that can take seconds (``step(description, total)``);
     warnings reach the user once, as the notes printed after it (not as Python's lines)."""
     progress = _progress()
     task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
+
+    def step(description: str, total: int):
+        """A new bar for a later step of the fit (the earlier ones hidden); its advance."""
+        for earlier in progress.task_ids:
+            progress.update(earlier, visible=False)
+        shown = progress.add_task(terminal(description), total=total)
+        progress.start()
+        progress.refresh()
+        return lambda _: progress.advance(shown)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         progress.start()
         try:
-            return call(lambda _: progress.advance(task), progress.stop)
+            return call(lambda _: progress.advance(task), progress.stop, step)
         finally:
             progress.stop()
 
@@ -74,8 +85,8 @@ def run_fit(
     result = _fit_with_progress(
         campaign,
         len(chosen.steady_runs),  # the bar counts these (not presliding/breakaway tests)
-        lambda progress, stop: fit_campaign(
-            opened, out, options, seal=seal, progress=progress, after_extraction=stop
+        lambda progress, stop, step: fit_campaign(
+            opened, out, options, seal=seal, progress=progress, after_extraction=stop, step=step
         ),
     )
     if not quiet:
@@ -128,8 +139,8 @@ def run_seals(
     result = _fit_with_progress(
         campaign,
         len(opened.steady_runs),
-        lambda progress, stop: fit_seals(
-            opened, out, options, progress=progress, after_extraction=stop
+        lambda progress, stop, step: fit_seals(
+            opened, out, options, progress=progress, after_extraction=stop, step=step
         ),
     )
     if not quiet:

@@ -564,7 +564,11 @@ def ramp_fit(record: DynamicRecord, *, travel: float = BREAKAWAY_TRAVEL) -> tupl
 
 
 def validate_breakaway(
-    model: FrictionModel, records: Iterable[DynamicRecord], *, travel: float = BREAKAWAY_TRAVEL
+    model: FrictionModel,
+    records: Iterable[DynamicRecord],
+    *,
+    travel: float = BREAKAWAY_TRAVEL,
+    progress: Callable[..., Any] | None = None,
 ) -> pd.DataFrame:
     """Breakaway forces of the ramp tests, measured and simulated with ``model``.
 
@@ -572,7 +576,7 @@ def validate_breakaway(
     free of load-cell noise) drives the model (:func:`simulate_record`); both displacements
     go through :func:`breakaway_force`. Columns: ``file``, ``pressure [Pa]``,
     ``force_rate [N/s]`` (fitted), ``measured [N]``, ``simulated [N]``, ``error [N]``,
-    ``relative_error [-]``.
+    ``relative_error [-]``. ``progress`` is called with each ramp's file name once simulated.
     """
     from dataclasses import replace
 
@@ -596,6 +600,8 @@ def validate_breakaway(
                 "relative_error [-]": (simulated - measured) / measured,
             }
         )
+        if progress is not None:
+            progress(record.file)
     columns = [
         "file",
         "pressure [Pa]",
@@ -734,7 +740,8 @@ def identify_dynamic(
         The steady-state model (g(v), sigma_2 and the pressure laws); its sigma_0 and sigma_1
         are replaced.
     progress : callable, optional
-        Called with each record's file name once fitted.
+        Called with each record's file name once fitted (presliding) or simulated
+        (breakaway): one call per presliding and per breakaway record.
     travel : float
         Breakaway travel [m] (:func:`breakaway_force`).
 
@@ -793,7 +800,7 @@ def identify_dynamic(
     identified = model.replace(
         sigma_0=values["sigma_0"], sigma_1=values["sigma_1"], dynamic_status=status, stderr=stderr
     )
-    breakaway = validate_breakaway(identified, records, travel=travel)
+    breakaway = validate_breakaway(identified, records, travel=travel, progress=progress)
     missing = breakaway["measured [N]"].isna() | breakaway["simulated [N]"].isna()
     for file in breakaway.loc[missing, "file"]:
         notes.append(f"{file}: no breakaway within the record ({travel * 1e3:g} mm travel)")

@@ -74,8 +74,26 @@ def law_lines(model: FrictionModel) -> list[str]:
     return lines
 
 
+REPORT_WIDTH = 100
+"""Longest line of :func:`fit_report` [characters]: longer ones wrap with a hanging indent,
+so the report fits a terminal and the HTML report's page."""
+
+
+def _wrapped(line: str, width: int = REPORT_WIDTH) -> str:
+    """``line`` wrapped at ``width`` characters, continuation lines indented 4 more."""
+    import textwrap
+
+    if len(line) <= width:
+        return line
+    indent = " " * (len(line) - len(line.lstrip()) + 4)
+    return textwrap.fill(line, width, subsequent_indent=indent, break_on_hyphens=False)
+
+
 def fit_report(model: FrictionModel, *, min_correlation: float = 0.1) -> str:
-    """lmfit-style report: model, fit statistics, variables ± stderr, correlations, dynamics."""
+    """lmfit-style report: model, fit statistics, variables ± stderr, correlations, dynamics.
+
+    No line is longer than :data:`REPORT_WIDTH` characters (longer ones wrap).
+    """
     stats = model.statistics
     lines = ["[[Model]]"]
     lines.append(
@@ -155,7 +173,7 @@ def fit_report(model: FrictionModel, *, min_correlation: float = 0.1) -> str:
             f"    {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} bar, "
             f"{val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
         )
-    return "\n".join(lines)
+    return "\n".join(_wrapped(line) for line in lines)
 
 
 PARAMETER_COLUMNS = (

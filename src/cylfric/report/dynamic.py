@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .figures import STYLE, log_axis
+from .figures import STYLE, _legend_below, log_axis
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -28,11 +28,20 @@ __all__ = ["figure_dynamic", "dynamic_tables", "dynamic_html"]
 def figure_dynamic(dynamic: _Results) -> Figure:
     """Left: net force [N] against displacement [um] of each presliding record's first slow
     cycle, the fitted model's curve and the line of slope sigma_0 (presliding stiffness).
-    Right: breakaway force [N] against force rate [N/s], measured and simulated."""
+    Right: breakaway force [N] against force rate [N/s], measured and simulated; without
+    breakaway tests no right panel, and a line under the left one says so. Legends stand
+    under the axes, over no point."""
     with matplotlib.rc_context(STYLE):
-        fig = Figure(figsize=(10, 4.2))
-        left, right = fig.subplots(1, 2)
-        fig.subplots_adjust(left=0.08, right=0.98, bottom=0.13, top=0.88, wspace=0.28)
+        table = dynamic.breakaway
+        rows = -(-max(len(dynamic.fits), 1) // 2)
+        if len(table):
+            fig = Figure(figsize=(10, 4.6 + 0.14 * rows))
+            left, right = fig.subplots(1, 2)
+        else:
+            fig = Figure(figsize=(6, 4.6 + 0.14 * rows))
+            left, right = fig.subplots(), None
+        bottom = (1.05 + 0.14 * rows) / fig.get_figheight()
+        fig.subplots_adjust(left=0.1, right=0.98, bottom=bottom, top=0.9, wspace=0.28)
         colors = matplotlib.colormaps["viridis"](np.linspace(0, 0.9, max(len(dynamic.fits), 1)))
         records = {r.file: r for r in dynamic.records}
         for fit, color in zip(dynamic.fits, colors, strict=True):
@@ -53,8 +62,18 @@ def figure_dynamic(dynamic: _Results) -> Figure:
         left.set_xlabel("displacement [um]")
         left.set_ylabel("net applied force [N]")
         left.set_title("Presliding: measured (dots), fitted model, slope sigma_0 (dashed)")
-        left.legend(fontsize=7, loc="upper left")
-        table = dynamic.breakaway
+        _legend_below(left, ncol=2)
+        if right is None:
+            fig.text(
+                0.5,
+                0.01,
+                "no breakaway tests: the model is not validated on force ramps",
+                ha="center",
+                va="bottom",
+                fontsize=8,
+                color="0.3",
+            )
+            return fig
         if len(table):
             levels = sorted(table["pressure [Pa]"].unique())
             level_colors = matplotlib.colormaps["viridis"](np.linspace(0, 0.9, len(levels)))
@@ -69,9 +88,7 @@ def figure_dynamic(dynamic: _Results) -> Figure:
             rates = rates[rates > 0]
             decades = float(np.log10(rates.max() / rates.min())) if rates.size else None
             log_axis(right, "x", decades)
-            right.legend(fontsize=7, title="o measured, x simulated", title_fontsize=7)
-        else:
-            right.text(0.5, 0.5, "no breakaway tests", ha="center", transform=right.transAxes)
+            _legend_below(right, title="o measured, x simulated", title_fontsize=7, ncol=3)
         right.set_xlabel("force rate [N/s]")
         right.set_ylabel("breakaway force [N]")
         right.set_title("Breakaway against force rate")

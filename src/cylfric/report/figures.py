@@ -39,6 +39,7 @@ __all__ = [
     "render_all",
     "save_rendered",
     "log_axis",
+    "not_identified_line",
     "STYLE",
 ]
 
@@ -95,48 +96,95 @@ def log_axis(ax, which="x", decades=None):
     axis.set_minor_locator(NullLocator())
 
 
+def _legend_right(ax, **keywords):
+    """Legend outside the axes, to their right (the canvas leaves room): never over data."""
+    return ax.legend(
+        loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7, **keywords
+    )
+
+
+def _legend_below(ax, **keywords):
+    """Legend outside the axes, under their x label (the canvas leaves room)."""
+    from matplotlib.transforms import offset_copy
+
+    below = offset_copy(ax.transAxes, fig=ax.figure, y=-36, units="points")
+    return ax.legend(
+        loc="upper center",
+        bbox_to_anchor=(0.5, 0.0),
+        bbox_transform=below,
+        borderaxespad=0.0,
+        fontsize=7,
+        **keywords,
+    )
+
+
+def _figure_band(model, velocity, pressure, level=0.95):
+    """The band the fit figure draws for judging the data: (lower, upper, label).
+
+    The band of a new measured point (:meth:`FrictionModel.prediction_band`, of a new run
+    where the model states a scope), not only the band of the mean, which real data miss
+    as soon as runs scatter. The band of the mean where the model carries no scatter.
+    ``velocity`` [m/s], ``pressure`` [Pa]; lower and upper [N].
+    """
+    import inspect
+
+    predict = getattr(model, "prediction_band", None)
+    if predict is not None and model.statistics.get("residual_std") is not None:
+        if "scope" in inspect.signature(predict).parameters:
+            lower, upper = predict(velocity, pressure, level, scope="run")
+            return lower, upper, f"{level * 100:.0f} % band of a new run's point"
+        lower, upper = predict(velocity, pressure, level)
+        return lower, upper, f"{level * 100:.0f} % band of a new measured point"
+    lower, upper = model.band(velocity, pressure, level)
+    return lower, upper, f"{level * 100:.0f} % band of the mean"
+
+
+def not_identified_line(names_reasons, width=110):
+    """One short text: which parameters were not identified and why (grouped by reason).
+
+    ``names_reasons`` maps a parameter name to its reason; '' when it is empty.
+    """
+    import textwrap
+
+    by_reason: dict[str, list[str]] = {}
+    for name, reason in names_reasons.items():
+        by_reason.setdefault(str(reason) or "no reason given", []).append(str(name))
+    text = "; ".join(
+        f"{', '.join(names)} not identified ({reason})" for reason, names in by_reason.items()
+    )
+    return textwrap.fill(text, width) if text else ""
+
+
 # The fixed layout of every report figure: size [in], subplot grid, margins (fractions of
 # the figure), shared y axes and which panels have a log speed axis.
 _CANVASES: dict[str, dict[str, Any]] = {
     "fit": {
-        "figsize": (7.5, 4.8),
-        "adjust": {"left": 0.09, "right": 0.98, "bottom": 0.11, "top": 0.93},
+        "figsize": (9.4, 4.8),
+        "adjust": {"left": 0.075, "right": 0.75, "bottom": 0.11, "top": 0.93},
         "log_speed": (0,),
     },
-    "parameters": {
-        "grid": (2, 3),
-        "figsize": (10, 5.6),
-        "adjust": {
-            "left": 0.07,
-            "right": 0.99,
-            "bottom": 0.09,
-            "top": 0.92,
-            "wspace": 0.32,
-            "hspace": 0.3,
-        },
-    },
     "directions": {
-        "figsize": (7.5, 4.6),
-        "adjust": {"left": 0.1, "right": 0.98, "bottom": 0.11, "top": 0.9},
+        "figsize": (9.4, 4.6),
+        "adjust": {"left": 0.08, "right": 0.75, "bottom": 0.11, "top": 0.9},
         "log_speed": (0,),
     },
     "sensitivity": {
         "grid": (1, 2),
-        "figsize": (9, 3.6),
-        "adjust": {"left": 0.08, "right": 0.99, "bottom": 0.14, "top": 0.88, "wspace": 0.25},
+        "figsize": (9, 4.2),
+        "adjust": {"left": 0.08, "right": 0.99, "bottom": 0.27, "top": 0.9, "wspace": 0.25},
     },
     "sensitivity_curves": {
         "grid": (1, 2),
-        "figsize": (11, 4.6),
+        "figsize": (11, 5.4),
         "sharey": True,
-        "adjust": {"left": 0.06, "right": 0.99, "bottom": 0.12, "top": 0.86, "wspace": 0.05},
+        "adjust": {"left": 0.06, "right": 0.99, "bottom": 0.23, "top": 0.88, "wspace": 0.05},
         "log_speed": (0, 1),
     },
     "residuals": {
         "grid": (1, 2),
-        "figsize": (9, 3.4),
+        "figsize": (9, 3.8),
         "sharey": True,
-        "adjust": {"left": 0.08, "right": 0.99, "bottom": 0.15, "top": 0.88, "wspace": 0.05},
+        "adjust": {"left": 0.08, "right": 0.99, "bottom": 0.22, "top": 0.89, "wspace": 0.05},
         "log_speed": (0,),
     },
 }
@@ -171,14 +219,20 @@ def _levels(points):
 
 @_styled
 def figure_fit(ident):
-    """Fig. 4.1: friction against speed (log axis) per pressure, the model and its 95 % band."""
+    """Fig. 4.1: friction against speed (log axis) per pressure, the model and its 95 % bands.
+
+    Two bands: the band a new measured point falls in (:func:`_figure_band`, light) and
+    the band of the mean (dark). The legend stands outside the axes, over no point.
+    """
+    import warnings
+
     pts, levels, colors = _levels(ident.points)
     model = ident.model
     fig, ax = _canvas("fit")
     speed = pts["velocity [m/s]"].abs()
     grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 200)
     banded = model.covariance is not None
-    widest = 0.0
+    widest, widest_mean, band_label = 0.0, 0.0, None
     for level, color in zip(levels, colors, strict=True):
         sel = pts[pts["level"] == level]
         p = float(ident.levels[level])
@@ -190,23 +244,47 @@ def figure_fit(ident):
             color=color,
             alpha=0.8,
             label=f"{p / 1e5:.3g} bar",
+            zorder=3,
         )
         pressure = np.full_like(grid, p)
         ax.plot(grid * 1e3, model.friction(grid, pressure), "-", color=color, lw=1.2)
         if banded:
-            lower, upper = model.band(grid, pressure)
-            ax.fill_between(grid * 1e3, lower, upper, color=color, alpha=0.25, lw=0)
-            widest = max(widest, float(np.max(upper - lower)) / 2)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the grid spans the data: no extrapolation
+                lower, upper, band_label = _figure_band(model, grid, pressure)
+                mean_lower, mean_upper = model.band(grid, pressure)
+            if not band_label.endswith("of the mean"):
+                ax.fill_between(grid * 1e3, lower, upper, color=color, alpha=0.13, lw=0)
+                widest = max(widest, float(np.max(upper - lower)) / 2)
+            ax.fill_between(grid * 1e3, mean_lower, mean_upper, color=color, alpha=0.35, lw=0)
+            widest_mean = max(widest_mean, float(np.max(mean_upper - mean_lower)) / 2)
     ax.plot([], [], "-", color="0.3", lw=1.2, label="model")
+    if banded and band_label is not None and not band_label.endswith("of the mean"):
+        ax.fill_between(
+            [],
+            [],
+            [],
+            color="0.3",
+            alpha=0.13,
+            lw=0,
+            label=f"{band_label}\n(± up to {widest:.2g} N)",
+        )
     if banded:
-        label = f"95 % band of the mean (± up to {widest:.2g} N)"
-        ax.fill_between([], [], [], color="0.3", alpha=0.25, lw=0, label=label)
+        ax.fill_between(
+            [],
+            [],
+            [],
+            color="0.3",
+            alpha=0.35,
+            lw=0,
+            label=f"95 % band of the mean\n(± up to {widest_mean:.2g} N)",
+        )
     ax.set_xlabel("speed |v| [mm/s]")
     ax.set_ylabel("friction force F_f [N]")
     ax.set_title(
         "Steady-state friction and the fitted pressure-dependent model (cf. thesis Fig. 4.1)"
     )
-    ax.legend(title="pressure", fontsize=7, ncol=2, loc="upper left")
+    _legend_right(ax, title="pressure", ncol=1 if len(levels) <= 16 else 2)
     return fig
 
 
@@ -243,10 +321,11 @@ def figure_model(model, pressures=None, *, velocities=None, level=0.95, ax=None)
         low, high = (1e-3, 0.1) if val is None else (val["velocity_min"], val["velocity_max"])
         velocities = np.geomspace(max(low, 1e-5), max(high, 2 * max(low, 1e-5)), 120)
     speeds = np.abs(np.asarray(velocities, dtype=float))
+    own = ax is None
     if ax is None:
-        fig = Figure(figsize=(7.5, 4.6))
+        fig = Figure(figsize=(9.2, 4.6))
         ax = fig.subplots()
-        fig.subplots_adjust(left=0.1, right=0.98, bottom=0.11, top=0.9)
+        fig.subplots_adjust(left=0.08, right=0.77, bottom=0.11, top=0.9)
     else:
         fig = ax.figure
     _log_speed_axis(ax)
@@ -274,31 +353,76 @@ def figure_model(model, pressures=None, *, velocities=None, level=0.95, ax=None)
     ax.set_xlabel("speed |v| [mm/s]")
     ax.set_ylabel("friction force F_f [N]")
     ax.set_title(f"Steady-state friction ({model.friction_law} law, {model.reference} pressure)")
-    ax.legend(title="operating pressure", fontsize=7, loc="best")
+    if own:
+        _legend_right(ax, title="operating pressure")
+    else:  # the user's axes: matplotlib's emptiest corner
+        ax.legend(title="operating pressure", fontsize=7, loc="best")
     return fig
+
+
+_PARAMETER_PANELS = (
+    ("F_c", "N", 1, "F_c [N]"),
+    ("F_s", "N", 1, "F_s [N]"),
+    ("sigma_2", "N*s/m", 1e-3, "sigma_2 [N*s/mm]"),
+    ("v_r", "m/s", 1e3, "v_r [mm/s]"),
+    ("alpha", "-", 1, "alpha [-]"),
+    ("stribeck_velocity", "m/s", 1e3, "v_Stribeck [mm/s]"),
+)
+"""Panels of the parameters figure: (name, SI unit, factor to the shown unit, axis label)."""
+
+
+def _shown_parameters(ident):
+    """(panels with per-pressure values, {name: reason} of those without)."""
+    table = ident.per_pressure
+    shown, missing = [], {}
+    reasons = dict(getattr(ident.model, "not_identified", {}) or {})
+    for spec in _PARAMETER_PANELS:
+        name, unit = spec[0], spec[1]
+        col = f"{name} [{unit}]"
+        if len(table) and col in table and not table[col].isna().all():
+            shown.append(spec)
+        elif name == "stribeck_velocity":
+            if "v_r" not in reasons and "alpha" not in reasons:
+                missing["v_Stribeck"] = "no per-pressure values"
+        else:
+            missing[name] = reasons.get(name, "no per-pressure values")
+    return shown, missing
 
 
 @_styled
 def figure_parameters(ident):
-    """Fig. 4.2: per-pressure parameters with the fitted pressure laws and 95 % intervals."""
+    """Fig. 4.2: per-pressure parameters with the fitted pressure laws and 95 % intervals.
+
+    Only the parameters with per-pressure values get a panel; a line under the title says
+    which were not identified and why (the model's ``not_identified`` reasons). None when
+    no parameter has per-pressure values.
+    """
     table = ident.per_pressure
-    fig, axes = _canvas("parameters")
-    specs = [
-        ("F_c", "N", 1, "F_c [N]"),
-        ("F_s", "N", 1, "F_s [N]"),
-        ("sigma_2", "N*s/m", 1e-3, "sigma_2 [N*s/mm]"),
-        ("v_r", "m/s", 1e3, "v_r [mm/s]"),
-        ("alpha", "-", 1, "alpha [-]"),
-        ("stribeck_velocity", "m/s", 1e3, "v_Stribeck [mm/s]"),
-    ]
-    p_bar = table["pressure [Pa]"] / 1e5 if len(table) else []
-    p_line = np.linspace(0, max(float(np.max(p_bar)) if len(table) else 1, 1), 100)
-    for ax, (name, unit, k, label) in zip(axes.flat, specs, strict=True):
+    shown, missing = _shown_parameters(ident)
+    if not shown:
+        return None
+    ncols = min(len(shown), 3)
+    nrows = -(-len(shown) // 3)
+    note = not_identified_line(missing, width=40 * ncols + 20)
+    note_lines = note.count("\n") + 1 if note else 0
+    width, height = 3.4 * ncols + 0.4, 2.6 * nrows + 1.0 + 0.16 * note_lines
+    fig = Figure(figsize=(width, height))
+    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
+    top = 1 - (0.42 + 0.16 * note_lines) / height
+    fig.subplots_adjust(
+        left=0.6 / width,
+        right=1 - 0.1 / width,
+        bottom=0.95 / height,
+        top=top,
+        wspace=0.38,
+        hspace=0.35,
+    )
+    for ax in axes[len(shown) :]:
+        fig.delaxes(ax)  # a short last row: no empty panel
+    p_bar = table["pressure [Pa]"] / 1e5
+    p_line = np.linspace(0, max(float(np.max(p_bar)), 1), 100)
+    for ax, (name, unit, k, label) in zip(axes, shown, strict=False):
         col = f"{name} [{unit}]"
-        if col not in table or table[col].isna().all():
-            ax.text(0.5, 0.5, "not identified", ha="center", transform=ax.transAxes)
-            ax.set_ylabel(label)
-            continue
         err = table.get(f"{name}_stderr [{unit}]")
         yerr = 1.96 * err * k if err is not None else None
         ax.errorbar(
@@ -322,8 +446,22 @@ def figure_parameters(ident):
                 ax.axhline(values * k, ls="--", lw=1, label="global surface fit")
         ax.set_xlabel("pressure p [bar]")
         ax.set_ylabel(label)
-    axes.flat[0].legend(fontsize=7)
-    fig.suptitle("Parameters against pressure (cf. thesis Fig. 4.2)")
+    handles: dict[str, Any] = {}
+    for ax in axes[: len(shown)]:
+        for handle, text in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(text, handle)
+    fig.legend(
+        list(handles.values()),
+        list(handles),
+        loc="lower center",
+        bbox_to_anchor=(0.5, 0.02),
+        ncol=len(handles),
+        fontsize=7,
+        frameon=False,
+    )
+    fig.suptitle("Parameters against pressure (cf. thesis Fig. 4.2)", y=1 - 0.08 / height, va="top")
+    if note:
+        fig.text(0.5, 1 - 0.36 / height, note, ha="center", va="top", fontsize=7.5, color="0.3")
     return fig
 
 
@@ -351,9 +489,9 @@ def figure_directions(points, offset=None):
                     alpha=0.8,
                     label=f"{pressure:.3g} bar" if sign == 1 else None,
                 )
-        ax.plot([], [], "^", color="0.4", label="^ ascending (extension)")
-        ax.plot([], [], "v", color="0.4", label="v descending, sign flipped")
-        ax.legend(fontsize=6, loc="upper left", ncol=3)
+        ax.plot([], [], "^", color="0.4", label="ascending (extension)")
+        ax.plot([], [], "v", color="0.4", label="descending, sign flipped")
+        _legend_right(ax, ncol=1 if len(levels) <= 16 else 2)
         if offset is not None and np.isfinite(offset):
             ax.set_title(
                 "Ascending and descending levels (cf. thesis Fig. 4.3): they differ by\n"
@@ -379,7 +517,7 @@ def figure_sensitivity(ident):
         axes[0].plot(part["alpha [-]"], part["rmse [N]"], "o-", label=label)
     axes[0].set_xlabel("alpha [-]")
     axes[0].set_ylabel("RMSE ('SME', eq. 4.4) [N]")
-    axes[0].legend(fontsize=7)
+    _legend_below(axes[0])
     part = table[table["table"] == "4.4"]
     axes[1].plot(part["v_r [m/s]"] * 1e3, part["rmse [N]"], "o-", label="alpha = 1 (Table 4.4)")
     if ident.recommended:
@@ -392,7 +530,7 @@ def figure_sensitivity(ident):
         )
     axes[1].set_xlabel("v_r [mm/s]")
     axes[1].set_ylabel("RMSE [N]")
-    axes[1].legend(fontsize=7)
+    _legend_below(axes[1])
     fig.suptitle("Sensitivity of the whole model to alpha and v_r (thesis 4.1.1-4.1.2)")
     return fig
 
@@ -436,7 +574,7 @@ def figure_sensitivity_curves(ident):
                 )
         ax.set_xlabel("speed |v| [mm/s]")
         ax.set_title(f"refit at fixed values, {title}", fontsize=9)
-        ax.legend(fontsize=7, loc="upper center", ncol=2)
+        _legend_below(ax, ncol=2)
     axes[0].set_ylabel("friction [N]")
     p_low, p_high = (ident.levels[lv] / 1e5 for lv in (shown[0], shown[-1]))
     fig.suptitle(
@@ -469,7 +607,7 @@ def figure_residuals(ident):
             ax.axhspan(
                 -2 * scatter, 2 * scatter, color="0.5", alpha=0.12, lw=0, label="± 2 x residual std"
             )
-        ax.legend(fontsize=7, loc="upper right")
+    _legend_below(axes[0], ncol=2)
     fig.suptitle(f"Residuals of the global fit (RMSE {ident.model.statistics['rmse']:.3f} N)")
     return fig
 
@@ -507,18 +645,19 @@ def save_rendered(folder, stem, png: bytes, svg: bytes) -> dict:
     }
 
 
-def render_all(ident, offset=None, *, workers=2):
+def render_all(ident, offset=None, *, workers=2, progress=None):
     """Draw every report figure: ``[(stem, caption, png, svg)]`` in report order.
 
     With ``workers`` >= 2 the figures are drawn on a pool of forked processes
     (:func:`cylfric._parallel.run`: matplotlib is single-threaded, and the workers inherit
     it loaded); where no pool can be forked, here, one after another. The result is the
-    same either way.
+    same either way. ``progress`` is called with each figure's stem once it is drawn.
     """
     from .._parallel import run
 
     figures = all_figures(ident, offset)
-    drawn = run(lambda i: render(figures[i][2]()), len(figures), workers=workers)
+    done = None if progress is None else (lambda i, _: progress(figures[i][0]))
+    drawn = run(lambda i: render(figures[i][2]()), len(figures), workers=workers, done=done)
     return [
         (stem, caption, *images) for (stem, caption, _), images in zip(figures, drawn, strict=True)
     ]
@@ -545,15 +684,22 @@ def all_figures(ident=None, offset=None, points=None):
         (
             "fit",
             "Steady-state points and the fitted pressure-dependent model with the 95 % "
-            "confidence band of the mean (cf. thesis Fig. 4.1).",
+            "band of a new measured point (light) and of the mean (dark) (cf. thesis "
+            "Fig. 4.1).",
             lambda: figure_fit(ident),
         ),
-        (
-            "parameters",
-            "Per-pressure parameters with 95 % intervals, the weighted "
-            "regressions and the global fit (cf. Fig. 4.2).",
-            lambda: figure_parameters(ident),
-        ),
+    ]
+    if _shown_parameters(ident)[0]:
+        figures.append(
+            (
+                "parameters",
+                "Per-pressure parameters with 95 % intervals, the weighted "
+                "regressions and the global fit (cf. Fig. 4.2); a parameter without "
+                "per-pressure values has no panel.",
+                lambda: figure_parameters(ident),
+            )
+        )
+    figures += [
         directions,
         ("residuals", "Residuals against speed and pressure.", lambda: figure_residuals(ident)),
     ]

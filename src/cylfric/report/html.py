@@ -11,10 +11,10 @@ import pandas as pd
 
 from ..escape import html_text
 from ..io.writers import atomic_write_text
-from .figures import render_all, save_rendered
+from .figures import not_identified_line, render_all, save_rendered
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Mapping, Sequence
+    from collections.abc import Callable, Iterable, Mapping, Sequence
     from pathlib import Path
     from typing import Any
     from typing import Any as _Results  # identification results, duck-typed: never imported here
@@ -22,7 +22,13 @@ if TYPE_CHECKING:
     from cylfric._typing import StrPath
     from cylfric.steady_state import Extraction
 
-__all__ = ["render_report", "write_report", "write_report_folder", "offset_by_pressure"]
+__all__ = [
+    "render_report",
+    "write_report",
+    "write_report_folder",
+    "offset_by_pressure",
+    "scatter_html",
+]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;
@@ -35,6 +41,9 @@ figure{margin:1rem 0}figure img{max-width:100%;border:1px solid #eee}
 figcaption{font-size:.85rem;color:#555}.law{font-family:ui-monospace,monospace;font-size:1rem}
 .note{background:#fff7e0;border-left:4px solid #e0a800;padding:.4rem .8rem;margin:.4rem 0}
 .muted{color:#777;font-size:.85rem}
+pre{white-space:pre-wrap;overflow-wrap:anywhere;max-width:100%;font-size:.8rem;
+background:#fafafa;border:1px solid #eee;padding:.5rem}
+.law{overflow-wrap:anywhere}.scroll{max-width:100%;overflow-x:auto}
 """
 
 
@@ -49,7 +58,99 @@ def _table(frame: pd.DataFrame, digits=4) -> str:
         "<tr>" + "".join(f"<td>{fmt(v)}</td>" for v in row) + "</tr>"
         for row in frame.itertuples(index=False)
     )
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+    table = f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+    return f"<div class='scroll'>{table}</div>"  # a wide table scrolls, the page does not
+
+
+def _number(value, digits=3) -> str:
+    """A number of a datasheet record as text ('n/a' when missing or not finite)."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        return "n/a"
+    return f"{value:.{digits}g}"
+
+
+def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, Any] | None) -> str:
+    """HTML: the scatter components (``fit.scatter``) and the lack-of-fit test
+    (``quality.lack_of_fit``) of a datasheet; '' when neither was computed.
+
+    The scatter table gives each component's standard deviation in % of the friction
+    level and in N, its source, and the prior's basis where the session component is a
+    prior; the lack-of-fit line the test, statistic, degrees of freedom, p-value, verdict
+    (at alpha = 0.05) and what the fit did about it.
+    """
+    if not scatter and not lack_of_fit:
+        return ""
+    parts = ["<h2>Scatter and lack of fit</h2>"]
+    if scatter:
+        components = scatter.get("components") or {}
+        rows = []
+        for name, part in components.items():
+            basis = ""
+            if "prior" in str(part.get("source", "")):
+                prior = _number(part.get("prior_percent"))
+                basis = f"prior {prior} %: {part.get('prior_basis') or 'basis not stated'}"
+            rows.append(
+                {
+                    "component": name,
+                    "std [%]": _number(part.get("std_percent")),
+                    "std [N]": _number(part.get("std_N")),
+                    "source": str(part.get("source", "")),
+                    "prior basis": basis,
+                }
+            )
+        total = scatter.get("reproducibility")
+        if total:
+            rows.append(
+                {
+                    "component": "reproducibility (ISO 5725-2 s_R)",
+                    "std [%]": _number(total.get("std_percent")),
+                    "std [N]": _number(total.get("std_N")),
+                    "source": "combined",
+                    "prior basis": "",
+                }
+            )
+        counts = ", ".join(
+            f"{scatter[k]} {k}"
+            for k in ("sessions", "runs", "points")
+            if scatter.get(k) is not None
+        )
+        level = _number(scatter.get("reference_force_N"))
+        parts.append(
+            f"<p>Scatter components ({html_text(scatter.get('method', 'method not stated'))}; "
+            f"{html_text(counts)}); N at the mean fitted friction {level} N.</p>"
+        )
+        if rows:
+            parts.append(_table(pd.DataFrame(rows)))
+    if lack_of_fit:
+        dof = lack_of_fit.get("dof")
+        dof_text = f", dof {dof[0]}, {dof[1]}" if dof else ""
+        significant = lack_of_fit.get("significant")
+        verdict = (
+            "the law does not fit the data (significant at 5 %)"
+            if significant
+            else "no significant lack of fit at 5 %"
+            if significant is not None
+            else "verdict not stated"
+        )
+        lack = lack_of_fit.get("rms_lack_N")
+        lack_text = f"; RMS lack of fit {_number(lack)} N" if lack is not None else ""
+        line = (
+            f"Lack of fit ({lack_of_fit.get('test', 'test not stated')}): statistic "
+            f"{_number(lack_of_fit.get('statistic'))}{dof_text}, p = "
+            f"{_number(lack_of_fit.get('p_value'), 2)}: {verdict}{lack_text}. "
+            f"Action: {lack_of_fit.get('action') or 'none stated'}."
+        )
+        css = "note" if significant else "muted"
+        parts.append(f"<p class='{css}' id='lack-of-fit'>{html_text(line)}</p>")
+    return "\n".join(parts)
+
+
+def _records(sheet, model) -> tuple[Any, Any]:
+    """(fit.scatter, quality.lack_of_fit): from the model when it carries them, else from
+    the datasheet; None where not computed."""
+    scatter = getattr(model, "scatter", None) or (sheet.get("fit") or {}).get("scatter")
+    lack = getattr(model, "lack_of_fit", None) or (sheet.get("quality") or {}).get("lack_of_fit")
+    return scatter, lack
 
 
 def render_report(
@@ -99,14 +200,16 @@ def render_report(
         )
     )
     parts.append(offset_by_pressure(extraction))
-    for name, reason in model.not_identified.items():
-        parts.append(f"<p class='note'>{html_text(name)} not identified: {html_text(reason)}</p>")
+    if model.not_identified:
+        line = not_identified_line(model.not_identified, width=10_000)
+        parts.append(f"<p class='note' id='not-identified'>{html_text(line)}.</p>")
     dyn = ", ".join(
         f"{name} {status} ({reason})" for name, (status, reason) in model.dynamic_status.items()
     )
     parts.append(f"<p class='muted'>Dynamic (LuGre) parameters: {html_text(dyn)}.</p>")
     for note in sheet.get("notes", []):
         parts.append(f"<p class='note'>{html_text(note)}</p>")
+    parts.append(scatter_html(*_records(sheet, model)))
     parts.append("<h2>Figures</h2>")
     for stem, caption, png in figures:
         data = base64.b64encode(png).decode("ascii")
@@ -289,6 +392,7 @@ def write_report_folder(
     workers: int = 2,
     exports: Sequence[Mapping[str, Any]] | None = None,
     dynamic: _Results | None = None,
+    progress: Callable[[str], object] | None = None,
 ) -> dict[str, Path]:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
@@ -296,14 +400,14 @@ def write_report_folder(
     :func:`~cylfric.report.figures.render_all`). ``exports``: plain summaries of the
     simulator exports (target, folder, files, loss rows) for their section. ``dynamic`` (a
     :class:`~cylfric.identify.dynamic.DynamicIdentification`) adds the presliding and
-    breakaway figure and tables.
+    breakaway figure and tables. ``progress`` is called with each figure's name once drawn.
     """
     from pathlib import Path
 
     out = Path(out)
     offset = None if extraction is None else extraction.offset
     files, shown = {}, []
-    for stem, caption, png, svg in render_all(ident, offset, workers=workers):
+    for stem, caption, png, svg in render_all(ident, offset, workers=workers, progress=progress):
         files[f"figure_{stem}"] = save_rendered(out / "figures", stem, png, svg)["png"]
         shown.append((stem, caption, png))
     section = None
@@ -313,6 +417,8 @@ def write_report_folder(
 
         png, svg = render(figure_dynamic(dynamic))
         files["figure_dynamic"] = save_rendered(out / "figures", "dynamic", png, svg)["png"]
+        if progress is not None:
+            progress("dynamic")
         section = dynamic_html(dynamic, base64.b64encode(png).decode("ascii"), _table)
     files["report"] = write_report(
         out / "report.html",
