@@ -136,7 +136,9 @@ def fit_campaign(
     elif len(campaign.seals) > 1:
         raise ValueError(_several_seals(campaign))
     staged = _staged(
-        folder, out, lambda staging: _fit(campaign, staging, options, progress, after_extraction, step)
+        folder,
+        out,
+        lambda staging: _fit(campaign, staging, options, progress, after_extraction, step),
     )
     return _moved(staged, out, out)
 
