@@ -144,6 +144,11 @@ def datasheet_model(
             "sensitivity": {"recommended": ident.recommended},
         },
     }
+    earlier = dict(model.record)  # what the identification recorded: scatter, lack of fit
+    if "scatter" in earlier.get("fit", {}):
+        record["fit"]["scatter"] = earlier["fit"]["scatter"]
+    if "quality" in earlier:
+        record["quality"] = earlier["quality"]
     source = {
         "campaign": str(campaign or ""),
         "files": [
