@@ -98,6 +98,18 @@ def relative_residuals(points: pd.DataFrame, fitted: np.ndarray) -> pd.DataFrame
     return table.reset_index(drop=True)
 
 
+def _reml(model):
+    """REML fit of a MixedLM, by the optimisers statsmodels offers in turn (a variance at its
+    zero bound can make the gradient's matrix singular for one and not another)."""
+    error: Exception | None = None
+    for method in ("lbfgs", "powell", "nm"):
+        try:
+            return model.fit(reml=True, method=method)
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            error = exc
+    raise ValueError(f"the mixed model of the scatter could not be fitted ({error})")
+
+
 def _mixed_model(table: pd.DataFrame, sessions: int) -> tuple[float, float, float]:
     """(s_session^2, s_run^2, s_r^2) [-] of the relative residuals by REML."""
     from statsmodels.regression.mixed_linear_model import MixedLM
@@ -119,12 +131,12 @@ def _mixed_model(table: pd.DataFrame, sessions: int) -> tuple[float, float, floa
                 exog_re=np.ones((len(table), 1)),
                 exog_vc={"run": runs},
             )
-            fit = model.fit(reml=True, method=["lbfgs", "powell"])
+            fit = _reml(model)
             session_var = float(np.asarray(fit.cov_re)[0, 0])
             run_var = float(fit.vcomp[0]) if len(fit.vcomp) else 0.0
         else:
             model = MixedLM(endog, exog, groups=table["run"].to_numpy())
-            fit = model.fit(reml=True, method=["lbfgs", "powell"])
+            fit = _reml(model)
             session_var, run_var = 0.0, float(np.asarray(fit.cov_re)[0, 0])
     residual_var = float(fit.scale)
     values = (max(session_var, 0.0), max(run_var, 0.0), max(residual_var, 0.0))

@@ -776,7 +776,8 @@ class FrictionModel:
             u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2)),  s_L >= s_run
 
         half-width = Student-t quantile (Welch-Satterthwaite degrees of freedom) x u; the
-        session band is never narrower than the run band. The lack of fit is not added: it
+        run band is never narrower than the point band, nor the session band than the run
+        band. The lack of fit is not added: it
         is already in s_res and s_run (docs/uncertainty.md). A model without a scatter
         record (an older datasheet) raises ValueError for "run" and "session" rather than
         give the point band under their name. Warns outside the validity ranges (raises
@@ -836,9 +837,12 @@ class FrictionModel:
             denominator = se**4 / mean_dof + sum(t**2 / d for t, d in terms)
             dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
         half = self._quantile(level, np.minimum(dof, 1e9)) * np.sqrt(variance)
-        if scope == "session":  # a new session is never predicted better than a new run
-            low, high = self.prediction_band(velocity, pressure, level, scope="run")
-            half = np.maximum(half, 0.5 * (high - low))
+        # a new run is never predicted better than a new point, a new session than a new run
+        narrower = "run" if scope == "session" else "point"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # checked above
+            low, high = self.prediction_band(velocity, pressure, level, scope=narrower)
+        half = np.maximum(half, 0.5 * (high - low))
         return f - half, f + half
 
     def correlations(self) -> tuple[tuple[str, ...], np.ndarray] | None:
