@@ -107,8 +107,10 @@ def test_runs_test_without_replicates():
 def test_scopes_ordered_and_round_trip_through_the_datasheet():
     model = _identify(_points(0, sessions=2, runs_per_level=2)).model
     v, p = np.full(5, 0.01), np.linspace(10e5, 90e5, 5)
-    widths = [np.subtract(*model.prediction_band(v, p, scope=s)[::-1]) for s in
-              ("point", "run", "session")]
+    widths = [
+        np.subtract(*model.prediction_band(v, p, scope=s)[::-1])
+        for s in ("point", "run", "session")
+    ]
     assert np.all(widths[0] <= widths[1] + 1e-12) and np.all(widths[1] <= widths[2] + 1e-12)
     sheet = model.to_datasheet()
     validate(sheet)

@@ -50,8 +50,10 @@ def _ideal(points):
     for p, group in points.groupby(bar):
         by_session = group.groupby("session")["friction [N]"]
         s_b = by_session.mean().std(ddof=1)
-        s_w = np.sqrt((by_session.var(ddof=1) * (by_session.count() - 1)).sum()
-                      / (by_session.count() - 1).sum())
+        s_w = np.sqrt(
+            (by_session.var(ddof=1) * (by_session.count() - 1)).sum()
+            / (by_session.count() - 1).sum()
+        )
         out[p] = 1.96 * np.hypot(s_b, s_w)
     return out
 
@@ -89,7 +91,9 @@ def test_scopes_ordered_on_real_data(fits):
     v, p = points["velocity [m/s]"].abs().to_numpy(), points["pressure [Pa]"].to_numpy()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        widths = [np.subtract(*model.prediction_band(v, p, scope=s)[::-1]) for s in
-                  ("point", "run", "session")]
+        widths = [
+            np.subtract(*model.prediction_band(v, p, scope=s)[::-1])
+            for s in ("point", "run", "session")
+        ]
     assert np.all(widths[0] <= widths[1] + 1e-9)
     assert np.all(widths[1] <= widths[2] + 1e-9)

@@ -99,7 +99,7 @@ def lack_of_fit(
         frame["run"] = points["run"].astype(str).to_numpy()
         runs_per_group = frame.groupby("g")["run"].nunique()
         if (runs_per_group >= 2).any():  # replicate runs: each run's mean is one observation
-            frame = frame.groupby(["g", "run"], as_index=False)["e"].mean()
+            frame = frame.groupby(["g", "run"], as_index=False).agg(e=("e", "mean"))
     n, g = len(frame), int(frame["g"].nunique())
     if n - g >= 1 and g - n_parameters >= 1:
         means = frame.groupby("g")["e"].transform("mean").to_numpy()
@@ -121,7 +121,11 @@ def lack_of_fit(
         fitted_order = np.argsort(points["friction [N]"].to_numpy(dtype=float) - residuals)
         statistic, p_value = runstest_1samp(residuals[fitted_order], cutoff=0.0, correction=True)
         statistic, p_value = float(statistic), float(p_value)
-        test, rms, dof_list = "Wald-Wolfowitz runs test (residual signs by fitted value)", None, None
+        test, rms, dof_list = (
+            "Wald-Wolfowitz runs test (residual signs by fitted value)",
+            None,
+            None,
+        )
     else:
         return None
     significant = bool(p_value < alpha)

@@ -813,12 +813,14 @@ class FrictionModel:
             half = self._quantile(level, dof) * np.sqrt(se**2 + scatter_sd**2)
             return f - half, f + half
         n_dof = max(self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1)
-        mean_dof = (
+        fit_dof = self.statistics.get("dof")
+        band_dof = np.asarray(
             self.effective_dof(velocity, pressure)
             if self.influence is not None
-            else self.statistics.get("dof")
+            else (np.inf if fit_dof is None else fit_dof),
+            dtype=float,
         )
-        mean_dof = np.inf if mean_dof is None else mean_dof
+        assert scatter is not None  # refused above for these scopes
         part = _band_parts(scatter, scope)
         force2 = np.asarray(f, dtype=float) ** 2
         use = force2 * (part["repeat"] ** 2 + part["between"] ** 2) >= residual_std**2
@@ -834,7 +836,7 @@ class FrictionModel:
         ]
         variance = se**2 + sum(t for t, _ in terms)
         with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
-            denominator = se**4 / mean_dof + sum(t**2 / d for t, d in terms)
+            denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
             dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
         half = self._quantile(level, np.minimum(dof, 1e9)) * np.sqrt(variance)
         # a new run is never predicted better than a new point, a new session than a new run
