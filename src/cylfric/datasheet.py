@@ -13,7 +13,7 @@ import hashlib
 import json
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from . import __version__
 from .io.writers import atomic_write_text
@@ -22,7 +22,6 @@ from .model.serialize import clean
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
-    from typing import Any
 
     import numpy as np
     from numpy.typing import ArrayLike
@@ -151,6 +150,12 @@ def datasheet_model(
             "sensitivity": {"recommended": ident.recommended},
         },
     }
+    earlier = dict(model.record)  # what the identification recorded: scatter, lack of fit
+    if "scatter" in earlier.get("fit", {}):
+        fit_record = cast("dict[str, Any]", record["fit"])
+        fit_record["scatter"] = earlier["fit"]["scatter"]
+    if "quality" in earlier:
+        record["quality"] = earlier["quality"]
     source = {
         "campaign": str(campaign or ""),
         "files": [

@@ -337,8 +337,9 @@ def extract_points(
 
 
 def _columns(rows):
-    extra = [k for k in rows[0] if k not in POINT_COLUMNS] if rows else []
-    return POINT_COLUMNS + extra
+    known = set(POINT_COLUMNS)
+    extra = {k: None for row in rows for k in row if k not in known}  # every run's labels
+    return POINT_COLUMNS + list(extra)
 
 
 def extraction_options(config: CampaignConfig, options: dict) -> dict:
@@ -504,7 +505,9 @@ class Extraction:
     Attributes
     ----------
     points : pandas.DataFrame
-        Columns :data:`POINT_COLUMNS` (+ extra metadata such as ``seal``).
+        Columns :data:`POINT_COLUMNS` (+ extra metadata such as ``seal``), and ``session``
+        (the run's session, :func:`cylfric.io.campaign.session_of`; None when the campaign
+        does not say).
     skipped : list of dict
         ``file`` and ``reason`` of the files skipped with ``skip_bad``.
     offset : float
@@ -727,6 +730,8 @@ def _finish(campaign, infos, results, skip_bad) -> Extraction:
     points = (
         pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)
     )
+    if "session" not in points:  # the label column every points table has (None: not said)
+        points["session"] = None
     return Extraction(
         points,
         skipped,

@@ -40,10 +40,12 @@ __all__ = [
 
 _SUBMODULES = (
     "dynamic",
+    "lack_of_fit",
     "linear_fit",
     "motion",
     "motion_validation",
     "pressure_fit",
+    "scatter",
     "sensitivity",
     "steady",
     "stribeck_fit",

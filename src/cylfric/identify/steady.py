@@ -575,6 +575,7 @@ def identify(
         )
         if sensitivity and shape:
             result = add_sensitivity(result)
+    result = with_uncertainty(result)
     if per_direction and "direction [-]" in used:
         if "offset [N]" in used:  # points of steady_state.extract_campaign
             result.notes.append(
@@ -593,6 +594,44 @@ def identify(
                         subset, fixed=fixed, pressure_law=pressure_law, sensitivity=False
                     )
     return result
+
+
+def with_uncertainty(ident: Identification) -> Identification:
+    """``ident`` with its model's scatter components and lack-of-fit test (issue 22).
+
+    The model's record gains ``fit.scatter`` (:func:`cylfric.identify.scatter.scatter_components`:
+    repeatability, run-to-run, session-to-session, by REML on the relative residuals) and
+    ``quality.lack_of_fit`` (:func:`cylfric.identify.lack_of_fit.lack_of_fit`); the notes say
+    both, and the assumption when the session scatter is a prior. Data the mixed model cannot
+    take leave a note instead (no bands beyond scope "point" then).
+    """
+    from .lack_of_fit import lack_of_fit
+    from .scatter import scatter_components, scatter_note
+
+    model, points = ident.model, ident.points
+    residuals = np.asarray(ident.residuals, dtype=float)
+    if residuals.shape != (len(points),):
+        return ident
+    fitted = points["friction [N]"].to_numpy(dtype=float) - residuals
+    n_parameters = int(model.statistics.get("n_variables") or 1)
+    notes = list(ident.notes)
+    record = dict(model.record)
+    try:
+        scatter = scatter_components(points, fitted, n_parameters=n_parameters)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        notes.append(f"scatter components not computed ({exc}); bands: scope 'point' only")
+    else:
+        record["fit"] = {**record.get("fit", {}), "scatter": scatter}
+        notes.append(scatter_note(scatter))
+    test = lack_of_fit(points, residuals, n_parameters)
+    if test is not None:
+        record["quality"] = {**record.get("quality", {}), "lack_of_fit": test}
+        if test["significant"]:
+            notes.append(
+                f"lack of fit: {test['test']} p = {test['p_value']:.3g} (alpha 0.05); "
+                + test["action"]
+            )
+    return replace(ident, model=model.replace(record=record), notes=notes)
 
 
 def add_sensitivity(ident: Identification) -> Identification:

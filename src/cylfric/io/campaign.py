@@ -23,7 +23,7 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from ..friction.pressure import PRESSURE_REFERENCES, pressure_reference_basis
 from ..units import UnitError, parse_quantity, parse_temperature
@@ -175,6 +175,7 @@ class RunInfo:
     nominal: dict = field(default_factory=dict)
     manifest_line: int | None = None  # the run's row in manifest.csv (1 = the header)
     manifest: Path | None = None  # the manifest.csv that lists the run
+    session: str | None = None  # the session the run belongs to (see session_of)
 
     @property
     def seal(self) -> str | None:
@@ -980,10 +981,35 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
                 extra = {**groups, **extra}
         line = manifest.lines.get(path.name)
         listed = folder / MANIFEST_NAME if line is not None else None
-        runs.append(RunInfo(path, pressure, velocity, extra, source, nominal, line, listed))
+        session = session_of(path, folder, config.glob, extra)
+        if session is not None:
+            extra = {**extra, "session": session}
+        runs.append(
+            RunInfo(path, pressure, velocity, extra, source, nominal, line, listed, session)
+        )
     if not runs:
         raise BenchFileError(folder, f"no run files matching {config.glob!r}")
     return runs
+
+
+def session_of(path: Path, folder: Path, glob: str, labels: Mapping[str, Any]) -> str | None:
+    """The session a run belongs to, or None when the campaign does not say.
+
+    In this order: ``manifest.csv``'s ``session`` column, a ``session`` group of
+    ``campaign.toml [files] name_pattern`` (both already in ``labels``), else the run's
+    subfolder when the runs are kept one subfolder per session: only when the glob's first
+    part is a wildcard (``"*/*.csv"``, ``"**/*.csv"``, ``"day*/*.txt"``) and the run lies in
+    a subfolder, the first subfolder below the campaign folder is the session. A literal
+    first part (``"runs/*.txt"``) is a folder of runs, not sessions, and gives none.
+    """
+    value = labels.get("session")
+    if value is not None and str(value).strip():
+        return str(value).strip()
+    first = glob.replace("\\", "/").split("/", 1)
+    parts = path.relative_to(folder).parts if path.is_relative_to(folder) else (path.name,)
+    if len(first) == 2 and any(c in first[0] for c in "*?[") and len(parts) > 1:
+        return parts[0]
+    return None
 
 
 def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:

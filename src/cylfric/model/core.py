@@ -767,29 +767,111 @@ class FrictionModel:
         half = self._quantile(level, dof) * self.standard_error(velocity, pressure)
         return f - half, f + half
 
-    def prediction_band(
-        self, velocity: ArrayLike, pressure: ArrayLike, level: float = 0.95, *, strict: bool = False
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Band (lower, upper) [N] for a new measured point: the mean's band plus the scatter.
+    @property
+    def scatter(self) -> dict | None:
+        """The ``fit.scatter`` record (repeatability, run, session components; relative), or
+        None when the fit made none (docs/uncertainty.md)."""
+        value = self.record.get("fit", {}).get("scatter")
+        return None if value is None else dict(value)
 
-        Adds the fit's residual standard deviation (``statistics["residual_std"]``) to the
-        variance of the mean. Warns outside the validity ranges (raises with ``strict=True``).
+    @property
+    def lack_of_fit(self) -> dict | None:
+        """The ``quality.lack_of_fit`` record (test, statistic, p-value, action), or None."""
+        value = (self.record.get("quality") or {}).get("lack_of_fit")
+        return None if value is None else dict(value)
+
+    def prediction_band(
+        self,
+        velocity: ArrayLike,
+        pressure: ArrayLike,
+        level: float = 0.95,
+        *,
+        scope: str = "point",
+        strict: bool = False,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Band (lower, upper) [N] for a new measurement at ``level``, of the given ``scope``.
+
+        ``scope="point"``: a new point of the fitted runs: the mean's band plus the fit's
+        residual standard deviation (``statistics["residual_std"]``). ``"run"``: a new run on
+        the same mount: the mean's band plus the repeatability and the run-to-run scatter of
+        :attr:`scatter`. ``"session"``: a new session (seal remounted, another day): the
+        between-session scatter of a level ``s_L`` (run and session components, the stated
+        prior pooled with the estimate) instead of the run part. With F the model friction::
+
+            u_point^2   = se^2 + s_res^2
+            u_run^2     = se^2 + max(s_res^2, F^2 (s_r^2 + s_run^2))
+            u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2)),  s_L >= s_run
+
+        half-width = Student-t quantile (Welch-Satterthwaite degrees of freedom) x u; the
+        run band is never narrower than the point band, nor the session band than the run
+        band. The lack of fit is not added: it
+        is already in s_res and s_run (docs/uncertainty.md). A model without a scatter
+        record (an older datasheet) raises ValueError for "run" and "session" rather than
+        give the point band under their name. Warns outside the validity ranges (raises
+        with ``strict=True``).
         """
-        scatter = self.statistics.get("residual_std")
-        if scatter is None:
+        if scope not in BAND_SCOPES:
+            raise ValueError(f"unknown band scope {scope!r}; valid: {list(BAND_SCOPES)}")
+        residual_std = self.statistics.get("residual_std")
+        if residual_std is None:
             raise ValueError("this model carries no residual scatter (statistics.residual_std)")
+        scatter = self.scatter
+        if scope != "point" and scatter is None:
+            raise ValueError(
+                f"scope {scope!r} needs the scatter components (fit.scatter), which this model "
+                "does not carry (a datasheet of an older cylfric, or a hand-made model): refit "
+                "the campaign, or use scope='point' (a new point of the same runs only)"
+            )
         self.check(velocity, pressure, strict=strict)
         f = self._friction(velocity, pressure, self.coefficients())
         se = self.standard_error(velocity, pressure)
-        dof = None
-        if self.influence is not None:  # Welch-Satterthwaite: the mean's and the scatter's
-            scatter_dof = max(
-                self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1
-            )
-            mean_dof = self.effective_dof(velocity, pressure)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                dof = (se**2 + scatter**2) ** 2 / (se**4 / mean_dof + scatter**4 / scatter_dof)
-        half = self._quantile(level, dof) * np.sqrt(se**2 + scatter**2)
+        if scope == "point":
+            scatter_sd = residual_std
+            dof = None
+            if self.influence is not None:  # Welch-Satterthwaite: the mean's and the scatter's
+                scatter_dof = max(
+                    self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1
+                )
+                mean_dof = self.effective_dof(velocity, pressure)
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    dof = (se**2 + scatter_sd**2) ** 2 / (
+                        se**4 / mean_dof + scatter_sd**4 / scatter_dof
+                    )
+            half = self._quantile(level, dof) * np.sqrt(se**2 + scatter_sd**2)
+            return f - half, f + half
+        n_dof = max(self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1)
+        fit_dof = self.statistics.get("dof")
+        band_dof = np.asarray(
+            self.effective_dof(velocity, pressure)
+            if self.influence is not None
+            else (np.inf if fit_dof is None else fit_dof),
+            dtype=float,
+        )
+        assert scatter is not None  # refused above for these scopes
+        part = _band_parts(scatter, scope)
+        force2 = np.asarray(f, dtype=float) ** 2
+        use = force2 * (part["repeat"] ** 2 + part["between"] ** 2) >= residual_std**2
+        terms = [
+            (
+                np.where(use, force2 * part["repeat"] ** 2, residual_std**2),
+                np.where(use, part["repeat_dof"], n_dof),
+            ),
+            (
+                np.where(use, force2 * part["between"] ** 2, 0.0),
+                np.where(use, part["between_dof"], np.inf),
+            ),
+        ]
+        variance = se**2 + sum(t for t, _ in terms)
+        with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
+            denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
+            dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
+        half = self._quantile(level, np.minimum(dof, 1e9)) * np.sqrt(variance)
+        # a new run is never predicted better than a new point, a new session than a new run
+        narrower = "run" if scope == "session" else "point"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # checked above
+            low, high = self.prediction_band(velocity, pressure, level, scope=narrower)
+        half = np.maximum(half, 0.5 * (high - low))
         return f - half, f + half
 
     def correlations(self) -> tuple[tuple[str, ...], np.ndarray] | None:
@@ -874,6 +956,33 @@ class FrictionModel:
         from .serialize import from_datasheet
 
         return from_datasheet(cls, source)
+
+
+BAND_SCOPES = ("point", "run", "session")
+"""Scopes of :meth:`FrictionModel.prediction_band` (docs/uncertainty.md)."""
+
+
+def _band_parts(scatter: Mapping, scope: str) -> dict[str, float]:
+    """Relative standard deviations [-] and their dof of a band's scatter terms."""
+    c = scatter["components"]
+    repeat = c["repeatability"]["std_percent"] / 100.0
+    run = c["run"]["std_percent"] / 100.0
+    session = c["session"]
+    between_dof = float(session.get("dof") or np.inf)
+    if scope == "run":
+        between = run
+    else:
+        between = session.get("between_percent")
+        between = (
+            math.hypot(run, session["std_percent"] / 100.0) if between is None else between / 100
+        )
+        between = max(between, run)
+    return {
+        "repeat": repeat,
+        "repeat_dof": float(c["repeatability"].get("dof") or np.inf),
+        "between": between,
+        "between_dof": between_dof,
+    }
 
 
 def _normal_quantile(q):

@@ -1,0 +1,271 @@
+"""Scatter components of a fit: repeatability, run-to-run and session-to-session (issue 22).
+
+:func:`scatter_components` fits a linear mixed model by REML (statsmodels ``MixedLM``) to
+the *relative* residuals of the points about the fitted law, ``r = (F_meas - F_model) /
+F_model``: a random intercept per session, a variance component per run inside its session,
+and the residual, so that
+
+    r_{s,k,i} = mu + b_s + c_{s,k} + e_{s,k,i},
+    b_s ~ N(0, s_session^2),  c_{s,k} ~ N(0, s_run^2),  e ~ N(0, s_r^2)
+
+(Pinheiro & Bates 2000, ch. 2; ISO 5725-2:2019 sec. 7 for the names: ``s_r`` the
+repeatability, ``s_R = sqrt(s_r^2 + s_L^2)`` the reproducibility, ``s_L^2`` the
+between-"laboratory" part, here between sessions: ``s_L^2 = s_run^2 + s_session^2``).
+
+One session cannot show its own offset: the between-session part ``s_L`` is then a stated
+prior, :data:`SESSION_PRIOR`, calibrated on the shared real repeatability data (Zillen et
+al. 2021, three sessions of one O-ring). From two sessions on, the estimate and the prior are
+pooled as a scaled-inverse-chi-square prior updated by the estimate's degrees of freedom
+(Gelman et al., *Bayesian Data Analysis*, 3rd ed., sec. 3.3 / 5.7):
+
+    s_L^2 = (nu0 P^2 + nu s_hat_L^2) / (nu0 + nu)
+
+so that with many sessions the estimate decides. ``s_L`` is never below the run-to-run part
+the data show (a variance component is not negative), and the session component is what
+``s_L`` adds to it: ``s_session^2 = s_L^2 - s_run^2``.
+
+On a rig that measures one file per pressure per session, the run-to-run component and a
+session-by-pressure interaction cannot be told apart: both are "this run's level is off the
+law". The run component then carries them, and the lack of the law's fit too (a level off a
+straight line is a run off the law); see docs/uncertainty.md.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+__all__ = [
+    "SESSION_PRIOR",
+    "scatter_components",
+    "relative_residuals",
+    "scatter_note",
+]
+
+SESSION_PRIOR: dict[str, Any] = {
+    "std_percent": 14.0,
+    "dof": 8,
+    "basis": (
+        "between-session scatter of a level mean s_L (run and session components together) "
+        "on the shared real repeatability data (Zillen et al. 2021, TU Delft, O-ring of bore "
+        "25.7 mm, three sessions x 1/3/5/7 bar): standard deviations of the three sessions' "
+        "level means 9/12/14/19 % of the level, RMS 14 %, 8 degrees of freedom (3 sessions "
+        "x 4 pressures); leave-one-session-out coverage in docs/uncertainty.md"
+    ),
+}
+"""The stated prior of the between-session scatter of a level mean, relative [%], with its
+degrees of freedom ``nu0`` [-] and basis (docs/uncertainty.md)."""
+
+METHOD = (
+    "linear mixed model, REML (statsmodels MixedLM): relative residuals about the fitted "
+    "law; session random intercept, run variance component, residual = repeatability "
+    "(ISO 5725-2 s_r, s_R)"
+)
+
+MIN_FORCE = 1e-6
+"""Smallest model friction [N] a relative residual is taken at."""
+
+
+def relative_residuals(points: pd.DataFrame, fitted: np.ndarray) -> pd.DataFrame:
+    """The table the mixed model sees: ``r`` [-], ``run`` and ``session`` labels.
+
+    ``fitted`` is the model friction [N] at each point. Points without a run get one run
+    each (no replicate); without a session column, one session ``"1"``.
+    """
+    measured = points["friction [N]"].to_numpy(dtype=float)
+    fitted = np.asarray(fitted, dtype=float)
+    keep = np.isfinite(measured) & np.isfinite(fitted) & (np.abs(fitted) > MIN_FORCE)
+    run = points["run"] if "run" in points else pd.Series(np.arange(len(points)))
+    session = (
+        points["session"]
+        if "session" in points
+        else pd.Series([None] * len(points), index=points.index)
+    )
+    session = session.where(session.notna(), "(none)").astype(str)
+    table = pd.DataFrame(
+        {
+            "r": (measured - fitted) / fitted,
+            "run": run.astype(str).to_numpy(),
+            "session": session.to_numpy(),
+            "fitted": fitted,
+        }
+    )[keep]
+    table["run"] = table["session"] + "/" + table["run"]  # a run is inside its session
+    return table.reset_index(drop=True)
+
+
+def _reml(model):
+    """REML fit of a MixedLM, by the optimisers statsmodels offers in turn (a variance at its
+    zero bound can make the gradient's matrix singular for one and not another)."""
+    error: Exception | None = None
+    for method in ("lbfgs", "powell", "nm"):
+        try:
+            return model.fit(reml=True, method=method)
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            error = exc
+    raise ValueError(f"the mixed model of the scatter could not be fitted ({error})")
+
+
+def _mixed_model(table: pd.DataFrame, sessions: int) -> tuple[float, float, float]:
+    """(s_session^2, s_run^2, s_r^2) [-] of the relative residuals by REML."""
+    from statsmodels.regression.mixed_linear_model import MixedLM
+
+    endog = table["r"].to_numpy()
+    exog = np.ones((len(table), 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # boundary (zero) variances: statsmodels warns
+        if sessions >= 2:
+            groups = table["session"].to_numpy()
+            runs = {  # each session's run indicators (its own runs only)
+                g: pd.get_dummies(table.loc[groups == g, "run"]).to_numpy(dtype=float)
+                for g in pd.unique(groups)
+            }
+            model = MixedLM(
+                endog,
+                exog,
+                groups=groups,
+                exog_re=np.ones((len(table), 1)),
+                exog_vc={"run": runs},
+            )
+            fit = _reml(model)
+            session_var = float(np.asarray(fit.cov_re)[0, 0])
+            run_var = float(fit.vcomp[0]) if len(fit.vcomp) else 0.0
+        else:
+            model = MixedLM(endog, exog, groups=table["run"].to_numpy())
+            fit = _reml(model)
+            session_var, run_var = 0.0, float(np.asarray(fit.cov_re)[0, 0])
+    residual_var = float(fit.scale)
+    values = (max(session_var, 0.0), max(run_var, 0.0), max(residual_var, 0.0))
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError("the mixed model of the scatter did not converge")
+    return values
+
+
+def _component(std, reference, source, dof, **more):
+    return {
+        "std_percent": 100.0 * std,
+        "std_N": std * reference,
+        "source": source,
+        "dof": dof,
+        **more,
+    }
+
+
+def scatter_components(
+    points: pd.DataFrame,
+    fitted: np.ndarray,
+    *,
+    n_parameters: int = 1,
+    prior: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The ``fit.scatter`` record: repeatability, run and session scatter of a fit.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        The points the law was fitted to: ``friction [N]``, ``run`` and, when the campaign
+        says, ``session``.
+    fitted : array
+        The fitted law's friction at each point [N].
+    n_parameters : int
+        Coefficients of the fitted law [-] (the run means' degrees of freedom about it).
+    prior : dict, optional
+        ``std_percent`` [%], ``dof`` [-] and ``basis`` of the between-session scatter;
+        default :data:`SESSION_PRIOR`.
+
+    Returns
+    -------
+    dict
+        ``method``, ``relative``, ``sessions``, ``runs``, ``points``,
+        ``reference_force_N`` [N], ``components`` (``repeatability``, ``run``, ``session``:
+        ``std_percent`` [%], ``std_N`` [N] at the reference force, ``source``, ``dof``),
+        ``reproducibility`` (``std_percent``, ``std_N``): docs/uncertainty.md.
+    """
+    prior = dict(SESSION_PRIOR if prior is None else prior)
+    table = relative_residuals(points, fitted)
+    if len(table) < 3:
+        raise ValueError(f"{len(table)} points are too few for the scatter components")
+    sessions = int(table["session"].nunique())
+    runs = int(table["run"].nunique())
+    reference = float(np.mean(np.abs(table["fitted"])))
+    if runs >= 2:
+        session_var, run_var, repeat_var = _mixed_model(table, sessions)
+        run_source = "estimated"
+    else:
+        session_var, run_var = 0.0, 0.0
+        repeat_var = float(np.var(table["r"], ddof=1))
+        run_source = "not estimable (one run)"
+    repeat_dof = max(len(table) - runs, 1)
+    run_dof = max(runs - sessions - (n_parameters - 1 if sessions == 1 else 0), 1)
+    prior_var = (prior["std_percent"] / 100.0) ** 2
+    nu0 = float(prior["dof"])
+    estimated_session = math.sqrt(session_var) if sessions >= 2 else None
+    if sessions >= 2:
+        # Satterthwaite dof of s_hat_L^2 = s_session^2 + s_run^2 (sessions - 1 and the runs')
+        estimate = session_var + run_var
+        terms = session_var**2 / (sessions - 1) + run_var**2 / run_dof
+        nu = estimate**2 / terms if terms > 0 else float(sessions - 1)
+        between = (nu0 * prior_var + nu * estimate) / (nu0 + nu)
+        between_dof = nu0 + nu
+        source = "estimated+prior"
+    elif runs >= 2:  # one session: its runs' scatter is the part of s_L it can show
+        between = (nu0 * prior_var + run_dof * run_var) / (nu0 + run_dof)
+        between_dof, source = nu0 + run_dof, "prior"
+    else:
+        between, between_dof, source = prior_var, nu0, "prior"
+    between = max(between, run_var)  # s_L never below the run-to-run part the data show
+    session_var = between - run_var
+    repeat, run, session = (math.sqrt(v) for v in (repeat_var, run_var, session_var))
+    reproducibility = math.sqrt(repeat_var + between)
+    return {
+        "method": METHOD,
+        "relative": True,
+        "sessions": sessions,
+        "runs": runs,
+        "points": int(len(table)),
+        "reference_force_N": reference,
+        "components": {
+            "repeatability": _component(repeat, reference, "estimated", repeat_dof),
+            "run": _component(run, reference, run_source, run_dof),
+            "session": _component(
+                session,
+                reference,
+                source,
+                between_dof,
+                prior_percent=float(prior["std_percent"]),
+                prior_dof=nu0,
+                prior_basis=str(prior["basis"]),
+                between_percent=100.0 * math.sqrt(between),
+                estimated_percent=(
+                    None if estimated_session is None else 100.0 * estimated_session
+                ),
+            ),
+        },
+        "reproducibility": {
+            "std_percent": 100.0 * reproducibility,
+            "std_N": reproducibility * reference,
+        },
+    }
+
+
+def scatter_note(record: dict[str, Any]) -> str:
+    """One line for the datasheet's notes: the components and, for a prior, the assumption."""
+    c = record["components"]
+    text = (
+        f"scatter (relative to the friction level, at {record['reference_force_N']:.3g} N): "
+        f"repeatability {c['repeatability']['std_percent']:.3g} %, run-to-run "
+        f"{c['run']['std_percent']:.3g} %, session {c['session']['std_percent']:.3g} % "
+        f"({c['session']['source']}); reproducibility "
+        f"{record['reproducibility']['std_percent']:.3g} % (ISO 5725-2)"
+    )
+    if c["session"]["source"] == "prior":
+        text += (
+            f"; ASSUMPTION: one session cannot show the between-session scatter, taken as "
+            f"{c['session']['prior_percent']:.3g} % of the level in total (prior: "
+            f"{c['session']['prior_basis']}); measure the seal in more sessions to replace it"
+        )
+    return text

@@ -1,0 +1,136 @@
+"""Scatter components, lack of fit and band scopes (issue 22) on synthetic tables with known
+components; the real-data acceptance is tests/test_scatter_real.py."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cylfric.identify import identify
+from cylfric.identify.lack_of_fit import lack_of_fit
+from cylfric.identify.scatter import scatter_components
+from cylfric.model import FrictionModel, validate
+
+
+def _table(seed, sessions=8, runs=6, points=12, s_session=0.10, s_run=0.05, s_r=0.02):
+    """Friction points of level 100 N with relative session, run and point scatter [-]."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for s in range(sessions):
+        b = rng.normal(0, s_session)
+        for k in range(runs):
+            c = rng.normal(0, s_run)
+            for _ in range(points):
+                f = 100.0 * (1 + b + c + rng.normal(0, s_r))
+                rows.append({"session": str(s), "run": s * runs + k, "friction [N]": f})
+    return pd.DataFrame(rows)
+
+
+def test_mixed_model_recovers_known_components():
+    table = _table(seed=3, sessions=12)
+    record = scatter_components(
+        table, np.full(len(table), 100.0), prior={"std_percent": 10.0, "dof": 1, "basis": "test"}
+    )
+    c = record["components"]
+    assert c["repeatability"]["std_percent"] == pytest.approx(2.0, rel=0.1)
+    assert c["run"]["std_percent"] == pytest.approx(5.0, rel=0.3)
+    assert c["session"]["estimated_percent"] == pytest.approx(10.0, rel=0.4)
+    assert c["session"]["source"] == "estimated+prior"
+    assert record["reproducibility"]["std_N"] == pytest.approx(
+        np.sqrt(2**2 + 5**2 + 10**2), rel=0.3
+    )
+
+
+def test_one_session_takes_the_prior():
+    table = _table(seed=1, sessions=1)
+    record = scatter_components(table, np.full(len(table), 100.0))
+    session = record["components"]["session"]
+    assert session["source"] == "prior"
+    assert session["prior_percent"] > 0 and session["prior_basis"]
+
+
+def _points(seed, curved=False, sessions=1, runs_per_level=1):
+    """Points of a one-speed campaign: level 20 + 4 p/bar N (or curved), 4 pressures."""
+    rng = np.random.default_rng(seed)
+    rows, run = [], 0
+    for s in range(sessions):
+        for bar in (10, 30, 50, 70, 90):
+            for _ in range(runs_per_level):
+                level = 20 + 0.4 * bar + (0.004 * (bar - 50) ** 2 if curved else 0.0)
+                level *= 1 + rng.normal(0, 0.01)
+                for d in (1, -1):
+                    for _ in range(8):
+                        rows.append(
+                            {
+                                "velocity [m/s]": 0.01 * d,
+                                "pressure [Pa]": bar * 1e5,
+                                "friction [N]": level * (1 + rng.normal(0, 0.02)),
+                                "direction [-]": d,
+                                "flag": "ok",
+                                "run": run,
+                                "session": str(s),
+                            }
+                        )
+                run += 1
+    return pd.DataFrame(rows)
+
+
+def _identify(points):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return identify(points, sensitivity=False)
+
+
+def test_lack_of_fit_sees_a_curve_and_rarely_a_line():
+    curved = [_identify(_points(seed, curved=True)).model.lack_of_fit for seed in range(3)]
+    assert all(t["significant"] and t["test"] == "pure-error F" for t in curved)
+    alarms = [
+        lack_of_fit(p, rng.normal(0, 1, len(p)), 2)["significant"]
+        for p, rng in ((_points(seed), np.random.default_rng(seed)) for seed in range(20))
+    ]
+    assert sum(alarms) <= 4  # 5 % expected; 4 of 20 has probability < 2 %
+
+
+def test_runs_test_without_replicates():
+    x = np.arange(1.0, 41.0) * 1e5  # 40 pressure levels, one point each [Pa]
+    curve = 1e-12 * (x - 20e5) ** 2 - 1.3  # residuals of a straight law to a parabola [N]
+    points = pd.DataFrame(
+        {"pressure [Pa]": x, "velocity [m/s]": 0.01, "friction [N]": 10 + x / 1e5 + curve}
+    )
+    result = lack_of_fit(points, curve, 2)
+    assert result["test"].startswith("Wald-Wolfowitz") and result["significant"]
+
+
+def test_scopes_ordered_and_round_trip_through_the_datasheet():
+    model = _identify(_points(0, sessions=2, runs_per_level=2)).model
+    v, p = np.full(5, 0.01), np.linspace(10e5, 90e5, 5)
+    widths = [
+        np.subtract(*model.prediction_band(v, p, scope=s)[::-1])
+        for s in ("point", "run", "session")
+    ]
+    assert np.all(widths[0] <= widths[1] + 1e-12) and np.all(widths[1] <= widths[2] + 1e-12)
+    sheet = model.to_datasheet()
+    validate(sheet)
+    assert sheet["fit"]["scatter"]["components"]["session"]["source"] == "estimated+prior"
+    assert "lack_of_fit" in sheet["quality"]
+    back = FrictionModel.from_datasheet(sheet)
+    assert back.scatter == model.scatter and back.lack_of_fit == model.lack_of_fit
+    np.testing.assert_allclose(
+        back.prediction_band(v, p, scope="session"), model.prediction_band(v, p, scope="session")
+    )
+
+
+def test_old_datasheet_loads_and_refuses_the_wider_scopes():
+    model = _identify(_points(1)).model
+    sheet = model.to_datasheet()
+    del sheet["fit"]["scatter"], sheet["quality"]  # a datasheet of an older cylfric
+    old = FrictionModel.from_datasheet(validate(sheet))
+    assert old.scatter is None and old.lack_of_fit is None
+    old.prediction_band(0.01, 5e6)  # scope "point" as before
+    with pytest.raises(ValueError, match="needs the scatter components"):
+        old.prediction_band(0.01, 5e6, scope="session")
+    with pytest.raises(ValueError, match="unknown band scope"):
+        old.prediction_band(0.01, 5e6, scope="day")
