@@ -39,7 +39,7 @@ def _fit(folder, out, **keywords):
 @pytest.fixture(scope="module")
 def zillen(shared_data, tmp_path_factory):
     """The shipped Zillen recipe on the real seal files (one speed per direction: the
-    Stribeck shape is not identified), fitted with its report."""
+    Stribeck shape is not identified), one seal (the O-ring) fitted with its report."""
     folder = tmp_path_factory.mktemp("zillen") / "campaign"
     folder.mkdir()
     for path in (shared_data / "zillen2021-pneumatic-seals").glob("*.csv"):
@@ -52,7 +52,7 @@ def zillen(shared_data, tmp_path_factory):
         return calls[-1]["done"].append
 
     out = folder.parent / "fit"
-    return _fit(folder, out, report=True, step=step), calls
+    return _fit(folder, out, report=True, step=step, seal="O-ring"), calls
 
 
 @pytest.fixture(scope="module")
@@ -290,8 +290,10 @@ def test_the_report_reads_the_records_from_the_model_or_the_datasheet(zillen):
     carrying["fit"] = {**result.datasheet["fit"], "scatter": SCATTER}
     page = render_report(carrying, result.identification, result.extraction, [])
     assert "<h2>Scatter and lack of fit</h2>" in page and "id='lack-of-fit'" in page
-    plain = render_report(result.datasheet, result.identification, result.extraction, [])
-    assert "Scatter and lack of fit" not in plain  # not computed: no empty section
+    fitted = render_report(result.datasheet, result.identification, result.extraction, [])
+    assert "<h2>Scatter and lack of fit</h2>" in fitted  # the fit computes both records
+    assert "session" in result.datasheet["fit"]["scatter"]["components"]
+    assert _records({}, SimpleNamespace()) == (None, None)  # not computed: no section
 
 
 def test_progress_on_the_figures_of_the_fit(zillen):

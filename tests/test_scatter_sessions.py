@@ -10,7 +10,7 @@ from cylfric.steady_state import extract_campaign
 
 def _touch(path):
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("time velocity\n0 1\n")
+    path.write_text(f"# {path}\ntime velocity\n0 1\n")  # distinct bytes: not duplicates
     return path
 
 
@@ -45,8 +45,12 @@ def test_session_from_subfolders_only_when_the_glob_says_so(tmp_path):
 
 
 def test_points_table_has_a_session_column(tmp_path):
-    settings = BenchSettings(pressures_bar=(20, 60), speeds_mm_s=(5.0, 20.0), seed=1)
+    settings = BenchSettings.clean(pressures_bar=(20, 60), speeds_mm_s=(5.0, 20.0), seed=1)
     generate_campaign(tmp_path / "c", settings)
     points = extract_campaign(tmp_path / "c").points
     assert "session" in points
     assert points["session"].isna().all()  # the campaign does not say
+    rough = BenchSettings(pressures_bar=(20, 60), speeds_mm_s=(5.0, 20.0), seed=1, sessions=2)
+    generate_campaign(tmp_path / "r", rough)  # the rough bench's manifest names the session
+    points = extract_campaign(tmp_path / "r").points
+    assert sorted(points["session"].unique()) == ["s1", "s2"]
