@@ -144,6 +144,8 @@ def datasheet_model(
             "sensitivity": {"recommended": ident.recommended},
         },
     }
+    if getattr(ident, "confounding", None) is not None:  # pressure tied to direction/speed
+        record["fit"]["confounding"] = ident.confounding
     source = {
         "campaign": str(campaign or ""),
         "files": [
