@@ -130,6 +130,12 @@ def datasheet_model(
         per_pressure.append(item)
     from datetime import UTC, datetime
 
+    fit_record: dict[str, Any] = {
+        "law_comparison": ident.comparison.to_dict("records"),
+        "sensitivity": {"recommended": ident.recommended},
+    }
+    if getattr(ident, "confounding", None) is not None:  # pressure tied to direction/speed
+        fit_record["confounding"] = ident.confounding
     record = {
         "schema": SCHEMA_ID,
         "cylfric_version": __version__,
@@ -139,13 +145,8 @@ def datasheet_model(
         "offset_std": extraction.offset_std if extraction is not None else None,
         "per_pressure": per_pressure,
         "notes": list(ident.notes),
-        "fit": {
-            "law_comparison": ident.comparison.to_dict("records"),
-            "sensitivity": {"recommended": ident.recommended},
-        },
+        "fit": fit_record,
     }
-    if getattr(ident, "confounding", None) is not None:  # pressure tied to direction/speed
-        record["fit"]["confounding"] = ident.confounding
     source = {
         "campaign": str(campaign or ""),
         "files": [

@@ -75,8 +75,11 @@ def friction_signal(data, config: CampaignConfig, velocity=None) -> np.ndarray:
     pa = data.get("pressure_a [Pa]", data.get("pressure [Pa]"))
     pb = data.get("pressure_b [Pa]", data.get("pressure [Pa]"))
     if config.force_source == "pressures":  # no load cell: the chambers drive the rod
-        needed = [name for name, area, p in (("a", config.area_a, pa), ("b", config.area_b, pb))
-                  if area and p is None]
+        needed = [
+            name
+            for name, area, p in (("a", config.area_a, pa), ("b", config.area_b, pb))
+            if area and p is None
+        ]
         if needed:
             raise ValueError(
                 f"force from the chamber pressures needs a pressure_{needed[0]} column (or one "

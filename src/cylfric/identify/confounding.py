@@ -113,7 +113,9 @@ def pressure_confounding(points) -> Confounding | None:
     of the velocity). Returns None when the question does not arise: a single direction, or
     a pressure that does not vary (no slope to identify).
     """
-    from statsmodels.stats.outliers_influence import variance_inflation_factor
+    from statsmodels.stats.outliers_influence import (  # type: ignore[import-untyped]
+        variance_inflation_factor,
+    )
 
     p = points["pressure [Pa]"].to_numpy(float)
     v = points["velocity [m/s]"].to_numpy(float)

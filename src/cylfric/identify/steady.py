@@ -245,6 +245,8 @@ def _check_per_pressure(per_pressure, fits) -> None:
                 IdentificationWarning,
                 stacklevel=3,
             )
+    if per_pressure.empty:  # no pressure level with enough points (pressures set by a valve)
+        return
     table = per_pressure.sort_values("pressure [Pa]")
     for par in ("F_c", "F_s"):
         values = table[f"{par} [N]"].to_numpy()
@@ -625,7 +627,9 @@ def _mark_confounded(result: Identification, tie: Confounding) -> Identification
         names = slopes(model)
         if not names:
             return model
-        return model.replace(not_identified={**model.not_identified, **dict.fromkeys(names, reason)})
+        return model.replace(
+            not_identified={**model.not_identified, **dict.fromkeys(names, reason)}
+        )
 
     names = slopes(result.model)
     if not names:

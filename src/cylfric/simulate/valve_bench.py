@@ -91,7 +91,7 @@ class ValveRigSettings:
     stroke: float = 0.300  # [m]
     moving_mass: float = 20.0  # [kg]
     supply_pressures_bar: tuple = (100.0,)  # [bar], one per run in turn (seeded shuffle)
-    voltages: tuple = (0.85, 1.0, 1.2, 1.45, 1.7, 2.0, 2.4, 2.8, 3.3, 3.9, 4.6, 5.4)  # [V]
+    voltages: tuple = (1.0, 1.2, 1.4, 1.7, 2.0, 2.3, 2.7, 3.1, 3.6, 4.2)  # [V]
     repeats: int = 2
     full_scale_voltage: float = 10.0  # [V]
     rated_flow: float = 24.0 / 60000  # [m^3/s] at full opening
@@ -315,7 +315,9 @@ def run_valve_test(settings: ValveRigSettings, voltage: float, supply_pressure: 
             "pressure_a [Pa]": float(pa[sel].mean()),
             "pressure_b [Pa]": float(pb[sel].mean()),
         }
-        p = float(operating_pressure(state["pressure_a [Pa]"], state["pressure_b [Pa]"], reference="a"))
+        p = float(
+            operating_pressure(state["pressure_a [Pa]"], state["pressure_b [Pa]"], reference="a")
+        )
         state["friction [N]"] = float(
             abs(s.friction.friction(state["velocity [m/s]"], p, strict=False))
         )
@@ -414,7 +416,13 @@ def generate_valve_campaign(
             [columns],
             header={"Station Name": "teaching-lab valve rig (virtual)", "Test Run Name": name},
             units=units,
-            decimals={"Time": 4, "Position": 4, "Pressure A": 3, "Pressure B": 3, "Valve voltage": 3},
+            decimals={
+                "Time": 4,
+                "Position": 4,
+                "Pressure A": 3,
+                "Pressure B": 3,
+                "Valve voltage": 3,
+            },
         )
         files.append(out / name)
         manifest.append(f"{name},{voltage:g},{supply / 1e5:g}")
