@@ -136,6 +136,12 @@ def datasheet_model(
         per_pressure.append(item)
     from datetime import UTC, datetime
 
+    fit_record: dict[str, Any] = {
+        "law_comparison": ident.comparison.to_dict("records"),
+        "sensitivity": {"recommended": ident.recommended},
+    }
+    if getattr(ident, "confounding", None) is not None:  # pressure tied to direction/speed
+        fit_record["confounding"] = ident.confounding
     record = {
         "schema": SCHEMA_ID,
         "cylfric_version": __version__,
@@ -145,10 +151,7 @@ def datasheet_model(
         "offset_std": extraction.offset_std if extraction is not None else None,
         "per_pressure": per_pressure,
         "notes": list(ident.notes),
-        "fit": {
-            "law_comparison": ident.comparison.to_dict("records"),
-            "sensitivity": {"recommended": ident.recommended},
-        },
+        "fit": fit_record,
     }
     earlier = dict(model.record)  # what the identification recorded: scatter, lack of fit
     if "scatter" in earlier.get("fit", {}):

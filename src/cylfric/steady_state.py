@@ -69,16 +69,33 @@ see: the chamber pressures combined by the campaign's pressure reference
 def friction_signal(data, config: CampaignConfig, velocity=None) -> np.ndarray:
     """``F_f sign(v)`` plus the weight offset, from eq. 3.1 [N].
 
-    ``data`` is a DataFrame or a dict of arrays. Uses ``force [N]``, the pressure columns
+    ``data`` is a DataFrame or a dict of arrays. Uses ``force [N]`` (none with
+    ``config.force_source == "pressures"``: a rig without a load cell), the pressure columns
     (``pressure_a``/``pressure_b``, or ``pressure`` for both chambers) with the areas of
     ``config``, and the inertia term when
     ``config.moving_mass`` > 0 (``velocity`` [m/s] then needed).
     """
-    if "force [N]" not in data:
-        raise ValueError(f"no force column; found {list(data)}")
-    signal = config.load_cell_sign * np.asarray(data["force [N]"])
     pa = data.get("pressure_a [Pa]", data.get("pressure [Pa]"))
     pb = data.get("pressure_b [Pa]", data.get("pressure [Pa]"))
+    if config.force_source == "pressures":  # no load cell: the chambers drive the rod
+        needed = [
+            name
+            for name, area, p in (("a", config.area_a, pa), ("b", config.area_b, pb))
+            if area and p is None
+        ]
+        if needed:
+            raise ValueError(
+                f"force from the chamber pressures needs a pressure_{needed[0]} column (or one "
+                f"pressure column for both chambers); found {list(data)}"
+            )
+        signal = np.zeros(len(np.asarray(data["time [s]"])))
+    elif "force [N]" not in data:
+        raise ValueError(
+            f"no force column; found {list(data)} (a rig without a load cell: "
+            '[force_balance] force = "pressures" in campaign.toml)'
+        )
+    else:
+        signal = config.load_cell_sign * np.asarray(data["force [N]"])
     if config.area_a and pa is not None:
         signal = signal + config.area_a * np.asarray(pa)
     if config.area_b and pb is not None:
@@ -184,6 +201,8 @@ def find_windows(
     method="auto",
     skip_start=10,
     skip_end=10,
+    settle_sigma=3.0,
+    settle_force_tolerance=0.005,
     return_components=False,
 ):
     """Constant-velocity windows of each stroke.
@@ -210,6 +229,14 @@ def find_windows(
         (end-of-stroke cushioning).
     median_window : int
         Samples of the rolling median [-].
+    settle_sigma, settle_force_tolerance : float
+        Force settling at the start of each window (a start-up transient: the pressures of a
+        valve-driven axis build up after the speed has settled): the window starts once a
+        rolling mean of the force (over a twentieth of the window) has entered and stays
+        within max(settle_sigma * its own spread over the window's second half,
+        settle_force_tolerance * |final level|) of the final level, the median of the second
+        half (the settling time of IEC 60050-351-45-24: the time after which the response
+        stays within a stated band around its final value) [-].
     method : {"auto", "fixed-index"}
         ``"fixed-index"`` is the thesis rule: drop ``skip_start`` samples at the start and
         ``skip_end`` at the end of each stroke (10, 10: with two strokes, 20 around the
@@ -255,6 +282,13 @@ def find_windows(
                 _Window(k, d, a + start, a + stop, "unsettled" if stop == start else "short_window")
             )
             continue
+        start += _settling_start(
+            force[a + start : a + stop],
+            median_window,
+            settle_sigma,
+            settle_force_tolerance,
+            min_samples,
+        )
         start, stop = _trim_by_force(
             force[a + start : a + stop], trim_sigma, trim_floor, median_window, a + start
         )
@@ -273,6 +307,37 @@ def _longest_true(mask):
     starts, stops = edges[::2], edges[1::2]
     i = int(np.argmax(stops - starts))
     return int(starts[i]), int(stops[i])
+
+
+def _settling_start(force, median_window, sigma, tolerance, min_samples):
+    """Samples at the start of a window before the force has settled [-].
+
+    The final level is the median of the window's second half; the force has settled from
+    the first sample after which a rolling mean (a twentieth of the window) stays within the
+    band max(sigma * the rolling mean's robust spread over the second half, tolerance *
+    |final level|). Only the first half is ever cut: a stroke whose force changes along its
+    travel keeps at least half its window.
+    """
+    n = len(force)
+    if n < 4 * max(min_samples, 1) or sigma <= 0:
+        return 0
+    from ._filters import rolling_mean, rolling_median
+
+    w = max(median_window, n // 20) | 1
+    median = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
+    residual = force - median
+    noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
+    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, median, force) if noise > 0 else force
+    mean = rolling_mean(clean, w)
+    half = n // 2
+    final = float(np.median(clean[half:]))
+    tail = mean[half:]
+    spread = max(1.4826 * float(np.median(np.abs(tail - np.median(tail)))), noise / math.sqrt(w))
+    band = max(sigma * spread, tolerance * abs(final))
+    outside = np.flatnonzero(np.abs(mean[:half] - final) > band)
+    if not outside.size:
+        return 0
+    return min(int(outside[-1]) + 1 + w // 2, half)
 
 
 SPIKE_SIGMA = 5.0
@@ -329,7 +394,8 @@ def extract_points(
     """
     config = config or CampaignConfig()
     rows = _offset_rows(
-        _point_rows(data, metadata, config, run, extraction_options(config, options))
+        _point_rows(data, metadata, config, run, extraction_options(config, options)),
+        config=config,
     )
     import pandas as pd
 
@@ -416,7 +482,10 @@ def _point_rows(data, metadata, config, run, options):
             "no position or velocity column; expected one named "
             "Displacement/Position/Weg or Velocity",
         )
-    force = friction_signal(data, config, velocity)
+    try:
+        force = friction_signal(data, config, velocity)
+    except ValueError as exc:
+        raise BenchFileError(file, str(exc)) from None
     position = (
         config.position_sign * np.asarray(data["position [m]"]) if "position [m]" in data else None
     )
@@ -480,11 +549,20 @@ def _point_rows(data, metadata, config, run, options):
     return rows
 
 
-def _offset_rows(rows, campaign_offset=None):
-    """Set the run offset (F_up + F_down)/2 and the friction magnitude of every row."""
+def _offset_rows(rows, campaign_offset=None, config=None):
+    """Set the run offset (F_up + F_down)/2 and the friction magnitude of every row.
+
+    A rig without a load cell (``config.force_source == "pressures"``) has no weight offset
+    to remove: its offset is 0 N. (F_up + F_down)/2 would also take away the real asymmetry
+    of its friction: on a valve-driven axis the two directions run at different pressures.
+    """
+    if config is not None and config.force_source == "pressures":
+        campaign_offset, rows_up_down = 0.0, False
+    else:
+        rows_up_down = True
     up = [r["force [N]"] for r in rows if r["flag"] == "ok" and r["direction [-]"] > 0]
     down = [r["force [N]"] for r in rows if r["flag"] == "ok" and r["direction [-]"] < 0]
-    if up and down:
+    if up and down and rows_up_down:
         offset = 0.5 * (float(np.mean(up)) + float(np.mean(down)))
     elif campaign_offset is not None:
         offset = campaign_offset
@@ -591,7 +669,9 @@ def start_extraction(
         info = infos[index]
         try:
             data, metadata = read_run(info, config)
-            rows = _offset_rows(_point_rows(data, metadata, config, index, dict(options)))
+            rows = _offset_rows(
+                _point_rows(data, metadata, config, index, dict(options)), config=config
+            )
         except BenchFileError as exc:
             return None, None, exc
         summary = {

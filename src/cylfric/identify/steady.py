@@ -24,6 +24,7 @@ from ..friction.laws import viscous
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..levels import pressure_levels
 from ..model import PARAMETER_BOUNDS, FrictionModel
+from .confounding import Confounding, pressure_confounding
 from .linear_fit import fit_linear_surface
 from .pressure_fit import (
     FITTED_LAWS,
@@ -144,6 +145,10 @@ class Identification:
         ``"extension"``/``"retraction"`` -> Identification.
     notes : list of str
         Warnings raised on the way, in words, for the report.
+    confounding : dict or None
+        The datasheet's ``fit.confounding`` record when the pressure is tied to the direction
+        or the speed (:mod:`cylfric.identify.confounding`); its pressure slopes are then in
+        ``model.not_identified`` with the reason. None otherwise.
     """
 
     model: FrictionModel
@@ -164,6 +169,7 @@ class Identification:
     sensitivity_refits: list | None = None
     directions: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    confounding: dict | None = None
 
     def summary(self) -> pd.DataFrame:
         """Pressure laws in engineering units: parameter, coefficient, value, stderr, unit."""
@@ -239,6 +245,8 @@ def _check_per_pressure(per_pressure, fits) -> None:
                 IdentificationWarning,
                 stacklevel=3,
             )
+    if per_pressure.empty:  # no pressure level with enough points (pressures set by a valve)
+        return
     table = per_pressure.sort_values("pressure [Pa]")
     for par in ("F_c", "F_s"):
         values = table[f"{par} [N]"].to_numpy()
@@ -575,6 +583,9 @@ def identify(
         )
         if sensitivity and shape:
             result = add_sensitivity(result)
+    tie = pressure_confounding(used)
+    if tie is not None and tie.confounded:
+        result = _mark_confounded(result, tie)
     result = with_uncertainty(result)
     if per_direction and "direction [-]" in used:
         if "offset [N]" in used:  # points of steady_state.extract_campaign
@@ -632,6 +643,51 @@ def with_uncertainty(ident: Identification) -> Identification:
                 + test["action"]
             )
     return replace(ident, model=model.replace(record=record), notes=notes)
+
+
+def _mark_confounded(result: Identification, tie: Confounding) -> Identification:
+    """Mark the pressure slopes of ``result``'s models not identified, with the reason.
+
+    The fitted law stays: it reproduces each direction's friction at its own pressures and
+    speeds (the identifiable combination), and the datasheet says its slopes are not
+    identified instead of giving them as numbers with small standard errors.
+    """
+    reason = tie.reason()
+
+    def slopes(model):
+        names = []
+        for par in PRESSURE_DEPENDENT:
+            spec = model.coefficients()[par]
+            if isinstance(spec, dict) and spec.get("law", model.pressure_law) != "constant":
+                names += [f"{par}.{k}" for k in spec if k not in ("intercept", "law")]
+        return names
+
+    def marked(model):
+        names = slopes(model)
+        if not names:
+            return model
+        return model.replace(
+            not_identified={**model.not_identified, **dict.fromkeys(names, reason)}
+        )
+
+    names = slopes(result.model)
+    if not names:
+        return result
+    message = (
+        f"{reason}; the datasheet marks {', '.join(names)} not identified: the fitted law "
+        "gives each direction's friction at its own pressures, not how friction changes with "
+        "pressure (vary the pressure within each direction, e.g. with a counter-pressure or "
+        "several supply pressures, to identify it)"
+    )
+    warnings.warn(message, IdentificationWarning, stacklevel=3)
+    return replace(
+        result,
+        model=marked(result.model),
+        models={law: marked(m) for law, m in result.models.items()},
+        directions=dict(result.directions),
+        notes=[*result.notes, message],
+        confounding=tie.record(names),
+    )
 
 
 def add_sensitivity(ident: Identification) -> Identification:

@@ -123,6 +123,11 @@ class CampaignConfig:
         +1 if the position column grows on extension.
     moving_mass : float
         Rod, piston and load-cell mass for the inertia term [kg] (0: neglected).
+    force_source : {"load_cell", "pressures"}
+        Where the force balance takes the force from: ``"load_cell"`` (a force column,
+        plus the chamber terms when areas are given) or ``"pressures"`` (a rig without a load
+        cell: ``A_a p_a - A_b p_b - m x''`` only, no force column needed and no weight
+        offset removed).
     extraction : dict
         Keyword options for :func:`cylfric.steady_state.extract_points`.
     roles : dict
@@ -146,6 +151,7 @@ class CampaignConfig:
     load_cell_sign: float = 1.0
     position_sign: float = 1.0
     moving_mass: float = 0.0
+    force_source: str = "load_cell"
     extraction: dict = field(default_factory=dict)
     source: str | None = None
     roles: dict = field(default_factory=dict)
@@ -271,7 +277,8 @@ def load_config(folder) -> CampaignConfig:
     ``pressure_reference`` = ``"a"``, ``"b"``, ``"sum"``, ``"mean"`` or ``"max"``: the
     pressure the laws see; a single-acting cylinder's is its working chamber A, a
     double-acting one's defaults to ``"mean"``), ``[force_balance]``
-    (``load_cell_sign``, ``position_sign``, ``moving_mass``), ``[extraction]`` and ``[oil]``
+    (``load_cell_sign``, ``position_sign``, ``moving_mass``, ``force`` = ``"load_cell"`` or
+    ``"pressures"``), ``[extraction]`` and ``[oil]``
     (``viscosity_40C``, ``viscosity_100C``, ``reference_temperature``, ``temperature``).
     Values with units are strings such as ``"25 mm"``, ``"46 mm2/s"``, ``"40 degC"``.
     """
@@ -351,6 +358,14 @@ def load_config(folder) -> CampaignConfig:
             'e.g. moving_mass = "12 kg"',
             line=_line_of(path, "moving_mass"),
         )
+    force_source = fb.get("force", "load_cell")
+    if force_source == "pressures" and not (area_a or area_b):
+        raise BenchFileError(
+            path,
+            'force_balance.force = "pressures" needs the piston areas: give [cylinder] bore, '
+            'rod and kind (e.g. bore = "40 mm", rod = "25 mm", kind = "single-rod")',
+            line=_line_of(path, "force"),
+        )
     return CampaignConfig(
         glob=files.get("glob", "*"),
         name_pattern=files.get("name_pattern"),
@@ -363,6 +378,7 @@ def load_config(folder) -> CampaignConfig:
         load_cell_sign=float(fb.get("load_cell_sign", 1)),
         position_sign=float(fb.get("position_sign", 1)),
         moving_mass=moving_mass,
+        force_source=force_source,
         extraction=dict(doc.get("extraction", {})),
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
@@ -422,6 +438,9 @@ def _oil(table: dict, path: Path) -> OilSettings:
 
 
 _QUANTITY_TEXT = {"type": "string", "minLength": 1}
+FORCE_SOURCES = ("load_cell", "pressures")
+"""Values of ``[force_balance] force``: a load-cell column, or the chamber pressures times the
+areas (a rig without a load cell, such as a valve-driven axis)."""
 ROLES = ("time", "position", "force", "pressure", "pressure_a", "pressure_b", "velocity")
 """Quantities a ``[columns]`` key can assign to a named column (``force = "Axial Force"``)."""
 CONFIG_SCHEMA = {
@@ -464,6 +483,7 @@ CONFIG_SCHEMA = {
                 "load_cell_sign": {"enum": [1, -1]},
                 "position_sign": {"enum": [1, -1]},
                 "moving_mass": _QUANTITY_TEXT,
+                "force": {"enum": list(FORCE_SOURCES)},
             },
         },
         "extraction": {
@@ -483,6 +503,8 @@ CONFIG_SCHEMA = {
                         "settle_tolerance",
                         "trim_sigma",
                         "spike_sigma",
+                        "settle_sigma",
+                        "settle_force_tolerance",
                         "velocity_window",
                     )
                 },
