@@ -55,7 +55,9 @@ def test_seed_1_loses_no_run_and_run_008_keeps_both_strokes(seed1, tmp_path):
     run = points[points["file"].str.endswith("run_008_p55bar_v2mms.txt")]
     assert sorted(run["direction [-]"]) == [-1, 1]
     assert list(run["flag"]) == ["ok", "ok"]
-    assert (run["spikes [-]"] >= 1).all()  # the spikes are rejected, and counted
+    # the spikes inside a window are rejected, and counted (the one at 36.3 s lies in the
+    # start-up transient the force-settling criterion leaves out: issue 22)
+    assert run["spikes [-]"].sum() >= 1
     # the bench's truth at 55 bar and 2 mm/s is about 138 N (friction of both directions)
     assert_allclose = np.testing.assert_allclose
     assert_allclose(run["friction [N]"], 137.95, atol=0.5)

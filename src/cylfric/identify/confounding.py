@@ -9,8 +9,9 @@ standard error in a model without a direction term.
 The criterion is the variance inflation factor of the pressure in the design
 ``[1, p, direction, |v|]`` (Kutner, Nachtsheim, Neter & Li, *Applied Linear Statistical
 Models*, 5th ed., 2005, sec. 10.5: a VIF above 10 signals multicollinearity that makes a
-coefficient's estimate unreliable; computed by
-:func:`statsmodels.stats.outliers_influence.variance_inflation_factor`). ``VIF = 1/(1 - R^2)``
+coefficient's estimate unreliable; computed as
+:func:`statsmodels.stats.outliers_influence.variance_inflation_factor` defines it, with
+numpy: importing statsmodels would load scipy.stats into every fit). ``VIF = 1/(1 - R^2)``
 of the pressure regressed on the other columns, so the slope's standard error with a
 direction (and speed) term beside it is ``sqrt(VIF)`` times the one without; with the two
 directions at disjoint pressures and no spread within a direction it is infinite.
@@ -32,7 +33,7 @@ VIF_LIMIT = 10.0
 CRITERION = (
     "variance inflation factor of the pressure in the design [1, p, direction, |v|] above "
     f"{VIF_LIMIT:g} (Kutner et al., Applied Linear Statistical Models, 2005, sec. 10.5; "
-    "statsmodels variance_inflation_factor)"
+    "VIF = 1/(1 - R^2) of p on the other columns)"
 )
 
 
@@ -113,10 +114,6 @@ def pressure_confounding(points) -> Confounding | None:
     of the velocity). Returns None when the question does not arise: a single direction, or
     a pressure that does not vary (no slope to identify).
     """
-    from statsmodels.stats.outliers_influence import (
-        variance_inflation_factor,
-    )
-
     p = points["pressure [Pa]"].to_numpy(float)
     v = points["velocity [m/s]"].to_numpy(float)
     d = points["direction [-]"].to_numpy(float) if "direction [-]" in points else np.sign(v)
@@ -128,11 +125,8 @@ def pressure_confounding(points) -> Confounding | None:
     columns = [np.ones_like(p), (p - p.mean()) / p.std(), d]
     if np.ptp(speed) > 0:
         columns.append((speed - speed.mean()) / speed.std())
-    exog = np.column_stack(columns)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        vif = float(variance_inflation_factor(exog, 1))
-    if not math.isfinite(vif) or vif < 0:
-        vif = math.inf
+    r2 = _r2(columns[1], np.column_stack(columns[2:]))
+    vif = 1.0 / (1.0 - r2) if r2 < 1.0 - 1e-12 else math.inf
     r2_direction = _r2(p, d)
     r2_speed = _r2(p, speed) if np.ptp(speed) > 0 else 0.0
     by_direction = {

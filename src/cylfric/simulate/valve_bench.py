@@ -43,6 +43,7 @@ from numba import njit
 from ..friction.pressure import operating_pressure
 from ..io.writers import atomic_write_text, write_mts_text
 from ..model import FrictionModel
+from .kernels import g_function
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
@@ -210,7 +211,7 @@ def _valve_kernel(
         F_s = F_s0 + F_s1 * p_op
         s_2 = s_0 + s_1 * p_op
         speed = abs(v)
-        g = F_c + (F_s - F_c) * math.exp(-((speed / v_r) ** alpha))
+        g = g_function(speed, F_c, F_s, v_r, alpha)  # eq. 2.5
         th = math.tanh(v / v_eps)
         f = (g + s_2 * speed) * th
         if k % every == 0:
