@@ -371,6 +371,7 @@ glob = "*.txt"
 bore = "{bore_mm:g} mm"
 rod = "{rod_mm:g} mm"
 kind = "{kind}"
+pressure_reference = "a"  # the pressure the friction laws see: chamber A (the rig's truth)
 
 [force_balance]
 force = "pressures"
