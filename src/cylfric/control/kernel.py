@@ -49,11 +49,13 @@ direction, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N]
 sample time [s]."""
 
 
-def friction_table(model, *, level: float = 1.0, slope: float = 1.0) -> np.ndarray:
+def friction_table(model, *, level: float = 1.0, slope: float = 1.0,
+                   offset: float = 0.0) -> np.ndarray:
     """The (7, 4) table of a :class:`~cylfric.model.FrictionModel` (see the module notes).
 
     ``level`` scales F_c, F_s and sigma_2 at every pressure [-]; ``slope`` scales their
-    pressure dependence only (the coefficients beyond the intercept) [-].
+    pressure dependence only (the coefficients beyond the intercept) [-]; ``offset`` [N] is
+    added to F_c and F_s at every pressure.
     """
     coefficients = model.coefficients()
     table = np.zeros((len(FRICTION_ROWS), 4))
@@ -74,6 +76,8 @@ def friction_table(model, *, level: float = 1.0, slope: float = 1.0) -> np.ndarr
             values[1:] = [v * slope for v in values[1:]]
         if name in ("F_c", "F_s", "sigma_2") and law == "exponential":
             values[1] *= slope
+        if name in ("F_c", "F_s"):
+            values[0] += offset
         table[row, 0] = LAW_CODES[law]
         table[row, 1 : 1 + len(values)] = values
     return table

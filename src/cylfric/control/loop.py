@@ -146,12 +146,13 @@ def read_reference(path: StrPath, axis: Axis = DEFAULT_AXIS) -> Reference:
 @dataclass(frozen=True)
 class PlantFriction:
     """How the plant's friction differs from the datasheet: ``level`` scales F_c, F_s,
-    sigma_2 [-], ``slope`` their pressure dependence [-], ``model`` replaces the datasheet
-    (another session's fit); ``name`` labels the case."""
+    sigma_2 [-], ``slope`` their pressure dependence [-], ``offset`` [N] shifts F_c and F_s,
+    ``model`` replaces the datasheet (another session's fit); ``name`` labels the case."""
 
     name: str = "datasheet"
     level: float = 1.0
     slope: float = 1.0
+    offset: float = 0.0
     model: Any = None
 
 
@@ -220,7 +221,7 @@ def simulate_loop(model: FrictionModel, compensator: str = "none", *, axis: Axis
     plant_model = plant.model if plant.model is not None else model
     outputs = closed_loop(
         axis.vector(),
-        friction_table(plant_model, level=plant.level, slope=plant.slope),
+        friction_table(plant_model, level=plant.level, slope=plant.slope, offset=plant.offset),
         REFERENCE_CODES[plant_model.reference],
         friction_table(model), REFERENCE_CODES[model.reference],
         COMPENSATOR_CODES[compensator],
