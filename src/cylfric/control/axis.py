@@ -159,8 +159,9 @@ class Axis:
     """Position x at t = 0 [m] (mid-stroke by default)."""
     control_rate: float = 1000.0
     """Controller sample rate [Hz]."""
-    substeps: int = 50
-    """Integration steps of the plant per controller sample [-]."""
+    substeps: int = 10
+    """Integration steps of the plant per controller sample [-] (10 at 1 kHz: 100 us, where
+    the demo loop's RMS error agrees with 50 substeps to 1e-4 relative)."""
 
     def __post_init__(self) -> None:
         positive = ("bore", "stroke", "dead_volume_a", "dead_volume_b", "mass", "bulk_modulus",

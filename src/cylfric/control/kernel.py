@@ -43,10 +43,11 @@ OUTPUTS = ("position [m]", "velocity [m/s]", "pressure_a [Pa]", "pressure_b [Pa]
 
 # the controller vector: indices
 CTRL = ("kp", "ki", "kd", "feedforward", "reserved_1", "smoothing_velocity", "observer_gain",
-        "coulomb_force", "reserved", "sample_time")
-"""Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward [s/m] per
-direction, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], unused,
-sample time [s]."""
+        "coulomb_force", "command_offset", "sample_time")
+"""Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
+(0), unused, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a constant command
+offset [-] (valve null bias; open-loop tests), sample time [s]. ``feedforward`` 0 switches
+the velocity feedforward off."""
 
 
 def friction_table(model, *, level: float = 1.0, slope: float = 1.0,
@@ -231,7 +232,7 @@ def closed_loop(ax, plant, plant_ref, model, model_ref, compensator, ctrl, x_ref
             rate = (comp - f_prev) / T
             u_c = rate / force_rate_gain(1.0 if rate >= 0 else -1.0, x, pa, pb, ax)
         f_prev = comp
-        u = ff + u_fb + u_c
+        u = ff + u_fb + u_c + ctrl[8]
         if u > 1.0:
             u = 1.0
         elif u < -1.0:
