@@ -33,8 +33,19 @@ def _open_loop(axis, state0, *, offset=0.0, seconds=1.0):
     n = int(seconds * axis.control_rate) + 1
     ctrl = np.array([0, 0, 0, 0, 0, 1e-3, 0, 0, offset, axis.sample_time], dtype=float)
     x = np.full(n, axis.start_position)
-    return closed_loop(axis.vector(), NO_FRICTION, 3, NO_FRICTION, 3, COMPENSATOR_CODES["none"],
-                       ctrl, x, np.zeros(n), axis.substeps, state0)
+    return closed_loop(
+        axis.vector(),
+        NO_FRICTION,
+        3,
+        NO_FRICTION,
+        3,
+        COMPENSATOR_CODES["none"],
+        ctrl,
+        x,
+        np.zeros(n),
+        axis.substeps,
+        state0,
+    )
 
 
 def test_natural_frequency_matches_merritt():
@@ -60,8 +71,12 @@ def test_steady_flow_through_the_valve():
     opening = 0.3
     out = _open_loop(axis, rest_state(axis), offset=opening, seconds=0.3)
     speed = out[-50:, 1].mean()
-    closed_form = axis.valve_coefficient * opening * math.sqrt(
-        (axis.supply_pressure - axis.tank_pressure) / 2) / axis.area_a
+    closed_form = (
+        axis.valve_coefficient
+        * opening
+        * math.sqrt((axis.supply_pressure - axis.tank_pressure) / 2)
+        / axis.area_a
+    )
     assert_allclose(speed, closed_form, rtol=1e-3)
     assert_allclose(axis.no_load_velocity_gain()[0] * opening, closed_form, rtol=1e-12)
 
@@ -98,11 +113,11 @@ def test_substeps_converge():
     model = FrictionModel()
     ref = make_reference("sine", DEFAULT_AXIS, duration=3.0)
     tuning = tune(DEFAULT_AXIS, 380.0)
-    fine = simulate_loop(model, "lugre", reference=ref, tuning=tuning,
-                         axis=DEFAULT_AXIS.replace(substeps=50))
+    fine = simulate_loop(
+        model, "lugre", reference=ref, tuning=tuning, axis=DEFAULT_AXIS.replace(substeps=50)
+    )
     coarse = simulate_loop(model, "lugre", reference=ref, tuning=tuning)
-    assert_allclose(np.sqrt(np.mean(coarse.error**2)), np.sqrt(np.mean(fine.error**2)),
-                    rtol=1e-3)
+    assert_allclose(np.sqrt(np.mean(coarse.error**2)), np.sqrt(np.mean(fine.error**2)), rtol=1e-3)
 
 
 def test_steps_give_steady_state_and_hunting_metrics(tmp_path):
@@ -116,14 +131,20 @@ def test_steps_give_steady_state_and_hunting_metrics(tmp_path):
     doc = json.loads((tmp_path / "out" / "metrics.json").read_text())
     assert doc["controller"]["loop_gain_1_s"] == pytest.approx(result.tuning.loop_gain_1_s)
     assert set(doc["compensators"]) == set(result.metrics)
-    assert {p.name for p in written} == {"metrics.json", "timeseries.csv", "error.png",
-                                         "control.html"}
+    assert {p.name for p in written} == {
+        "metrics.json",
+        "timeseries.csv",
+        "error.png",
+        "control.html",
+    }
 
 
 def test_axis_toml_units_and_errors(tmp_path):
     good = tmp_path / "axis.toml"
-    good.write_text('[axis]\nbore = "63 mm"\ndead_volume_a = "0.2 L"\n'
-                    'valve_nominal_flow = "40 L/min"\nspool_frequency = "80 Hz"\nmass = 120\n')
+    good.write_text(
+        '[axis]\nbore = "63 mm"\ndead_volume_a = "0.2 L"\n'
+        'valve_nominal_flow = "40 L/min"\nspool_frequency = "80 Hz"\nmass = 120\n'
+    )
     axis = load_axis(good)
     assert axis.bore == pytest.approx(0.063)
     assert axis.dead_volume_a == pytest.approx(2e-4)
@@ -132,7 +153,7 @@ def test_axis_toml_units_and_errors(tmp_path):
     bad.write_text('[axis]\nbore = "40 mm"\nstroke = "2 L"\n')
     with pytest.raises(AxisError, match=r"bad.toml, line 3: axis.stroke"):
         load_axis(bad)
-    bad.write_text('[axis]\nboar = 0.04\n')
+    bad.write_text("[axis]\nboar = 0.04\n")
     with pytest.raises(AxisError, match=r"line 2: unknown key axis.boar"):
         load_axis(bad)
     bad.write_text('[axis]\nrod = "50 mm"\n')
@@ -156,7 +177,8 @@ def test_cli_control_errors_exit_2(tmp_path):
     from cylfric.cli import app
 
     runner = CliRunner()
-    done = runner.invoke(app, ["control", str(tmp_path / "none.json"), "--out",
-                               str(tmp_path / "out")])
+    done = runner.invoke(
+        app, ["control", str(tmp_path / "none.json"), "--out", str(tmp_path / "out")]
+    )
     assert done.exit_code == 2
     assert "not found" in done.output

@@ -74,10 +74,20 @@ AXIS_KEYS: dict[str, tuple[str, str]] = {
 # units the shared table (cylfric.units) has no dimension for
 _LOCAL_UNITS = {
     "volume": {"m3": 1.0, "l": 1e-3, "L": 1e-3, "dm3": 1e-3, "cm3": 1e-6, "mm3": 1e-9},
-    "flow": {"m3/s": 1.0, "l/min": 1e-3 / 60, "L/min": 1e-3 / 60, "l/s": 1e-3, "L/s": 1e-3,
-             "cm3/s": 1e-6},
-    "conductance": {"m3/(s*Pa)": 1.0, "m3/s/Pa": 1.0, "l/min/bar": 1e-3 / 60 / 1e5,
-                    "L/min/bar": 1e-3 / 60 / 1e5},
+    "flow": {
+        "m3/s": 1.0,
+        "l/min": 1e-3 / 60,
+        "L/min": 1e-3 / 60,
+        "l/s": 1e-3,
+        "L/s": 1e-3,
+        "cm3/s": 1e-6,
+    },
+    "conductance": {
+        "m3/(s*Pa)": 1.0,
+        "m3/s/Pa": 1.0,
+        "l/min/bar": 1e-3 / 60 / 1e5,
+        "L/min/bar": 1e-3 / 60 / 1e5,
+    },
     "frequency": {"Hz": 1.0, "hz": 1.0, "kHz": 1e3, "khz": 1e3},
     "dimensionless": {"": 1.0, "-": 1.0},
 }
@@ -164,10 +174,22 @@ class Axis:
     the demo loop's RMS error agrees with 50 substeps to 1e-4 relative)."""
 
     def __post_init__(self) -> None:
-        positive = ("bore", "stroke", "dead_volume_a", "dead_volume_b", "mass", "bulk_modulus",
-                    "supply_pressure", "valve_nominal_flow", "valve_nominal_drop",
-                    "valve_laminar_drop", "spool_time_constant", "spool_frequency",
-                    "spool_damping", "control_rate")
+        positive = (
+            "bore",
+            "stroke",
+            "dead_volume_a",
+            "dead_volume_b",
+            "mass",
+            "bulk_modulus",
+            "supply_pressure",
+            "valve_nominal_flow",
+            "valve_nominal_drop",
+            "valve_laminar_drop",
+            "spool_time_constant",
+            "spool_frequency",
+            "spool_damping",
+            "control_rate",
+        )
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -175,8 +197,9 @@ class Axis:
         for name in ("rod", "rod_a"):
             value = getattr(self, name)
             if not (0 <= value < self.bore):
-                raise AxisError(f"axis {name} = {value!r} m; expected 0 <= {name} < bore "
-                                f"{self.bore} m")
+                raise AxisError(
+                    f"axis {name} = {value!r} m; expected 0 <= {name} < bore {self.bore} m"
+                )
         if not (0 <= self.leakage < 1e-6):
             raise AxisError(f"axis leakage = {self.leakage!r}; expected 0 <= C_i < 1e-6 m^3/(s*Pa)")
         if not (0 <= self.tank_pressure < self.supply_pressure):
@@ -184,8 +207,10 @@ class Axis:
         if self.spool_order not in (1, 2):
             raise AxisError(f"axis spool_order = {self.spool_order!r}; expected 1 or 2")
         if not (0 < self.start_position < self.stroke):
-            raise AxisError(f"axis start_position = {self.start_position!r} m; expected inside "
-                            f"(0, stroke = {self.stroke} m)")
+            raise AxisError(
+                f"axis start_position = {self.start_position!r} m; expected inside "
+                f"(0, stroke = {self.stroke} m)"
+            )
         if not (isinstance(self.substeps, int) and 1 <= self.substeps <= 10000):
             raise AxisError(f"axis substeps = {self.substeps!r}; expected an integer 1..10000")
         if not math.isfinite(self.load_force):
@@ -214,8 +239,10 @@ class Axis:
 
     def volumes(self, position: float) -> tuple[float, float]:
         """Chamber volumes (V_A, V_B) [m^3] at ``position`` x [m]."""
-        return (self.dead_volume_a + self.area_a * position,
-                self.dead_volume_b + self.area_b * (self.stroke - position))
+        return (
+            self.dead_volume_a + self.area_a * position,
+            self.dead_volume_b + self.area_b * (self.stroke - position),
+        )
 
     def hydraulic_stiffness(self, position: float | None = None) -> float:
         """Oil-spring stiffness ``beta (A_A^2/V_A + A_B^2/V_B)`` [N/m] at ``position`` [m]."""
@@ -259,8 +286,12 @@ class Axis:
 
     def vector(self) -> np.ndarray:
         """The parameters as the compiled loop's array (order of :data:`_VECTOR`)."""
-        values = {**asdict(self), "area_a": self.area_a, "area_b": self.area_b,
-                  "valve_coefficient": self.valve_coefficient}
+        values = {
+            **asdict(self),
+            "area_a": self.area_a,
+            "area_b": self.area_b,
+            "valve_coefficient": self.valve_coefficient,
+        }
         values["spool_omega"] = 2 * math.pi * self.spool_frequency
         return np.array([float(values[k]) for k in _VECTOR])
 
@@ -273,10 +304,25 @@ class Axis:
         return asdict(self)
 
 
-_VECTOR = ("area_a", "area_b", "stroke", "dead_volume_a", "dead_volume_b", "mass",
-           "bulk_modulus", "leakage", "supply_pressure", "tank_pressure", "valve_coefficient",
-           "valve_laminar_drop", "spool_order", "spool_time_constant", "spool_omega",
-           "spool_damping", "load_force")
+_VECTOR = (
+    "area_a",
+    "area_b",
+    "stroke",
+    "dead_volume_a",
+    "dead_volume_b",
+    "mass",
+    "bulk_modulus",
+    "leakage",
+    "supply_pressure",
+    "tank_pressure",
+    "valve_coefficient",
+    "valve_laminar_drop",
+    "spool_order",
+    "spool_time_constant",
+    "spool_omega",
+    "spool_damping",
+    "load_force",
+)
 """Order of :meth:`Axis.vector` (the compiled loop reads it by index)."""
 
 DEFAULT_AXIS = Axis()

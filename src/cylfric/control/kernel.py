@@ -23,8 +23,18 @@ from numba import njit
 
 from ..simulate.kernels import g_function, z_step
 
-__all__ = ["closed_loop", "friction_table", "FRICTION_ROWS", "LAW_CODES", "REFERENCE_CODES",
-           "COMPENSATOR_CODES", "OUTPUTS", "params_at", "operating_pressure", "force_rate_gain"]
+__all__ = [
+    "closed_loop",
+    "friction_table",
+    "FRICTION_ROWS",
+    "LAW_CODES",
+    "REFERENCE_CODES",
+    "COMPENSATOR_CODES",
+    "OUTPUTS",
+    "params_at",
+    "operating_pressure",
+    "force_rate_gain",
+]
 
 FRICTION_ROWS = ("F_c", "F_s", "sigma_2", "v_r", "alpha", "sigma_0", "sigma_1")
 LAW_CODES = {"constant": 0, "linear": 1, "quadratic": 2, "exponential": 3}
@@ -36,22 +46,41 @@ _LAW_KEYS = {
 }
 REFERENCE_CODES = {"a": 0, "b": 1, "sum": 2, "mean": 3, "max": 4}
 COMPENSATOR_CODES = {"none": 0, "coulomb": 1, "static": 2, "lugre": 3, "oracle": 4}
-OUTPUTS = ("position [m]", "velocity [m/s]", "pressure_a [Pa]", "pressure_b [Pa]",
-           "command [-]", "spool [-]", "friction [N]", "compensation [N]", "z [m]",
-           "z_hat [m]")
+OUTPUTS = (
+    "position [m]",
+    "velocity [m/s]",
+    "pressure_a [Pa]",
+    "pressure_b [Pa]",
+    "command [-]",
+    "spool [-]",
+    "friction [N]",
+    "compensation [N]",
+    "z [m]",
+    "z_hat [m]",
+)
 """Columns of the output array of :func:`closed_loop` (one row per controller sample)."""
 
 # the controller vector: indices
-CTRL = ("kp", "ki", "kd", "feedforward", "reserved_1", "smoothing_velocity", "observer_gain",
-        "coulomb_force", "command_offset", "sample_time")
+CTRL = (
+    "kp",
+    "ki",
+    "kd",
+    "feedforward",
+    "reserved_1",
+    "smoothing_velocity",
+    "observer_gain",
+    "coulomb_force",
+    "command_offset",
+    "sample_time",
+)
 """Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
-(0), unused, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a constant command
-offset [-] (valve null bias; open-loop tests), sample time [s]. ``feedforward`` 0 switches
-the velocity feedforward off."""
+(0), unused, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
+constant command offset [-] (valve null bias; open-loop tests), sample time [s]."""
 
 
-def friction_table(model, *, level: float = 1.0, slope: float = 1.0,
-                   offset: float = 0.0) -> np.ndarray:
+def friction_table(
+    model, *, level: float = 1.0, slope: float = 1.0, offset: float = 0.0
+) -> np.ndarray:
     """The (7, 4) table of a :class:`~cylfric.model.FrictionModel` (see the module notes).
 
     ``level`` scales F_c, F_s and sigma_2 at every pressure [-]; ``slope`` scales their
@@ -172,8 +201,9 @@ def velocity_gain(direction, pa, pb, ax):
 
 
 @njit(cache=True)
-def closed_loop(ax, plant, plant_ref, model, model_ref, compensator, ctrl, x_ref, v_ref,
-                substeps, state0):
+def closed_loop(
+    ax, plant, plant_ref, model, model_ref, compensator, ctrl, x_ref, v_ref, substeps, state0
+):
     """Simulate the loop over the reference samples; returns (n, len(OUTPUTS)) outputs.
 
     ``ax`` is :meth:`Axis.vector`, ``plant`` and ``model`` friction tables (the plant's
@@ -185,7 +215,7 @@ def closed_loop(ax, plant, plant_ref, model, model_ref, compensator, ctrl, x_ref
     aa, ab, stroke, va0, vb0, mass = ax[0], ax[1], ax[2], ax[3], ax[4], ax[5]
     beta, leak, ps, pt, kv, lam = ax[6], ax[7], ax[8], ax[9], ax[10], ax[11]
     order, tau, wv, zv, fload = ax[12], ax[13], ax[14], ax[15], ax[16]
-    kp, ki, kd, ff_ext, ff_ret = ctrl[0], ctrl[1], ctrl[2], ctrl[3], ctrl[4]
+    kp, ki, kd, ff_ext = ctrl[0], ctrl[1], ctrl[2], ctrl[3]
     vs, kobs, fcoul, T = ctrl[5], ctrl[6], ctrl[7], ctrl[9]
     n = x_ref.shape[0]
     out = np.empty((n, 10))

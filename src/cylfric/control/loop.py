@@ -54,9 +54,18 @@ if TYPE_CHECKING:
     from cylfric._typing import StrPath
     from cylfric.model import FrictionModel
 
-__all__ = ["COMPENSATORS", "REFERENCES", "Reference", "LoopRun", "make_reference",
-           "read_reference", "simulate_loop", "SMOOTHING_VELOCITY", "OBSERVER_GAIN",
-           "PlantFriction"]
+__all__ = [
+    "COMPENSATORS",
+    "REFERENCES",
+    "Reference",
+    "LoopRun",
+    "make_reference",
+    "read_reference",
+    "simulate_loop",
+    "SMOOTHING_VELOCITY",
+    "OBSERVER_GAIN",
+    "PlantFriction",
+]
 
 COMPENSATORS = tuple(COMPENSATOR_CODES)
 REFERENCES = ("sine", "steps", "ramp")
@@ -77,8 +86,14 @@ class Reference:
     name: str
 
 
-def make_reference(name: str, axis: Axis = DEFAULT_AXIS, *, duration: float = 10.0,
-                   amplitude: float = 5e-3, period: float = 5.0) -> Reference:
+def make_reference(
+    name: str,
+    axis: Axis = DEFAULT_AXIS,
+    *,
+    duration: float = 10.0,
+    amplitude: float = 5e-3,
+    period: float = 5.0,
+) -> Reference:
     """A built-in reference from the axis's start position.
 
     ``sine``: ``x0 + A (1 - cos(2 pi t / P))`` (starts at rest; peak speed ``2 pi A / P``:
@@ -118,8 +133,10 @@ def read_reference(path: StrPath, axis: Axis = DEFAULT_AXIS) -> Reference:
     header = [h.strip() for h in rows[0]]
     scales = {"position [m]": 1.0, "position [mm]": 1e-3}
     if "time [s]" not in header or not any(h in scales for h in header):
-        raise ValueError(f"{path}, line 1: expected columns 'time [s]' and 'position [m]' "
-                         f"(or 'position [mm]'), found {header}")
+        raise ValueError(
+            f"{path}, line 1: expected columns 'time [s]' and 'position [m]' "
+            f"(or 'position [mm]'), found {header}"
+        )
     it = header.index("time [s]")
     name = next(h for h in header if h in scales)
     ip = header.index(name)
@@ -194,21 +211,44 @@ def rest_state(axis: Axis) -> np.ndarray:
     return np.array([axis.start_position, 0.0, pa, pb, 0.0])
 
 
-def controller_vector(axis: Axis, tuning: Tuning, model: FrictionModel, *,
-                      smoothing_velocity: float = SMOOTHING_VELOCITY,
-                      observer_gain: float = OBSERVER_GAIN) -> np.ndarray:
+def controller_vector(
+    axis: Axis,
+    tuning: Tuning,
+    model: FrictionModel,
+    *,
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> np.ndarray:
     """The compiled loop's controller vector (``kernel.CTRL``)."""
     pa, pb = axis.rest_pressures()
     coulomb = float(model.params_at(float(model.operating_pressure(pa, pb)))["F_c"])
-    return np.array([tuning.kp, tuning.ki, tuning.kd, 1.0, 1.0,
-                     smoothing_velocity, observer_gain, coulomb, 0.0, axis.sample_time])
+    return np.array(
+        [
+            tuning.kp,
+            tuning.ki,
+            tuning.kd,
+            1.0,
+            1.0,
+            smoothing_velocity,
+            observer_gain,
+            coulomb,
+            0.0,
+            axis.sample_time,
+        ]
+    )
 
 
-def simulate_loop(model: FrictionModel, compensator: str = "none", *, axis: Axis = DEFAULT_AXIS,
-                  reference: Reference | str = "sine", tuning: Tuning | None = None,
-                  plant: PlantFriction | None = None,
-                  smoothing_velocity: float = SMOOTHING_VELOCITY,
-                  observer_gain: float = OBSERVER_GAIN) -> LoopRun:
+def simulate_loop(
+    model: FrictionModel,
+    compensator: str = "none",
+    *,
+    axis: Axis = DEFAULT_AXIS,
+    reference: Reference | str = "sine",
+    tuning: Tuning | None = None,
+    plant: PlantFriction | None = None,
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> LoopRun:
     """Run the loop with one compensator; the compensator always uses ``model`` (the
     datasheet), the plant ``plant`` (default: the datasheet itself)."""
     if compensator not in COMPENSATOR_CODES:
@@ -223,12 +263,16 @@ def simulate_loop(model: FrictionModel, compensator: str = "none", *, axis: Axis
         axis.vector(),
         friction_table(plant_model, level=plant.level, slope=plant.slope, offset=plant.offset),
         REFERENCE_CODES[plant_model.reference],
-        friction_table(model), REFERENCE_CODES[model.reference],
+        friction_table(model),
+        REFERENCE_CODES[model.reference],
         COMPENSATOR_CODES[compensator],
-        controller_vector(axis, tuning, model, smoothing_velocity=smoothing_velocity,
-                          observer_gain=observer_gain),
-        np.ascontiguousarray(reference.position), np.ascontiguousarray(reference.velocity),
-        axis.substeps, rest_state(axis),
+        controller_vector(
+            axis, tuning, model, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+        ),
+        np.ascontiguousarray(reference.position),
+        np.ascontiguousarray(reference.velocity),
+        axis.substeps,
+        rest_state(axis),
     )
     return LoopRun(compensator, reference, outputs, tuning, plant)
 

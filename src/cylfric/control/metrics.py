@@ -35,8 +35,13 @@ def _reversals(velocity: np.ndarray) -> np.ndarray:
     return moving[1:][s[1:] != s[:-1]]
 
 
-def tracking_metrics(time: np.ndarray, reference: np.ndarray, ref_velocity: np.ndarray,
-                     position: np.ndarray, command: np.ndarray) -> dict:
+def tracking_metrics(
+    time: np.ndarray,
+    reference: np.ndarray,
+    ref_velocity: np.ndarray,
+    position: np.ndarray,
+    command: np.ndarray,
+) -> dict:
     """The metrics (see the module notes) of one run sampled at ``time`` [s]."""
     error = reference - position
     dt = float(time[1] - time[0])

@@ -38,16 +38,23 @@ if TYPE_CHECKING:
 __all__ = ["ControlResult", "compare_compensators", "ROBUSTNESS_CASES", "robustness_cases"]
 
 
-def robustness_cases(model: FrictionModel, *, scatter: FrictionModel | None = None,
-                     ) -> list[PlantFriction]:
+def robustness_cases(
+    model: FrictionModel,
+    *,
+    scatter: FrictionModel | None = None,
+) -> list[PlantFriction]:
     """The plants the datasheet is wrong about: +-20 % friction level, half and double the
     pressure slope, a session at the upper edge of the datasheet's scatter (F_c and F_s
     raised by twice the fit's residual standard deviation, the 95 % prediction band of the
     points), and (when given) another session's datasheet as the plant."""
-    cases = [PlantFriction("level +20 %", level=1.2), PlantFriction("level -20 %", level=0.8),
-             PlantFriction("pressure slope x2", slope=2.0),
-             PlantFriction("pressure slope x0.5", slope=0.5)]
-    residual = (model.statistics or {}).get("residual_std")
+    cases = [
+        PlantFriction("level +20 %", level=1.2),
+        PlantFriction("level -20 %", level=0.8),
+        PlantFriction("pressure slope x2", slope=2.0),
+        PlantFriction("pressure slope x0.5", slope=0.5),
+    ]
+    statistics: dict = dict(model.statistics or {})
+    residual = statistics.get("residual_std")
     if residual:
         cases.append(PlantFriction("session scatter +2 s", offset=2.0 * float(residual)))
     if scatter is not None:
@@ -55,8 +62,14 @@ def robustness_cases(model: FrictionModel, *, scatter: FrictionModel | None = No
     return cases
 
 
-ROBUSTNESS_CASES = ("level +20 %", "level -20 %", "pressure slope x2", "pressure slope x0.5",
-                    "session scatter +2 s", "other session")
+ROBUSTNESS_CASES = (
+    "level +20 %",
+    "level -20 %",
+    "pressure slope x2",
+    "pressure slope x0.5",
+    "session scatter +2 s",
+    "other session",
+)
 
 
 @dataclass
@@ -93,8 +106,11 @@ class ControlResult:
             "reference": self.reference.name,
             "axis": self.axis.to_dict(),
             "omega_h_rad_s": self.axis.natural_frequency(),
-            "controller": {**self.tuning.to_dict(), "sign_smoothing_m_s": SMOOTHING_VELOCITY,
-                           "observer_gain_1_s": OBSERVER_GAIN},
+            "controller": {
+                **self.tuning.to_dict(),
+                "sign_smoothing_m_s": SMOOTHING_VELOCITY,
+                "observer_gain_1_s": OBSERVER_GAIN,
+            },
             "compensators": self.metrics,
             "ratios": self.ratios(),
             "robustness": {
@@ -107,14 +123,18 @@ class ControlResult:
         """Time series of every compensator, side by side (units in the names)."""
         import pandas as pd
 
-        frames = []
+        frames: list[pd.DataFrame] = []
         for name, run in self.runs.items():
             frame = run.to_pandas()
             if frames:
-                frame = frame.drop(columns=["time [s]", "reference [m]",
-                                            "reference velocity [m/s]"])
-            frames.append(frame.rename(columns=lambda c, n=name: c if c.startswith(
-                ("time", "reference")) else f"{n} {c}"))
+                frame = frame.drop(
+                    columns=["time [s]", "reference [m]", "reference velocity [m/s]"]
+                )
+            names = {
+                c: c if c.startswith(("time", "reference")) else f"{name} {c}"
+                for c in frame.columns
+            }
+            frames.append(frame.rename(columns=names))
         return pd.concat(frames, axis=1)
 
     def figure(self):
@@ -140,9 +160,10 @@ class ControlResult:
 
         out = Path(out)
         make_folder(out)
-        written = [atomic_write_text(out / "metrics.json",
-                                     json.dumps(self.to_dict(), indent=2) + "\n"),
-                   atomic_write_text(out / "timeseries.csv", self.to_pandas().to_csv(index=False))]
+        written = [
+            atomic_write_text(out / "metrics.json", json.dumps(self.to_dict(), indent=2) + "\n"),
+            atomic_write_text(out / "timeseries.csv", self.to_pandas().to_csv(index=False)),
+        ]
         buffer = io.BytesIO()
         self.figure().savefig(buffer, format="png", dpi=100)
         png = buffer.getvalue()
@@ -155,8 +176,9 @@ class ControlResult:
         for name, m in self.metrics.items():
             cells = [m["rms_error_m"], m["max_error_m"], m["reversal_error_m"]]
             text = "".join(f"<td>{'-' if c is None else f'{c * 1e6:.2f}'}</td>" for c in cells)
-            rows.append(f"<tr><td>{html_text(name)}</td>{text}"
-                        f"<td>{m['control_effort_rms']:.4f}</td></tr>")
+            rows.append(
+                f"<tr><td>{html_text(name)}</td>{text}<td>{m['control_effort_rms']:.4f}</td></tr>"
+            )
         image = base64.b64encode(png).decode()
         title = html_text(self.datasheet or "datasheet")
         return (
@@ -168,36 +190,57 @@ class ControlResult:
             f"omega_h = {self.axis.natural_frequency():.1f} rad/s.</p>"
             "<table border='1'><tr><th>compensator</th><th>RMS error [µm]</th>"
             "<th>max error [µm]</th><th>reversal error [µm]</th><th>command RMS [-]</th></tr>"
-            + "".join(rows) + "</table>"
+            + "".join(rows)
+            + "</table>"
             f"<img alt='tracking error' src='data:image/png;base64,{image}'>"
             "</body></html>\n"
         )
 
 
 def _metrics(run: LoopRun) -> dict:
-    return tracking_metrics(run.time, run.reference.position, run.reference.velocity,
-                            run.outputs[:, 0], run.outputs[:, 4])
+    return tracking_metrics(
+        run.time,
+        run.reference.position,
+        run.reference.velocity,
+        run.outputs[:, 0],
+        run.outputs[:, 4],
+    )
 
 
-def compare_compensators(model: FrictionModel, *, axis: Axis = DEFAULT_AXIS,
-                         reference: Reference | str = "sine", robustness: bool = True,
-                         scatter: FrictionModel | None = None,
-                         tuning: Tuning | None = None) -> ControlResult:
+def compare_compensators(
+    model: FrictionModel,
+    *,
+    axis: Axis = DEFAULT_AXIS,
+    reference: Reference | str = "sine",
+    robustness: bool = True,
+    scatter: FrictionModel | None = None,
+    tuning: Tuning | None = None,
+) -> ControlResult:
     """Run every compensator (:data:`~.loop.COMPENSATORS`) on ``axis`` with ``reference``;
     with ``robustness``, again on the plants of :func:`robustness_cases`."""
     if isinstance(reference, str):
         reference = make_reference(reference, axis)
     tuning = tuning or tune(axis, viscous=_rest_viscous(model, axis))
-    runs = {c: simulate_loop(model, c, axis=axis, reference=reference, tuning=tuning)
-            for c in COMPENSATORS}
-    result = ControlResult(axis, reference, tuning, runs,
-                           {c: _metrics(r) for c, r in runs.items()},
-                           datasheet=getattr(model, "source", None))
+    runs = {
+        c: simulate_loop(model, c, axis=axis, reference=reference, tuning=tuning)
+        for c in COMPENSATORS
+    }
+    result = ControlResult(
+        axis,
+        reference,
+        tuning,
+        runs,
+        {c: _metrics(r) for c, r in runs.items()},
+        datasheet=getattr(model, "source", None),
+    )
     if robustness:
         for case in robustness_cases(model, scatter=scatter):
             result.robustness[case.name] = {
-                c: _metrics(simulate_loop(model, c, axis=axis, reference=reference,
-                                          tuning=tuning, plant=case))
+                c: _metrics(
+                    simulate_loop(
+                        model, c, axis=axis, reference=reference, tuning=tuning, plant=case
+                    )
+                )
                 for c in COMPENSATORS
             }
     return result

@@ -9,8 +9,9 @@ phase is -180 deg (the Nyquist point); the tuning uses ``K_p = K_u / 2`` (6 dB g
 the margin Jelali & Kroll 2003 sec. 6.2 and Merritt sec. 8.3 recommend for hydraulic
 position loops, whose limit is ``K_v < 2 zeta_h omega_h``). The integral time is ``T_i =
 10 / omega_c``, omega_c the gain crossover of the P loop at half its critical gain (the
-integral's phase lag at the crossover is then 5.7 deg), and ``K_u`` is computed with that integral action in the loop, so the
-margin holds for the controller used, not for a P controller alone.
+integral's phase lag at the crossover is then 5.7 deg), and ``K_u`` is computed with that
+integral action in the loop, so the margin holds for the controller used, not for a P
+controller alone.
 """
 
 from __future__ import annotations
@@ -69,8 +70,18 @@ def linear_model(axis: Axis, viscous: float = 0.0) -> tuple[np.ndarray, np.ndarr
     bb = np.zeros(n)
     a[0, 1] = 1.0
     a[1, 1], a[1, 2], a[1, 3] = -viscous / m, axis.area_a / m, -axis.area_b / m
-    a[2, 1], a[2, 2], a[2, 3], a[2, 4] = -b * axis.area_a / va, -b * c / va, b * c / va, b * kqa / va
-    a[3, 1], a[3, 2], a[3, 3], a[3, 4] = b * axis.area_b / vb, b * c / vb, -b * c / vb, -b * kqb / vb
+    a[2, 1], a[2, 2], a[2, 3], a[2, 4] = (
+        -b * axis.area_a / va,
+        -b * c / va,
+        b * c / va,
+        b * kqa / va,
+    )
+    a[3, 1], a[3, 2], a[3, 3], a[3, 4] = (
+        b * axis.area_b / vb,
+        b * c / vb,
+        -b * c / vb,
+        -b * kqb / vb,
+    )
     if axis.spool_order == 1:
         a[4, 4] = -1.0 / axis.spool_time_constant
         bb[4] = 1.0 / axis.spool_time_constant
@@ -134,9 +145,15 @@ def tune(axis: Axis, viscous: float = 0.0, *, points: int = 4000) -> Tuning:
     pm = 180.0 + math.degrees(np.unwrap(np.angle(loop))[i])
     v_gain = 0.5 * sum(axis.no_load_velocity_gain())
     return Tuning(
-        kp=float(kp), ki=float(kp / ti), kd=0.0, loop_gain_1_s=float(kp * v_gain),
-        critical_kp=float(ku), gain_margin_db=float(20 * math.log10(ku / kp)),
-        phase_crossover_rad_s=float(w180), gain_crossover_rad_s=float(wc),
-        phase_margin_deg=float(pm), omega_h_rad_s=axis.natural_frequency(),
+        kp=float(kp),
+        ki=float(kp / ti),
+        kd=0.0,
+        loop_gain_1_s=float(kp * v_gain),
+        critical_kp=float(ku),
+        gain_margin_db=float(20 * math.log10(ku / kp)),
+        phase_crossover_rad_s=float(w180),
+        gain_crossover_rad_s=float(wc),
+        phase_margin_deg=float(pm),
+        omega_h_rad_s=axis.natural_frequency(),
         method="critical gain of the PI loop (T_i = 10/omega_c), K_p = K_u/2 (6 dB margin)",
     )
