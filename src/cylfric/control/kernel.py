@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..simulate.kernels import g_function, z_step
+from ..simulate.kernels import g_function, lugre_instant, z_step
 
 __all__ = [
     "closed_loop",
@@ -249,8 +249,7 @@ def closed_loop(
             fc, fs, s2, v_r, al, s0, s1 = params_at(model, p_meas)
             z_hat, _ = z_step(z_hat, v_meas, T, s0, fc, fs, v_r, al)
             z_hat += kobs * err * T
-            g = g_function(abs(v_meas), fc, fs, v_r, al)
-            comp = s0 * z_hat + s1 * (v_meas - s0 * abs(v_meas) * z_hat / g) + s2 * v_meas
+            comp = lugre_instant(v_meas, z_hat, s0, s1, s2, fc, fs, v_r, al)
         else:
             comp = friction
         ff = 0.0
@@ -285,8 +284,7 @@ def closed_loop(
         for _ in range(substeps):
             po = operating_pressure(plant_ref, pa, pb)
             fc, fs, s2, v_r, al, s0, s1 = params_at(plant, po)
-            g = g_function(abs(v), fc, fs, v_r, al)
-            friction = s0 * z + s1 * (v - s0 * abs(v) * z / g) + s2 * v
+            friction = lugre_instant(v, z, s0, s1, s2, fc, fs, v_r, al)
             force = aa * pa - ab * pb - friction - fload
             v_new = v + h * force / mass
             z, _ = z_step(z, 0.5 * (v + v_new), h, s0, fc, fs, v_r, al)
@@ -309,6 +307,5 @@ def closed_loop(
                 s, sd = -1.0, 0.0
         po = operating_pressure(plant_ref, pa, pb)
         fc, fs, s2, v_r, al, s0, s1 = params_at(plant, po)
-        g = g_function(abs(v), fc, fs, v_r, al)
-        friction = s0 * z + s1 * (v - s0 * abs(v) * z / g) + s2 * v
+        friction = lugre_instant(v, z, s0, s1, s2, fc, fs, v_r, al)
     return out
