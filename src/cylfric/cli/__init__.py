@@ -8,8 +8,8 @@ bar, mm/s, s, kg, N/m as each option's help says.
 
 :mod:`.common` holds the app, the consoles and :func:`~.common.guarded`; :mod:`.fit`
 (``fit``, ``demo``, ``show``), :mod:`.bench` (``generate``, ``simulate``), :mod:`.catalog`,
-:mod:`.drift`, :mod:`.export`, :mod:`.many` (``fit-many``), :mod:`.motion` (``fit-motion``)
-and :mod:`.plan` add their commands. A command module imports only typer, rich and
+:mod:`.drift`, :mod:`.export`, :mod:`.many` (``fit-many``), :mod:`.motion` (``fit-motion``),
+:mod:`.plan` and :mod:`.control` add their commands. A command module imports only typer, rich and
 :mod:`.common` at the top and the library inside its command bodies, so ``cylfric
 --version`` stays fast.
 """
@@ -29,10 +29,10 @@ from . import fit  # noqa: F401
 from . import bench  # noqa: F401
 
 # isort: split
-from . import catalog, drift, export, many, motion, plan
+from . import catalog, control, drift, export, many, motion, plan
 from .fit import run_fit
 
-for _module in (drift, export, catalog, many, motion, plan):
+for _module in (drift, export, catalog, many, motion, plan, control):
     _module.register(app)
 
 

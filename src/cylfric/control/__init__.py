@@ -1,0 +1,1 @@
+"""Friction compensation in the servo loop (issue 25): axis, controllers, loop, metrics."""

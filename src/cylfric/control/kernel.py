@@ -1,0 +1,311 @@
+"""The compiled closed loop: axis (:mod:`.axis`), PID with feedforward, compensators.
+
+One function, :func:`closed_loop`, runs a whole simulation: the plant integrated at a fixed
+inner step ``h = T / substeps`` (semi-implicit Euler for the load: the velocity first, the
+position and the pressures with the new velocity; the bristle deflection z by the exact
+update of thesis eq. 2.5 at constant velocity (``simulate.kernels.z_step``), stable for any
+sigma_0; the spool of a first-order valve by its exact step), the controller at the sample
+instants ``k T`` with a zero-order hold on its command.
+
+The friction parameters come as a (7, 4) table, one row per parameter of
+:data:`FRICTION_ROWS`: ``[law code, c0, c1, c2]`` with the codes of :data:`LAW_CODES`
+(constant c0; linear c0 + c1 p; quadratic c0 + c1 p + c2 p^2; exponential c0 + c1 (exp(c2 p)
+- 1)), evaluated at the operating pressure of (p_A, p_B) by the rule code of
+:data:`REFERENCE_CODES`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..simulate.kernels import g_function, lugre_instant, z_step
+
+__all__ = [
+    "closed_loop",
+    "friction_table",
+    "FRICTION_ROWS",
+    "LAW_CODES",
+    "REFERENCE_CODES",
+    "COMPENSATOR_CODES",
+    "OUTPUTS",
+    "params_at",
+    "operating_pressure",
+    "force_rate_gain",
+]
+
+FRICTION_ROWS = ("F_c", "F_s", "sigma_2", "v_r", "alpha", "sigma_0", "sigma_1")
+LAW_CODES = {"constant": 0, "linear": 1, "quadratic": 2, "exponential": 3}
+_LAW_KEYS = {
+    "constant": ("intercept",),
+    "linear": ("intercept", "slope"),
+    "quadratic": ("intercept", "slope", "curvature"),
+    "exponential": ("intercept", "amplitude", "rate"),
+}
+REFERENCE_CODES = {"a": 0, "b": 1, "sum": 2, "mean": 3, "max": 4}
+COMPENSATOR_CODES = {"none": 0, "coulomb": 1, "static": 2, "lugre": 3, "oracle": 4}
+OUTPUTS = (
+    "position [m]",
+    "velocity [m/s]",
+    "pressure_a [Pa]",
+    "pressure_b [Pa]",
+    "command [-]",
+    "spool [-]",
+    "friction [N]",
+    "compensation [N]",
+    "z [m]",
+    "z_hat [m]",
+)
+"""Columns of the output array of :func:`closed_loop` (one row per controller sample)."""
+
+# the controller vector: indices
+CTRL = (
+    "kp",
+    "ki",
+    "kd",
+    "feedforward",
+    "reserved_1",
+    "smoothing_velocity",
+    "observer_gain",
+    "coulomb_force",
+    "command_offset",
+    "sample_time",
+)
+"""Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
+(0), unused, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
+constant command offset [-] (valve null bias; open-loop tests), sample time [s]."""
+
+
+def friction_table(
+    model, *, level: float = 1.0, slope: float = 1.0, offset: float = 0.0
+) -> np.ndarray:
+    """The (7, 4) table of a :class:`~cylfric.model.FrictionModel` (see the module notes).
+
+    ``level`` scales F_c, F_s and sigma_2 at every pressure [-]; ``slope`` scales their
+    pressure dependence only (the coefficients beyond the intercept) [-]; ``offset`` [N] is
+    added to F_c and F_s at every pressure.
+    """
+    coefficients = model.coefficients()
+    table = np.zeros((len(FRICTION_ROWS), 4))
+    defaults = {"F_s": coefficients.get("F_c"), "sigma_2": 0.0, "v_r": 1.0, "alpha": 1.0}
+    for row, name in enumerate(FRICTION_ROWS):
+        spec = coefficients.get(name)
+        if spec is None:
+            spec = defaults[name]
+        if isinstance(spec, dict):
+            law = spec.get("law", model.laws.get(name, model.pressure_law))
+            keys = _LAW_KEYS[law]
+            values = [float(spec[k]) for k in keys]
+        else:
+            law, values = "constant", [float(spec)]
+        scale = level if name in ("F_c", "F_s", "sigma_2") else 1.0
+        values = [v * scale for v in values]
+        if name in ("F_c", "F_s", "sigma_2") and law in ("linear", "quadratic"):
+            values[1:] = [v * slope for v in values[1:]]
+        if name in ("F_c", "F_s", "sigma_2") and law == "exponential":
+            values[1] *= slope
+        if name in ("F_c", "F_s"):
+            values[0] += offset
+        table[row, 0] = LAW_CODES[law]
+        table[row, 1 : 1 + len(values)] = values
+    return table
+
+
+@njit(cache=True, inline="always")
+def _law(table, row, p):
+    code = table[row, 0]
+    c0, c1, c2 = table[row, 1], table[row, 2], table[row, 3]
+    if code == 0:
+        return c0
+    if code == 1:
+        return c0 + c1 * p
+    if code == 2:
+        return c0 + p * (c1 + c2 * p)
+    return c0 + c1 * math.expm1(c2 * p)
+
+
+@njit(cache=True, inline="always")
+def operating_pressure(code, pa, pb):
+    """The pressure the laws see [Pa] (rule code of REFERENCE_CODES)."""
+    if code == 0:
+        return pa
+    if code == 1:
+        return pb
+    if code == 2:
+        return pa + pb
+    if code == 3:
+        return 0.5 * (pa + pb)
+    return max(pa, pb)
+
+
+@njit(cache=True, inline="always")
+def params_at(table, p):
+    """(F_c, F_s, sigma_2, v_r, alpha, sigma_0, sigma_1) at pressure p, kept physical."""
+    fc = max(_law(table, 0, p), 1e-9)
+    fs = max(_law(table, 1, p), 1e-9)
+    s2 = max(_law(table, 2, p), 0.0)
+    vr = max(_law(table, 3, p), 1e-12)
+    al = max(_law(table, 4, p), 1e-3)
+    s0 = max(_law(table, 5, p), 1e-9)
+    s1 = max(_law(table, 6, p), 0.0)
+    return fc, fs, s2, vr, al, s0, s1
+
+
+@njit(cache=True, inline="always")
+def _root(dp, laminar):
+    """sign(dp) sqrt(|dp|), linear below ``laminar`` [sqrt(Pa)]."""
+    a = abs(dp)
+    if a < laminar:
+        return dp / math.sqrt(laminar)
+    return math.sqrt(a) if dp > 0 else -math.sqrt(a)
+
+
+@njit(cache=True, inline="always")
+def valve_flows(s, pa, pb, ps, pt, k, laminar):
+    """Flows (Q_A, Q_B) into the chambers [m^3/s] at spool opening s [-]."""
+    if s >= 0.0:
+        return k * s * _root(ps - pa, laminar), -k * s * _root(pb - pt, laminar)
+    return k * s * _root(pa - pt, laminar), -k * s * _root(ps - pb, laminar)
+
+
+@njit(cache=True, inline="always")
+def force_rate_gain(direction, x, pa, pb, ax):
+    """d(A_A p_A - A_B p_B)/dt per unit of spool opening [N/s] in ``direction`` (+-1)."""
+    aa, ab, stroke, va0, vb0 = ax[0], ax[1], ax[2], ax[3], ax[4]
+    beta, ps, pt, k, lam = ax[6], ax[8], ax[9], ax[10], ax[11]
+    va = va0 + aa * x
+    vb = vb0 + ab * (stroke - x)
+    floor = math.sqrt(lam)
+    if direction >= 0:
+        ka = k * max(_root(ps - pa, lam), floor)
+        kb = k * max(_root(pb - pt, lam), floor)
+    else:
+        ka = k * max(_root(pa - pt, lam), floor)
+        kb = k * max(_root(ps - pb, lam), floor)
+    return beta * (aa * ka / va + ab * kb / vb)
+
+
+@njit(cache=True, inline="always")
+def velocity_gain(direction, pa, pb, ax):
+    """Piston speed per unit opening [m/s] at the pressures: the mean of the two chambers'
+    ``K r(dp) / A`` in ``direction`` (+-1)."""
+    aa, ab, ps, pt, k, lam = ax[0], ax[1], ax[8], ax[9], ax[10], ax[11]
+    floor = math.sqrt(lam)
+    if direction >= 0:
+        ra, rb = max(_root(ps - pa, lam), floor), max(_root(pb - pt, lam), floor)
+    else:
+        ra, rb = max(_root(pa - pt, lam), floor), max(_root(ps - pb, lam), floor)
+    return 0.5 * k * (ra / aa + rb / ab)
+
+
+@njit(cache=True)
+def closed_loop(
+    ax, plant, plant_ref, model, model_ref, compensator, ctrl, x_ref, v_ref, substeps, state0
+):
+    """Simulate the loop over the reference samples; returns (n, len(OUTPUTS)) outputs.
+
+    ``ax`` is :meth:`Axis.vector`, ``plant`` and ``model`` friction tables (the plant's
+    friction and the compensator's datasheet), ``*_ref`` their pressure rule codes,
+    ``compensator`` a code of COMPENSATOR_CODES, ``ctrl`` the controller vector (CTRL),
+    ``x_ref``, ``v_ref`` the reference at the samples [m], [m/s], ``state0`` (x, v, p_A,
+    p_B, z) [SI].
+    """
+    aa, ab, stroke, va0, vb0, mass = ax[0], ax[1], ax[2], ax[3], ax[4], ax[5]
+    beta, leak, ps, pt, kv, lam = ax[6], ax[7], ax[8], ax[9], ax[10], ax[11]
+    order, tau, wv, zv, fload = ax[12], ax[13], ax[14], ax[15], ax[16]
+    kp, ki, kd, ff_ext = ctrl[0], ctrl[1], ctrl[2], ctrl[3]
+    vs, kobs, fcoul, T = ctrl[5], ctrl[6], ctrl[7], ctrl[9]
+    n = x_ref.shape[0]
+    out = np.empty((n, 10))
+    h = T / substeps
+    decay = math.exp(-h / tau)
+    x, v, pa, pb, z = state0[0], state0[1], state0[2], state0[3], state0[4]
+    s = 0.0
+    sd = 0.0
+    integ = 0.0
+    x_prev = x
+    f_prev = 0.0
+    z_hat = 0.0
+    u = 0.0
+    comp = 0.0
+    friction = 0.0
+    for k in range(n):
+        # ---------------------------------------------------------- the controller
+        v_meas = (x - x_prev) / T if k > 0 else 0.0
+        x_prev = x
+        err = x_ref[k] - x
+        vr = v_ref[k]
+        p_meas = operating_pressure(model_ref, pa, pb)
+        if compensator == 0:
+            comp = 0.0
+        elif compensator == 1:
+            comp = fcoul * math.tanh(vr / vs)
+        elif compensator == 2:
+            fc, fs, s2, v_r, al, s0, s1 = params_at(model, p_meas)
+            comp = g_function(abs(vr), fc, fs, v_r, al) * math.tanh(vr / vs) + s2 * vr
+        elif compensator == 3:
+            fc, fs, s2, v_r, al, s0, s1 = params_at(model, p_meas)
+            z_hat, _ = z_step(z_hat, v_meas, T, s0, fc, fs, v_r, al)
+            z_hat += kobs * err * T
+            comp = lugre_instant(v_meas, z_hat, s0, s1, s2, fc, fs, v_r, al)
+        else:
+            comp = friction
+        ff = 0.0
+        if ff_ext > 0.0:  # flow linearisation at the measured pressures
+            ff = vr / velocity_gain(1.0 if vr >= 0 else -1.0, pa, pb, ax)
+        u_fb = kp * err + integ + kd * (vr - v_meas)
+        u_c = 0.0
+        if k > 0 and compensator != 0:
+            rate = (comp - f_prev) / T
+            u_c = rate / force_rate_gain(1.0 if rate >= 0 else -1.0, x, pa, pb, ax)
+        f_prev = comp
+        u = ff + u_fb + u_c + ctrl[8]
+        if u > 1.0:
+            u = 1.0
+        elif u < -1.0:
+            u = -1.0
+        else:
+            integ += ki * err * T  # conditional integration: no wind-up in saturation
+        out[k, 0] = x
+        out[k, 1] = v
+        out[k, 2] = pa
+        out[k, 3] = pb
+        out[k, 4] = u
+        out[k, 5] = s
+        out[k, 6] = friction
+        out[k, 7] = comp
+        out[k, 8] = z
+        out[k, 9] = z_hat
+        if k == n - 1:
+            break
+        # ---------------------------------------------------------- the plant, one sample
+        for _ in range(substeps):
+            po = operating_pressure(plant_ref, pa, pb)
+            fc, fs, s2, v_r, al, s0, s1 = params_at(plant, po)
+            friction = lugre_instant(v, z, s0, s1, s2, fc, fs, v_r, al)
+            force = aa * pa - ab * pb - friction - fload
+            v_new = v + h * force / mass
+            z, _ = z_step(z, 0.5 * (v + v_new), h, s0, fc, fs, v_r, al)
+            v = v_new
+            x += h * v
+            qa, qb = valve_flows(s, pa, pb, ps, pt, kv, lam)
+            va = va0 + aa * min(max(x, 0.0), stroke)
+            vb = vb0 + ab * (stroke - min(max(x, 0.0), stroke))
+            q_leak = leak * (pa - pb)
+            pa = max(pa + h * beta / va * (qa - aa * v - q_leak), 0.0)
+            pb = max(pb + h * beta / vb * (qb + ab * v + q_leak), 0.0)
+            if order == 1:
+                s = u + (s - u) * decay
+            else:
+                sd += h * (wv * wv * (u - s) - 2.0 * zv * wv * sd)
+                s += h * sd
+            if s > 1.0:
+                s, sd = 1.0, 0.0
+            elif s < -1.0:
+                s, sd = -1.0, 0.0
+        po = operating_pressure(plant_ref, pa, pb)
+        fc, fs, s2, v_r, al, s0, s1 = params_at(plant, po)
+        friction = lugre_instant(v, z, s0, s1, s2, fc, fs, v_r, al)
+    return out

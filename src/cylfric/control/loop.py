@@ -1,0 +1,282 @@
+"""The closed loop from Python: references, compensators, one run, every compensator.
+
+The controller (at the axis's ``control_rate``, zero-order hold):
+
+    u = v_ref / K_vel(p_A, p_B) + k_p e + k_i sum(e T) + k_d (v_ref - v_meas) + u_c
+
+with ``e = x_ref - x``, ``K_vel`` the piston speed per unit opening at the measured chamber
+pressures (the reference-velocity feedforward with the valve's flow linearised: the mean of
+``K sqrt(p_S - p_A) / A_A`` and ``K sqrt(p_B - p_T) / A_B`` for extension, and of the
+mirrored pair for retraction; Jelali & Kroll 2003 sec. 7.2), ``v_meas`` the
+backward difference of the sampled position, and the integral held while ``u`` saturates
+(conditional integration). The compensation ``u_c`` turns the compensator's friction force
+estimate ``F`` [N] into the flow that changes the cylinder force by as much: ``u_c = (dF/dt) /
+G_F``, ``dF/dt = (F_k - F_{k-1}) / T`` and ``G_F = beta (A_A K_A / V_A + A_B K_B / V_B)`` the
+force rate per unit opening at the measured pressures and position (the inverse of the
+pressure build-up equations; the force appears as the integral of the flow, as in the
+backstepping designs of hydraulic force control, e.g. Jelali & Kroll 2003 sec. 7.4).
+
+Compensators (:data:`COMPENSATORS`):
+
+- ``none``: the PI(D) and feedforward alone;
+- ``coulomb``: ``F = F_c tanh(v_ref / v_s)``, one constant level (the datasheet's F_c at the
+  axis's rest operating pressure), keyed to the reference velocity;
+- ``static``: the datasheet's steady law at the measured pressures, ``F = g(v_ref)
+  tanh(v_ref / v_s) + sigma_2 v_ref`` (eq. 2.7 with the sign smoothed);
+- ``lugre``: the observer of Canudas de Wit et al. (1995, eq. 12): ``dz^/dt = v - sigma_0
+  |v| z^ / g(v) + k_o e`` with the measured velocity, the datasheet's sigma_0, sigma_1 and
+  pressure laws at the measured pressures, ``F = sigma_0 z^ + sigma_1 (v - sigma_0 |v| z^ /
+  g(v)) + sigma_2 v``; z^ advanced by the exact update at constant v over T, then the
+  correction ``k_o e T``;
+- ``oracle``: the plant's own friction force at the sample, fed in exactly (the bound no
+  compensator can beat through this force path).
+
+Sign smoothing: ``v_s`` (default 1 mm/s, :data:`SMOOTHING_VELOCITY`); observer gain
+``k_o`` (default :data:`OBSERVER_GAIN`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .axis import DEFAULT_AXIS, Axis
+from .kernel import COMPENSATOR_CODES, OUTPUTS, REFERENCE_CODES, closed_loop, friction_table
+from .tuning import Tuning, tune
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
+
+__all__ = [
+    "COMPENSATORS",
+    "REFERENCES",
+    "Reference",
+    "LoopRun",
+    "make_reference",
+    "read_reference",
+    "simulate_loop",
+    "SMOOTHING_VELOCITY",
+    "OBSERVER_GAIN",
+    "PlantFriction",
+]
+
+COMPENSATORS = tuple(COMPENSATOR_CODES)
+REFERENCES = ("sine", "steps", "ramp")
+SMOOTHING_VELOCITY = 1e-3
+"""Sign smoothing velocity v_s of the Coulomb and static terms [m/s]."""
+OBSERVER_GAIN = 0.0
+"""Observer gain k_o of the LuGre observer [1/s] (0: open-loop observer)."""
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A position reference at the controller's samples: ``time`` [s], ``position`` [m],
+    ``velocity`` [m/s] (its derivative), ``name``."""
+
+    time: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    name: str
+
+
+def make_reference(
+    name: str,
+    axis: Axis = DEFAULT_AXIS,
+    *,
+    duration: float = 10.0,
+    amplitude: float = 5e-3,
+    period: float = 5.0,
+) -> Reference:
+    """A built-in reference from the axis's start position.
+
+    ``sine``: ``x0 + A (1 - cos(2 pi t / P))`` (starts at rest; peak speed ``2 pi A / P``:
+    6.3 mm/s by default, below the demo datasheet's Stribeck velocity, where friction
+    dominates); ``steps``: holds of ``P / 2`` at x0 + A, x0 - A, ... (steady state and
+    hunting); ``ramp``: a triangle between x0 and x0 + 2A at ``4 A / P`` [m/s]. ``amplitude``
+    A [m], ``period`` P [s], ``duration`` [s].
+    """
+    if name not in REFERENCES:
+        raise ValueError(f"unknown reference {name!r}; valid: {list(REFERENCES)} or a CSV file")
+    t = np.arange(0.0, duration + 0.5 * axis.sample_time, axis.sample_time)
+    x0, a, w = axis.start_position, amplitude, 2 * math.pi / period
+    if name == "sine":
+        x, v = x0 + a * (1 - np.cos(w * t)), a * w * np.sin(w * t)
+    elif name == "steps":
+        level = np.where(np.floor(t / (period / 2)) % 2 == 0, 1.0, -1.0)
+        level[t < 0.5] = 0.0
+        x, v = x0 + a * level, np.zeros_like(t)
+    else:
+        phase = (t / period) % 1.0
+        x = x0 + 2 * a * np.where(phase < 0.5, 2 * phase, 2 - 2 * phase)
+        v = np.where(phase < 0.5, 4 * a / period, -4 * a / period)
+    return Reference(t, x, v, name)
+
+
+def read_reference(path: StrPath, axis: Axis = DEFAULT_AXIS) -> Reference:
+    """A reference from a CSV file: columns ``time [s]`` and ``position [m]`` (or
+    ``position [mm]``), resampled linearly at the controller rate; the velocity by
+    central differences."""
+    import csv
+
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as handle:
+        rows = list(csv.reader(handle))
+    if not rows:
+        raise ValueError(f"{path}: empty; expected columns 'time [s]' and 'position [m]'")
+    header = [h.strip() for h in rows[0]]
+    scales = {"position [m]": 1.0, "position [mm]": 1e-3}
+    if "time [s]" not in header or not any(h in scales for h in header):
+        raise ValueError(
+            f"{path}, line 1: expected columns 'time [s]' and 'position [m]' "
+            f"(or 'position [mm]'), found {header}"
+        )
+    it = header.index("time [s]")
+    name = next(h for h in header if h in scales)
+    ip = header.index(name)
+    t, x = [], []
+    for number, row in enumerate(rows[1:], 2):
+        try:
+            t.append(float(row[it]))
+            x.append(float(row[ip]) * scales[name])
+        except (ValueError, IndexError):
+            raise ValueError(f"{path}, line {number}: expected two numbers, got {row}") from None
+    time, position = np.array(t), np.array(x)
+    if len(time) < 2 or not np.all(np.isfinite(time)) or not np.all(np.isfinite(position)):
+        raise ValueError(f"{path}: expected at least two rows of finite numbers")
+    if np.any(np.diff(time) <= 0):
+        bad = int(np.nonzero(np.diff(time) <= 0)[0][0]) + 3
+        raise ValueError(f"{path}, line {bad}: time is not increasing")
+    if position.min() <= 0 or position.max() >= axis.stroke:
+        raise ValueError(f"{path}: positions must lie inside the stroke (0, {axis.stroke} m)")
+    grid = np.arange(time[0], time[-1] + 0.5 * axis.sample_time, axis.sample_time)
+    xs = np.interp(grid, time, position)
+    return Reference(grid - grid[0], xs, np.gradient(xs, axis.sample_time), path.name)
+
+
+@dataclass(frozen=True)
+class PlantFriction:
+    """How the plant's friction differs from the datasheet: ``level`` scales F_c, F_s,
+    sigma_2 [-], ``slope`` their pressure dependence [-], ``offset`` [N] shifts F_c and F_s,
+    ``model`` replaces the datasheet (another session's fit); ``name`` labels the case."""
+
+    name: str = "datasheet"
+    level: float = 1.0
+    slope: float = 1.0
+    offset: float = 0.0
+    model: Any = None
+
+
+@dataclass
+class LoopRun:
+    """One closed-loop run: the compensator, the reference, the outputs at the samples."""
+
+    compensator: str
+    reference: Reference
+    outputs: np.ndarray
+    tuning: Tuning
+    plant: PlantFriction = field(default_factory=PlantFriction)
+
+    @property
+    def time(self) -> np.ndarray:
+        """Sample times [s]."""
+        return self.reference.time
+
+    @property
+    def error(self) -> np.ndarray:
+        """Tracking error x_ref - x [m]."""
+        return self.reference.position - self.outputs[:, 0]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Time series with units in the column names."""
+        import pandas as pd
+
+        frame = pd.DataFrame(self.outputs, columns=list(OUTPUTS))
+        frame.insert(0, "time [s]", self.time)
+        frame.insert(1, "reference [m]", self.reference.position)
+        frame.insert(2, "reference velocity [m/s]", self.reference.velocity)
+        frame["error [m]"] = self.error
+        return frame
+
+
+def rest_state(axis: Axis) -> np.ndarray:
+    """(x, v, p_A, p_B, z) at rest [SI]."""
+    pa, pb = axis.rest_pressures()
+    return np.array([axis.start_position, 0.0, pa, pb, 0.0])
+
+
+def controller_vector(
+    axis: Axis,
+    tuning: Tuning,
+    model: FrictionModel,
+    *,
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> np.ndarray:
+    """The compiled loop's controller vector (``kernel.CTRL``)."""
+    pa, pb = axis.rest_pressures()
+    coulomb = float(model.params_at(float(model.operating_pressure(pa, pb)))["F_c"])
+    return np.array(
+        [
+            tuning.kp,
+            tuning.ki,
+            tuning.kd,
+            1.0,
+            1.0,
+            smoothing_velocity,
+            observer_gain,
+            coulomb,
+            0.0,
+            axis.sample_time,
+        ]
+    )
+
+
+def simulate_loop(
+    model: FrictionModel,
+    compensator: str = "none",
+    *,
+    axis: Axis = DEFAULT_AXIS,
+    reference: Reference | str = "sine",
+    tuning: Tuning | None = None,
+    plant: PlantFriction | None = None,
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> LoopRun:
+    """Run the loop with one compensator; the compensator always uses ``model`` (the
+    datasheet), the plant ``plant`` (default: the datasheet itself)."""
+    if compensator not in COMPENSATOR_CODES:
+        raise ValueError(f"unknown compensator {compensator!r}; valid: {list(COMPENSATORS)}")
+    if isinstance(reference, str):
+        reference = make_reference(reference, axis)
+    plant = plant or PlantFriction()
+    if tuning is None:
+        tuning = tune(axis, viscous=_rest_viscous(model, axis))
+    plant_model = plant.model if plant.model is not None else model
+    outputs = closed_loop(
+        axis.vector(),
+        friction_table(plant_model, level=plant.level, slope=plant.slope, offset=plant.offset),
+        REFERENCE_CODES[plant_model.reference],
+        friction_table(model),
+        REFERENCE_CODES[model.reference],
+        COMPENSATOR_CODES[compensator],
+        controller_vector(
+            axis, tuning, model, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+        ),
+        np.ascontiguousarray(reference.position),
+        np.ascontiguousarray(reference.velocity),
+        axis.substeps,
+        rest_state(axis),
+    )
+    return LoopRun(compensator, reference, outputs, tuning, plant)
+
+
+def _rest_viscous(model: FrictionModel, axis: Axis) -> float:
+    pa, pb = axis.rest_pressures()
+    return float(model.params_at(float(model.operating_pressure(pa, pb)))["sigma_2"])

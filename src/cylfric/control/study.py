@@ -1,0 +1,246 @@
+"""Every compensator on one axis and reference, with robustness cases; the outputs.
+
+:func:`compare_compensators` returns a :class:`ControlResult` (the Python API); its
+:meth:`~ControlResult.write` makes ``OUT/metrics.json``, ``OUT/timeseries.csv`` and
+``OUT/control.html`` (PNG figures embedded), every file written atomically.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .._atomic import atomic_write_bytes, atomic_write_text
+from ..escape import html_text
+from .axis import DEFAULT_AXIS, Axis
+from .loop import (
+    COMPENSATORS,
+    OBSERVER_GAIN,
+    SMOOTHING_VELOCITY,
+    LoopRun,
+    PlantFriction,
+    Reference,
+    _rest_viscous,
+    make_reference,
+    simulate_loop,
+)
+from .metrics import tracking_metrics
+from .tuning import Tuning, tune
+
+if TYPE_CHECKING:
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
+
+__all__ = ["ControlResult", "compare_compensators", "ROBUSTNESS_CASES", "robustness_cases"]
+
+
+def robustness_cases(
+    model: FrictionModel,
+    *,
+    scatter: FrictionModel | None = None,
+) -> list[PlantFriction]:
+    """The plants the datasheet is wrong about: +-20 % friction level, half and double the
+    pressure slope, a session at the upper edge of the datasheet's scatter (F_c and F_s
+    raised by twice the fit's residual standard deviation, the 95 % prediction band of the
+    points), and (when given) another session's datasheet as the plant."""
+    cases = [
+        PlantFriction("level +20 %", level=1.2),
+        PlantFriction("level -20 %", level=0.8),
+        PlantFriction("pressure slope x2", slope=2.0),
+        PlantFriction("pressure slope x0.5", slope=0.5),
+    ]
+    statistics: dict = dict(model.statistics or {})
+    residual = statistics.get("residual_std")
+    if residual:
+        cases.append(PlantFriction("session scatter +2 s", offset=2.0 * float(residual)))
+    if scatter is not None:
+        cases.append(PlantFriction("other session", model=scatter))
+    return cases
+
+
+ROBUSTNESS_CASES = (
+    "level +20 %",
+    "level -20 %",
+    "pressure slope x2",
+    "pressure slope x0.5",
+    "session scatter +2 s",
+    "other session",
+)
+
+
+@dataclass
+class ControlResult:
+    """Runs by compensator (the datasheet plant), metrics, tuning, robustness metrics."""
+
+    axis: Axis
+    reference: Reference
+    tuning: Tuning
+    runs: dict[str, LoopRun]
+    metrics: dict[str, dict]
+    robustness: dict[str, dict[str, dict]] = field(default_factory=dict)
+    datasheet: str | None = None
+
+    def ratios(self, metrics: dict[str, dict] | None = None) -> dict[str, float | None]:
+        """The acceptance ratios (RMS and reversal error of lugre against the others)."""
+        m = self.metrics if metrics is None else metrics
+
+        def ratio(a, b, key):
+            x, y = m[a][key], m[b][key]
+            return None if x is None or not y else x / y
+
+        return {
+            "lugre_rms_over_none": ratio("lugre", "none", "rms_error_m"),
+            "lugre_reversal_over_none": ratio("lugre", "none", "reversal_error_m"),
+            "lugre_reversal_over_coulomb": ratio("lugre", "coulomb", "reversal_error_m"),
+            "lugre_rms_over_oracle": ratio("lugre", "oracle", "rms_error_m"),
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """The metrics.json document."""
+        return {
+            "datasheet": self.datasheet,
+            "reference": self.reference.name,
+            "axis": self.axis.to_dict(),
+            "omega_h_rad_s": self.axis.natural_frequency(),
+            "controller": {
+                **self.tuning.to_dict(),
+                "sign_smoothing_m_s": SMOOTHING_VELOCITY,
+                "observer_gain_1_s": OBSERVER_GAIN,
+            },
+            "compensators": self.metrics,
+            "ratios": self.ratios(),
+            "robustness": {
+                case: {"compensators": metrics, "ratios": self.ratios(metrics)}
+                for case, metrics in self.robustness.items()
+            },
+        }
+
+    def to_pandas(self):
+        """Time series of every compensator, side by side (units in the names)."""
+        import pandas as pd
+
+        frames: list[pd.DataFrame] = []
+        for name, run in self.runs.items():
+            frame = run.to_pandas()
+            if frames:
+                frame = frame.drop(
+                    columns=["time [s]", "reference [m]", "reference velocity [m/s]"]
+                )
+            names = {
+                c: c if c.startswith(("time", "reference")) else f"{name} {c}"
+                for c in frame.columns
+            }
+            frames.append(frame.rename(columns=names))
+        return pd.concat(frames, axis=1)
+
+    def figure(self):
+        """Tracking error against time for every compensator (a pyplot-free Figure)."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(9, 6.5), layout="constrained")
+        top, bottom = fig.subplots(2, 1, sharex=True)
+        run = next(iter(self.runs.values()))
+        top.plot(run.time, run.reference.position * 1e3, "k", lw=1, label="reference")
+        top.set_ylabel("position [mm]")
+        for name, r in self.runs.items():
+            bottom.plot(r.time, r.error * 1e6, lw=1, label=name)
+        bottom.set_ylabel("tracking error [µm]")
+        bottom.set_xlabel("time [s]")
+        bottom.legend(ncols=5, fontsize=8)
+        top.legend(fontsize=8)
+        return fig
+
+    def write(self, out: StrPath) -> list[Path]:
+        """metrics.json, timeseries.csv and control.html (with error.png) into ``out``."""
+        from .._paths import make_folder
+
+        out = Path(out)
+        make_folder(out)
+        written = [
+            atomic_write_text(out / "metrics.json", json.dumps(self.to_dict(), indent=2) + "\n"),
+            atomic_write_text(out / "timeseries.csv", self.to_pandas().to_csv(index=False)),
+        ]
+        buffer = io.BytesIO()
+        self.figure().savefig(buffer, format="png", dpi=100)
+        png = buffer.getvalue()
+        written.append(atomic_write_bytes(out / "error.png", png))
+        written.append(atomic_write_text(out / "control.html", self._html(png)))
+        return written
+
+    def _html(self, png: bytes) -> str:
+        rows = []
+        for name, m in self.metrics.items():
+            cells = [m["rms_error_m"], m["max_error_m"], m["reversal_error_m"]]
+            text = "".join(f"<td>{'-' if c is None else f'{c * 1e6:.2f}'}</td>" for c in cells)
+            rows.append(
+                f"<tr><td>{html_text(name)}</td>{text}<td>{m['control_effort_rms']:.4f}</td></tr>"
+            )
+        image = base64.b64encode(png).decode()
+        title = html_text(self.datasheet or "datasheet")
+        return (
+            "<!DOCTYPE html><html><head><meta charset='utf-8'><title>cylfric control</title>"
+            "</head><body>"
+            f"<h1>Friction compensation: {title}</h1>"
+            f"<p>Reference {html_text(self.reference.name)}; PI gain K_v = "
+            f"{self.tuning.loop_gain_1_s:.2f} 1/s ({html_text(self.tuning.method)}); "
+            f"omega_h = {self.axis.natural_frequency():.1f} rad/s.</p>"
+            "<table border='1'><tr><th>compensator</th><th>RMS error [µm]</th>"
+            "<th>max error [µm]</th><th>reversal error [µm]</th><th>command RMS [-]</th></tr>"
+            + "".join(rows)
+            + "</table>"
+            f"<img alt='tracking error' src='data:image/png;base64,{image}'>"
+            "</body></html>\n"
+        )
+
+
+def _metrics(run: LoopRun) -> dict:
+    return tracking_metrics(
+        run.time,
+        run.reference.position,
+        run.reference.velocity,
+        run.outputs[:, 0],
+        run.outputs[:, 4],
+    )
+
+
+def compare_compensators(
+    model: FrictionModel,
+    *,
+    axis: Axis = DEFAULT_AXIS,
+    reference: Reference | str = "sine",
+    robustness: bool = True,
+    scatter: FrictionModel | None = None,
+    tuning: Tuning | None = None,
+) -> ControlResult:
+    """Run every compensator (:data:`~.loop.COMPENSATORS`) on ``axis`` with ``reference``;
+    with ``robustness``, again on the plants of :func:`robustness_cases`."""
+    if isinstance(reference, str):
+        reference = make_reference(reference, axis)
+    tuning = tuning or tune(axis, viscous=_rest_viscous(model, axis))
+    runs = {
+        c: simulate_loop(model, c, axis=axis, reference=reference, tuning=tuning)
+        for c in COMPENSATORS
+    }
+    result = ControlResult(
+        axis,
+        reference,
+        tuning,
+        runs,
+        {c: _metrics(r) for c, r in runs.items()},
+        datasheet=getattr(model, "source", None),
+    )
+    if robustness:
+        for case in robustness_cases(model, scatter=scatter):
+            result.robustness[case.name] = {
+                c: _metrics(
+                    simulate_loop(
+                        model, c, axis=axis, reference=reference, tuning=tuning, plant=case
+                    )
+                )
+                for c in COMPENSATORS
+            }
+    return result

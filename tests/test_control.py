@@ -1,0 +1,184 @@
+"""The servo-loop study (cylfric.control): the axis against closed forms, the tuning, the
+compensators and the command.
+
+Closed forms: the hydraulic natural frequency of a symmetric cylinder at mid-stroke,
+omega_h = sqrt(4 beta A^2 / (V_t m)) (Merritt 1967 eq. 6-41), and the steady no-load speed
+through a critically lapped valve with turbulent orifices, v = K s sqrt((p_S - p_T)/2) / A
+for a symmetric cylinder (Merritt eq. 2-4 with the load pressure zero).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from cylfric.control.axis import DEFAULT_AXIS, Axis, AxisError, load_axis
+from cylfric.control.kernel import COMPENSATOR_CODES, closed_loop
+from cylfric.control.loop import make_reference, read_reference, rest_state, simulate_loop
+from cylfric.control.study import compare_compensators
+from cylfric.control.tuning import tune
+from cylfric.model import FrictionModel
+
+NO_FRICTION = np.array([[0, 1e-9, 0, 0, 0]] * 7, dtype=float)[:, :4]
+NO_FRICTION[3, 1] = 0.01  # v_r [m/s]
+NO_FRICTION[4, 1] = 1.0  # alpha [-]
+
+
+def _open_loop(axis, state0, *, offset=0.0, seconds=1.0):
+    """The axis with the controller off (gains 0, no feedforward), a constant command."""
+    n = int(seconds * axis.control_rate) + 1
+    ctrl = np.array([0, 0, 0, 0, 0, 1e-3, 0, 0, offset, axis.sample_time], dtype=float)
+    x = np.full(n, axis.start_position)
+    return closed_loop(
+        axis.vector(),
+        NO_FRICTION,
+        3,
+        NO_FRICTION,
+        3,
+        COMPENSATOR_CODES["none"],
+        ctrl,
+        x,
+        np.zeros(n),
+        axis.substeps,
+        state0,
+    )
+
+
+def test_natural_frequency_matches_merritt():
+    # symmetric (double-rod) cylinder at mid-stroke, equal dead volumes, no leakage
+    axis = Axis(leakage=0.0, control_rate=20000.0, substeps=5)
+    area = axis.area_a
+    volume_total = sum(axis.volumes(axis.start_position))
+    omega = math.sqrt(4 * axis.bulk_modulus * area**2 / (volume_total * axis.mass))
+    assert_allclose(axis.natural_frequency(), omega, rtol=1e-12)
+    state = rest_state(axis)
+    state[2] += 1e4  # a 0.1 bar pressure step: small-signal oscillation, valve closed
+    out = _open_loop(axis, state, seconds=0.2)
+    t = np.arange(out.shape[0]) / axis.control_rate
+    x = out[:, 0] - out[:, 0].mean()
+    up = np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]
+    crossings = t[up] - x[up] / (x[up + 1] - x[up]) / axis.control_rate
+    measured = 2 * math.pi / np.mean(np.diff(crossings))
+    assert_allclose(measured, omega, rtol=2e-3)
+
+
+def test_steady_flow_through_the_valve():
+    axis = Axis(leakage=0.0, spool_order=1)
+    opening = 0.3
+    out = _open_loop(axis, rest_state(axis), offset=opening, seconds=0.3)
+    speed = out[-50:, 1].mean()
+    closed_form = (
+        axis.valve_coefficient
+        * opening
+        * math.sqrt((axis.supply_pressure - axis.tank_pressure) / 2)
+        / axis.area_a
+    )
+    assert_allclose(speed, closed_form, rtol=1e-3)
+    assert_allclose(axis.no_load_velocity_gain()[0] * opening, closed_form, rtol=1e-12)
+
+
+def test_steady_flow_differential_cylinder_both_directions():
+    axis = Axis(rod_a=0.0, leakage=0.0, spool_order=1)
+    extend, retract = axis.no_load_velocity_gain()
+    for opening, expected in ((0.2, 0.2 * extend), (-0.2, -0.2 * retract)):
+        out = _open_loop(axis, rest_state(axis), offset=opening, seconds=1.0)
+        assert_allclose(out[-50:, 1].mean(), expected, rtol=1e-3)
+
+
+def test_tuning_has_a_six_db_gain_margin():
+    tuning = tune(DEFAULT_AXIS, viscous=380.0)
+    assert_allclose(tuning.gain_margin_db, 20 * math.log10(2), rtol=1e-12)
+    assert tuning.kp == pytest.approx(tuning.critical_kp / 2)
+    assert 0 < tuning.loop_gain_1_s < tuning.omega_h_rad_s
+    assert tuning.phase_margin_deg > 30
+
+
+def test_lugre_compensation_beats_pid_alone_on_the_thesis_law():
+    model = FrictionModel()  # thesis eq. 4.1-4.3, assumed sigma_0 and sigma_1
+    ref = make_reference("sine", DEFAULT_AXIS, duration=5.0)
+    result = compare_compensators(model, reference=ref, robustness=False)
+    assert set(result.metrics) == {"none", "coulomb", "static", "lugre", "oracle"}
+    none, lugre = result.metrics["none"], result.metrics["lugre"]
+    assert lugre["rms_error_m"] < none["rms_error_m"]
+    assert lugre["reversal_error_m"] < none["reversal_error_m"]
+    assert none["reversals"] == 1
+    assert none["steady_state_error_m"] is None  # a sine never rests
+
+
+def test_substeps_converge():
+    model = FrictionModel()
+    ref = make_reference("sine", DEFAULT_AXIS, duration=3.0)
+    tuning = tune(DEFAULT_AXIS, 380.0)
+    fine = simulate_loop(
+        model, "lugre", reference=ref, tuning=tuning, axis=DEFAULT_AXIS.replace(substeps=50)
+    )
+    coarse = simulate_loop(model, "lugre", reference=ref, tuning=tuning)
+    assert_allclose(np.sqrt(np.mean(coarse.error**2)), np.sqrt(np.mean(fine.error**2)), rtol=1e-3)
+
+
+def test_steps_give_steady_state_and_hunting_metrics(tmp_path):
+    model = FrictionModel()
+    ref = make_reference("steps", DEFAULT_AXIS, duration=4.0, period=4.0)
+    result = compare_compensators(model, reference=ref, robustness=False)
+    m = result.metrics["none"]
+    assert m["steady_state_error_m"] is not None and m["steady_state_error_m"] >= 0
+    assert m["hunting_amplitude_m"] is not None
+    written = result.write(tmp_path / "out")
+    doc = json.loads((tmp_path / "out" / "metrics.json").read_text())
+    assert doc["controller"]["loop_gain_1_s"] == pytest.approx(result.tuning.loop_gain_1_s)
+    assert set(doc["compensators"]) == set(result.metrics)
+    assert {p.name for p in written} == {
+        "metrics.json",
+        "timeseries.csv",
+        "error.png",
+        "control.html",
+    }
+
+
+def test_axis_toml_units_and_errors(tmp_path):
+    good = tmp_path / "axis.toml"
+    good.write_text(
+        '[axis]\nbore = "63 mm"\ndead_volume_a = "0.2 L"\n'
+        'valve_nominal_flow = "40 L/min"\nspool_frequency = "80 Hz"\nmass = 120\n'
+    )
+    axis = load_axis(good)
+    assert axis.bore == pytest.approx(0.063)
+    assert axis.dead_volume_a == pytest.approx(2e-4)
+    assert axis.valve_nominal_flow == pytest.approx(40e-3 / 60)
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[axis]\nbore = "40 mm"\nstroke = "2 L"\n')
+    with pytest.raises(AxisError, match=r"bad.toml, line 3: axis.stroke"):
+        load_axis(bad)
+    bad.write_text("[axis]\nboar = 0.04\n")
+    with pytest.raises(AxisError, match=r"line 2: unknown key axis.boar"):
+        load_axis(bad)
+    bad.write_text('[axis]\nrod = "50 mm"\n')
+    with pytest.raises(AxisError, match=r"line 2: .*rod"):
+        load_axis(bad)
+
+
+def test_reference_file(tmp_path):
+    path = tmp_path / "ref.csv"
+    path.write_text("time [s],position [mm]\n0,100\n1,101\n2,100\n")
+    ref = read_reference(path)
+    assert_allclose(ref.position[[0, 1000, 2000]], [0.1, 0.101, 0.1])
+    path.write_text("time [s],position [mm]\n0,100\n0,101\n")
+    with pytest.raises(ValueError, match="line 3: time is not increasing"):
+        read_reference(path)
+
+
+def test_cli_control_errors_exit_2(tmp_path):
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    runner = CliRunner()
+    done = runner.invoke(
+        app, ["control", str(tmp_path / "none.json"), "--out", str(tmp_path / "out")]
+    )
+    assert done.exit_code == 2
+    assert "not found" in done.output
