@@ -212,10 +212,7 @@ def scatter_components(
         between = (nu0 * prior_var + nu * estimate) / (nu0 + nu)
         between_dof = nu0 + nu
         source = "estimated+prior"
-    elif runs >= 2:  # one session: its runs' scatter is the part of s_L it can show
-        between = (nu0 * prior_var + run_dof * run_var) / (nu0 + run_dof)
-        between_dof, source = nu0 + run_dof, "prior"
-    else:
+    else:  # one session shows nothing of the others: the prior (raised below to its runs')
         between, between_dof, source = prior_var, nu0, "prior"
     between = max(between, run_var)  # s_L never below the run-to-run part the data show
     session_var = between - run_var

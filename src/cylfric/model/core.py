@@ -800,7 +800,7 @@ class FrictionModel:
 
             u_point^2   = se^2 + s_res^2
             u_run^2     = se^2 + max(s_res^2, F^2 (s_r^2 + s_run^2))
-            u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2)),  s_L >= s_run
+            u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2 (1 + 1/n))),  s_L >= s_run
 
         half-width = Student-t quantile (Welch-Satterthwaite degrees of freedom) x u; the
         run band is never narrower than the point band, nor the session band than the run
@@ -977,6 +977,10 @@ def _band_parts(scatter: Mapping, scope: str) -> dict[str, float]:
             math.hypot(run, session["std_percent"] / 100.0) if between is None else between / 100
         )
         between = max(between, run)
+        # the fitted curve is the mean of the fitted sessions, itself a draw of the sessions'
+        # population: a new session differs from it by s_L sqrt(1 + 1/n_sessions)
+        sessions = max(int(scatter.get("sessions") or 1), 1)
+        between *= math.sqrt(1.0 + 1.0 / sessions)
     return {
         "repeat": repeat,
         "repeat_dof": float(c["repeatability"].get("dof") or np.inf),
