@@ -359,6 +359,26 @@ def _linear_model(args, fixed, weights, notes):
     else:
         chosen = stribeck
     level = [b for b in chosen.at_bounds if b.startswith("F_c")]
+    if level and chosen is stribeck and not {"F_s", "v_r", "alpha"} & set(fixed):
+        # the dip's shape took the level: Coulomb + viscous friction keeps it positive when
+        # the data do (a rough rig's scatter between pressures); else the signs are wrong
+        reason = (
+            f"no identifiable Stribeck dip: the Stribeck fit pushes {', '.join(level)} to 0 N "
+            "while Coulomb + viscous friction keeps the level positive"
+        )
+        fallback = fit_linear_surface(
+            *args,
+            friction_law="coulomb_viscous",
+            fixed=reduced_fixed,
+            not_identified={n: reason for n in ("F_s", "v_r", "alpha")},
+            **weights,
+        )
+        if not any(b.startswith("F_c") for b in fallback.at_bounds):
+            notes.append(
+                f"{reason}; the datasheet gives the Coulomb + viscous model F_c(p) + "
+                "sigma_2(p) |v| and marks F_s, v_r and alpha not identified"
+            )
+            chosen, alternative, level = fallback, stribeck, []
     if level:
         raise UnphysicalFrictionError(
             f"the friction level is pushed to 0 N ({', '.join(level)}): the data contradict a "
