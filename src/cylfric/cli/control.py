@@ -35,10 +35,25 @@ def register(app) -> None:
             "--robustness/--no-robustness",
             help="Also run plants whose friction differs from the datasheet.",
         ),
+        export: str = typer.Option(
+            None,
+            "--export-compensator",
+            help="Also write the compensator step into OUT/compensator: any of c, fmu, "
+            "matlab, comma-separated (C source, FMI 2.0 co-simulation FMU, MATLAB function).",
+        ),
+        fmu_kind: str = typer.Option(
+            "lugre",
+            "--fmu-compensator",
+            help="The kind the FMU carries: none, coulomb, static or lugre.",
+        ),
+        export_only: bool = typer.Option(
+            False, "--export-only", help="Write the exports only; do not run the loop."
+        ),
         json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Run the position loop with every compensator (none, coulomb, static, lugre,
-        oracle); write metrics.json, timeseries.csv and control.html into --out."""
+        oracle); write metrics.json, timeseries.csv and control.html into --out; with
+        --export-compensator, the compensator as C, FMU and/or MATLAB code."""
         from .._paths import refuse_link
         from ..control.axis import DEFAULT_AXIS, load_axis
         from ..control.loop import REFERENCES, Reference, read_reference
@@ -59,6 +74,34 @@ def register(app) -> None:
             raise BadInput(
                 f"--reference {reference!r}: expected one of {list(REFERENCES)} or a CSV file"
             )
+        targets: list[str] = []
+        if export is not None:
+            from ..control.export import EXPORT_TARGETS, EXPORTABLE_COMPENSATORS
+
+            targets = [t.strip() for t in export.split(",") if t.strip()]
+            bad = [t for t in targets if t not in EXPORT_TARGETS]
+            if bad or not targets:
+                raise BadInput(
+                    f"--export-compensator {export!r}: expected some of "
+                    f"{list(EXPORT_TARGETS)}, comma-separated"
+                )
+            if fmu_kind not in EXPORTABLE_COMPENSATORS:
+                raise BadInput(
+                    f"--fmu-compensator {fmu_kind!r}: expected one of "
+                    f"{list(EXPORTABLE_COMPENSATORS)}"
+                )
+        elif export_only:
+            raise BadInput("--export-only needs --export-compensator c,fmu,matlab")
+        if targets:
+            from ..control.export import export_compensator
+
+            written = export_compensator(
+                model, out / "compensator", targets=targets, axis=the_axis, compensator=fmu_kind
+            )
+            for path in written:
+                console.print(terminal(f"written: {path}", markup=False), markup=False)
+        if export_only:
+            return
         result = compare_compensators(model, axis=the_axis, reference=ref, robustness=robustness)
         result.write(out)
         document = result.to_dict()

@@ -34,6 +34,9 @@ __all__ = [
     "params_at",
     "operating_pressure",
     "force_rate_gain",
+    "compensator_step",
+    "run_compensator",
+    "COMPENSATOR_STATE",
 ]
 
 FRICTION_ROWS = ("F_c", "F_s", "sigma_2", "v_r", "alpha", "sigma_0", "sigma_1")
@@ -200,6 +203,66 @@ def velocity_gain(direction, pa, pb, ax):
     return 0.5 * k * (ra / aa + rb / ab)
 
 
+COMPENSATOR_STATE = ("x_prev [m]", "z_hat [m]", "f_prev [N]", "started [-]")
+"""The compensator's state vector (:func:`compensator_step`): the previous position sample,
+the observer's bristle deflection, the previous force estimate, 1 after the first sample."""
+COMPENSATOR_STATE_SIZE = len(COMPENSATOR_STATE)
+
+
+@njit(cache=True, inline="always")
+def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, v_ref, oracle):
+    """One controller sample of a compensator: returns (force F [N], command u_c [-]).
+
+    A pure function of the measurements (position ``x`` [m], chamber pressures ``pa``,
+    ``pb`` [Pa], reference ``x_ref`` [m], ``v_ref`` [m/s]) and the state vector
+    ``state`` (:data:`COMPENSATOR_STATE`, updated in place); ``kind`` a code of
+    COMPENSATOR_CODES, ``model`` the datasheet's friction table, ``model_ref`` its pressure
+    rule, ``ctrl`` the controller vector (CTRL), ``ax`` the axis vector; ``oracle`` the
+    plant's friction [N] (used by kind 4 only). The C, FMU and MATLAB exports
+    (:mod:`cylfric.control.export`) are this function, line by line.
+    """
+    T = ctrl[9]
+    started = state[3] > 0.0
+    v_meas = (x - state[0]) / T if started else 0.0
+    state[0] = x
+    comp = 0.0
+    if kind == 1:
+        comp = ctrl[7] * math.tanh(v_ref / ctrl[5])
+    elif kind == 2:
+        fc, fs, s2, v_r, al, s0, s1 = params_at(model, operating_pressure(model_ref, pa, pb))
+        comp = g_function(abs(v_ref), fc, fs, v_r, al) * math.tanh(v_ref / ctrl[5]) + s2 * v_ref
+    elif kind == 3:
+        fc, fs, s2, v_r, al, s0, s1 = params_at(model, operating_pressure(model_ref, pa, pb))
+        z_hat, _ = z_step(state[1], v_meas, T, s0, fc, fs, v_r, al)
+        z_hat += ctrl[6] * (x_ref - x) * T
+        state[1] = z_hat
+        comp = lugre_instant(v_meas, z_hat, s0, s1, s2, fc, fs, v_r, al)
+    elif kind == 4:
+        comp = oracle
+    u_c = 0.0
+    if started and kind != 0:
+        rate = (comp - state[2]) / T
+        u_c = rate / force_rate_gain(1.0 if rate >= 0 else -1.0, x, pa, pb, ax)
+    state[2] = comp
+    state[3] = 1.0
+    return comp, u_c
+
+
+@njit(cache=True)
+def run_compensator(kind, model, model_ref, ctrl, ax, measurements):
+    """:func:`compensator_step` along recorded measurements, from the zero state: rows
+    (x [m], p_A [Pa], p_B [Pa], x_ref [m], v_ref [m/s]); returns rows (F [N], u_c [-])."""
+    n = measurements.shape[0]
+    out = np.empty((n, 2))
+    state = np.zeros(COMPENSATOR_STATE_SIZE)
+    for k in range(n):
+        m = measurements[k]
+        out[k, 0], out[k, 1] = compensator_step(
+            kind, model, model_ref, ctrl, ax, state, m[0], m[1], m[2], m[3], m[4], 0.0
+        )
+    return out
+
+
 @njit(cache=True)
 def closed_loop(
     ax, plant, plant_ref, model, model_ref, compensator, ctrl, x_ref, v_ref, substeps, state0
@@ -216,7 +279,7 @@ def closed_loop(
     beta, leak, ps, pt, kv, lam = ax[6], ax[7], ax[8], ax[9], ax[10], ax[11]
     order, tau, wv, zv, fload = ax[12], ax[13], ax[14], ax[15], ax[16]
     kp, ki, kd, ff_ext = ctrl[0], ctrl[1], ctrl[2], ctrl[3]
-    vs, kobs, fcoul, T = ctrl[5], ctrl[6], ctrl[7], ctrl[9]
+    T = ctrl[9]
     n = x_ref.shape[0]
     out = np.empty((n, 10))
     h = T / substeps
@@ -226,7 +289,7 @@ def closed_loop(
     sd = 0.0
     integ = 0.0
     x_prev = x
-    f_prev = 0.0
+    cstate = np.zeros(COMPENSATOR_STATE_SIZE)
     z_hat = 0.0
     u = 0.0
     comp = 0.0
@@ -237,30 +300,14 @@ def closed_loop(
         x_prev = x
         err = x_ref[k] - x
         vr = v_ref[k]
-        p_meas = operating_pressure(model_ref, pa, pb)
-        if compensator == 0:
-            comp = 0.0
-        elif compensator == 1:
-            comp = fcoul * math.tanh(vr / vs)
-        elif compensator == 2:
-            fc, fs, s2, v_r, al, s0, s1 = params_at(model, p_meas)
-            comp = g_function(abs(vr), fc, fs, v_r, al) * math.tanh(vr / vs) + s2 * vr
-        elif compensator == 3:
-            fc, fs, s2, v_r, al, s0, s1 = params_at(model, p_meas)
-            z_hat, _ = z_step(z_hat, v_meas, T, s0, fc, fs, v_r, al)
-            z_hat += kobs * err * T
-            comp = lugre_instant(v_meas, z_hat, s0, s1, s2, fc, fs, v_r, al)
-        else:
-            comp = friction
+        comp, u_c = compensator_step(
+            compensator, model, model_ref, ctrl, ax, cstate, x, pa, pb, x_ref[k], vr, friction
+        )
+        z_hat = cstate[1]
         ff = 0.0
         if ff_ext > 0.0:  # flow linearisation at the measured pressures
             ff = vr / velocity_gain(1.0 if vr >= 0 else -1.0, pa, pb, ax)
         u_fb = kp * err + integ + kd * (vr - v_meas)
-        u_c = 0.0
-        if k > 0 and compensator != 0:
-            rate = (comp - f_prev) / T
-            u_c = rate / force_rate_gain(1.0 if rate >= 0 else -1.0, x, pa, pb, ax)
-        f_prev = comp
         u = ff + u_fb + u_c + ctrl[8]
         if u > 1.0:
             u = 1.0

@@ -45,7 +45,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .axis import DEFAULT_AXIS, Axis
-from .kernel import COMPENSATOR_CODES, OUTPUTS, REFERENCE_CODES, closed_loop, friction_table
+from .kernel import (
+    COMPENSATOR_CODES,
+    OUTPUTS,
+    REFERENCE_CODES,
+    closed_loop,
+    friction_table,
+    run_compensator,
+)
 from .tuning import Tuning, tune
 
 if TYPE_CHECKING:
@@ -65,6 +72,9 @@ __all__ = [
     "SMOOTHING_VELOCITY",
     "OBSERVER_GAIN",
     "PlantFriction",
+    "compensator_constants",
+    "compensator_outputs",
+    "MEASUREMENTS",
 ]
 
 COMPENSATORS = tuple(COMPENSATOR_CODES)
@@ -193,6 +203,13 @@ class LoopRun:
         """Tracking error x_ref - x [m]."""
         return self.reference.position - self.outputs[:, 0]
 
+    def measurements(self) -> np.ndarray:
+        """What a compensator read at each sample: rows of :data:`MEASUREMENTS`."""
+        o = self.outputs
+        return np.column_stack(
+            [o[:, 0], o[:, 2], o[:, 3], self.reference.position, self.reference.velocity]
+        )
+
     def to_pandas(self) -> pd.DataFrame:
         """Time series with units in the column names."""
         import pandas as pd
@@ -213,7 +230,7 @@ def rest_state(axis: Axis) -> np.ndarray:
 
 def controller_vector(
     axis: Axis,
-    tuning: Tuning,
+    tuning: Tuning | None,
     model: FrictionModel,
     *,
     smoothing_velocity: float = SMOOTHING_VELOCITY,
@@ -222,11 +239,10 @@ def controller_vector(
     """The compiled loop's controller vector (``kernel.CTRL``)."""
     pa, pb = axis.rest_pressures()
     coulomb = float(model.params_at(float(model.operating_pressure(pa, pb)))["F_c"])
+    gains = (0.0, 0.0, 0.0) if tuning is None else (tuning.kp, tuning.ki, tuning.kd)
     return np.array(
         [
-            tuning.kp,
-            tuning.ki,
-            tuning.kd,
+            *gains,
             1.0,
             1.0,
             smoothing_velocity,
@@ -235,6 +251,69 @@ def controller_vector(
             0.0,
             axis.sample_time,
         ]
+    )
+
+
+def compensator_constants(
+    model: FrictionModel,
+    axis: Axis = DEFAULT_AXIS,
+    *,
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> np.ndarray:
+    """The controller vector with the PID off: what the compensator step alone reads
+    (sign smoothing [m/s], observer gain [1/s], Coulomb level [N], sample time [s])."""
+    ctrl = controller_vector(
+        axis, None, model, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+    )
+    ctrl[:4] = 0.0
+    return ctrl
+
+
+MEASUREMENTS = (
+    "position [m]",
+    "pressure_a [Pa]",
+    "pressure_b [Pa]",
+    "position_reference [m]",
+    "velocity_reference [m/s]",
+)
+"""Columns of the measurements a compensator reads at each sample (:func:`compensator_outputs`)."""
+
+
+def compensator_outputs(
+    model: FrictionModel,
+    compensator: str,
+    measurements: np.ndarray,
+    *,
+    axis: Axis = DEFAULT_AXIS,
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> np.ndarray:
+    """The compensator (``kernel.compensator_step``) along recorded measurements.
+
+    ``measurements``: rows of :data:`MEASUREMENTS` at the controller samples (e.g.
+    :meth:`LoopRun.measurements` of a closed-loop run); returns rows (force [N], command
+    [-]), from the zero state. The reference the exported C, FMU and MATLAB steps match.
+    """
+    if compensator not in COMPENSATOR_CODES or compensator == "oracle":
+        raise ValueError(
+            f"compensator {compensator!r}: expected one of "
+            f"{[c for c in COMPENSATORS if c != 'oracle']} (the oracle reads the plant)"
+        )
+    data = np.ascontiguousarray(measurements, dtype=float)
+    if data.ndim != 2 or data.shape[1] != len(MEASUREMENTS):
+        raise ValueError(
+            f"measurements of shape {data.shape}; expected (n, 5) columns {list(MEASUREMENTS)}"
+        )
+    return run_compensator(
+        COMPENSATOR_CODES[compensator],
+        friction_table(model),
+        REFERENCE_CODES[model.reference],
+        compensator_constants(
+            model, axis, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+        ),
+        axis.vector(),
+        data,
     )
 
 

@@ -584,14 +584,14 @@ def _params_header(model, law_lines) -> str:
     )
 
 
-def _build_description(name) -> str:
+def _build_description(name, source: str = "cylfric_fmu.c") -> str:
     return "\n".join(
         [
             '<?xml version="1.0" encoding="UTF-8"?>',
             '<fmiBuildDescription fmiVersion="3.0">',
             f'  <BuildConfiguration modelIdentifier="{name}">',
             '    <SourceFileSet language="C99">',
-            '      <SourceFile name="cylfric_fmu.c"/>',
+            f"      <SourceFile name={quoteattr(source)}/>",
             "    </SourceFileSet>",
             "  </BuildConfiguration>",
             "</fmiBuildDescription>",
@@ -604,15 +604,16 @@ def _template(filename: str) -> bytes:
     return resources.files(__package__).joinpath("templates", filename).read_bytes()
 
 
-def _compile(sources: dict, name: str, suffix: str, cc: str) -> bytes:
-    """Compile the sources with ``cc`` in a scratch folder; returns the shared library."""
+def _compile(sources: dict, name: str, suffix: str, cc: str, main: str = "cylfric_fmu.c") -> bytes:
+    """Compile the sources (``main``, the one translation unit) with ``cc`` in a scratch
+    folder; returns the shared library. Also used by :mod:`cylfric.control.export`."""
     with tempfile.TemporaryDirectory(prefix="cylfric-fmu-") as tmp:
         folder = Path(tmp) / "sources"
         folder.mkdir()
         for filename, data in sources.items():
             (folder / filename).write_bytes(data)
         target = f"{name}{suffix}"
-        command = [cc, *_CFLAGS, "-Isources", "sources/cylfric_fmu.c", "-o", target, "-lm"]
+        command = [cc, *_CFLAGS, "-Isources", f"sources/{main}", "-o", target, "-lm"]
         done = subprocess.run(command, cwd=tmp, capture_output=True, text=True, check=False)
         if done.returncode != 0:
             raise RuntimeError(

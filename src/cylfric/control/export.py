@@ -1,0 +1,575 @@
+"""The compensator leaves cylfric: C source, an FMU and a MATLAB function of one sample.
+
+``export_compensator(model, out, targets=("c", "fmu", "matlab"))`` writes the compensator step
+of :func:`cylfric.control.kernel.compensator_step` (every exportable kind: ``none``,
+``coulomb``, ``static``, ``lugre``; the ``oracle`` needs the plant's own friction and is not
+a compensator one can deploy) with the datasheet's friction laws, the axis and the controller
+constants fixed at export:
+
+``c``
+    ``cylfric_compensator.h`` (the interface: input, state and output structs of doubles),
+    ``cylfric_compensator.c`` (the step, the same for every datasheet; C99, no allocation,
+    no global written, a pure function of the measurements and the state) and the generated
+    ``cylfric_compensator_params.h`` (the friction table, the operating-pressure rule, the
+    axis constants, the sample time, sign smoothing, observer gain, Coulomb level; every
+    number with 17 significant digits).
+``fmu``
+    ``<name>.fmu``: an FMI 2.0 co-simulation FMU of one kind (``compensator``, structural),
+    inputs ``position`` [m], ``pressure_a``, ``pressure_b`` [Pa], ``position_reference`` [m],
+    ``velocity_reference`` [m/s], outputs ``force`` [N] and ``command`` [-]; each ``doStep``
+    is one controller sample (the step must equal the axis's sample time), built with the
+    FMU machinery of :mod:`cylfric.export.fmu` (the same compiler, zip and build
+    description; the sources inside for other platforms).
+``matlab``
+    ``<name>_step.m``: ``[force, command, state] = <name>_step(kind, position, pressure_a,
+    pressure_b, position_reference, velocity_reference, state)`` with ``kind`` 0 none,
+    1 coulomb, 2 static, 3 lugre and ``state`` a 4-vector (``zeros(4, 1)`` at the start):
+    fixed sizes and subfunctions only, so that it serves as a Simulink MATLAB Function block.
+
+Every user string that reaches the generated code (the datasheet's source) goes through
+:mod:`cylfric.escape`. The files are deterministic (no dates) and written atomically.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import warnings
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..escape import c_comment, c_string, matlab_comment
+from ..escape import xml_attr as quoteattr
+from .axis import DEFAULT_AXIS, Axis
+from .kernel import COMPENSATOR_CODES, FRICTION_ROWS, REFERENCE_CODES, friction_table
+from .loop import OBSERVER_GAIN, SMOOTHING_VELOCITY, compensator_constants
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping
+
+    from cylfric._typing import StrPath
+    from cylfric.model import FrictionModel
+
+__all__ = [
+    "export_compensator",
+    "EXPORT_TARGETS",
+    "EXPORTABLE_COMPENSATORS",
+    "C_FILES",
+    "FMU_INPUTS",
+    "FMU_OUTPUTS",
+]
+
+EXPORT_TARGETS = ("c", "fmu", "matlab")
+"""What :func:`export_compensator` can write."""
+EXPORTABLE_COMPENSATORS = ("none", "coulomb", "static", "lugre")
+"""Compensator kinds the exports carry (codes of ``kernel.COMPENSATOR_CODES``)."""
+C_FILES = ("cylfric_compensator.h", "cylfric_compensator.c", "cylfric_compensator_params.h")
+"""The C target's files."""
+FMU_INPUTS = {
+    "position": ("m", "measured rod position"),
+    "pressure_a": ("Pa", "measured pressure in chamber A (cap side)"),
+    "pressure_b": ("Pa", "measured pressure in chamber B (rod side)"),
+    "position_reference": ("m", "reference position"),
+    "velocity_reference": ("m/s", "reference velocity"),
+}
+"""Inputs of the compensator FMU (value references 0-4) with their units."""
+FMU_OUTPUTS = {
+    "force": ("N", "friction force estimate, positive in the direction of motion"),
+    "command": ("", "valve command that changes the cylinder force by the estimate's change"),
+}
+"""Outputs of the compensator FMU (value references 5, 6)."""
+
+_AXIS_DEFINES = (
+    ("CYLFRIC_AREA_A", "area_a", "piston area of chamber A [m^2]"),
+    ("CYLFRIC_AREA_B", "area_b", "piston area of chamber B [m^2]"),
+    ("CYLFRIC_STROKE", "stroke", "stroke [m]"),
+    ("CYLFRIC_DEAD_VOLUME_A", "dead_volume_a", "dead volume of chamber A [m^3]"),
+    ("CYLFRIC_DEAD_VOLUME_B", "dead_volume_b", "dead volume of chamber B [m^3]"),
+    ("CYLFRIC_BULK_MODULUS", "bulk_modulus", "oil bulk modulus [Pa]"),
+    ("CYLFRIC_SUPPLY", "supply_pressure", "supply pressure [Pa]"),
+    ("CYLFRIC_TANK", "tank_pressure", "tank pressure [Pa]"),
+    ("CYLFRIC_VALVE_K", "valve_coefficient", "valve flow coefficient [m^3/(s*sqrt(Pa))]"),
+    ("CYLFRIC_LAMINAR_DROP", "valve_laminar_drop", "laminar transition of the orifices [Pa]"),
+)
+_ROW_UNITS = ("N", "N", "N*s/m", "m/s", "-", "N/m", "N*s/m")
+_LAW_NAMES = {0: "constant", 1: "linear", 2: "quadratic", 3: "exponential"}
+_REFERENCE_C = {
+    "a": "p = pressure_a",
+    "b": "p = pressure_b",
+    "sum": "p = pressure_a + pressure_b",
+    "mean": "p = 0.5 (pressure_a + pressure_b)",
+    "max": "p = max(pressure_a, pressure_b)",
+}
+
+
+def _template(filename: str) -> bytes:
+    return resources.files(__package__).joinpath("templates", filename).read_bytes()
+
+
+def _number(value: float) -> str:
+    """A double as C/MATLAB text that reads back to the same bits."""
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"cannot export the non-finite value {value!r}")
+    return repr(value)
+
+
+class _Constants:
+    """Everything the exported step fixes: the friction table, rule, axis, controller."""
+
+    def __init__(self, model, axis: Axis, smoothing_velocity: float, observer_gain: float):
+        self.model = model
+        self.axis = axis
+        self.table = friction_table(model)
+        self.reference = model.reference
+        ctrl = compensator_constants(
+            model, axis, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+        )
+        self.sample_time = float(ctrl[9])
+        self.smoothing = float(ctrl[5])
+        self.observer_gain = float(ctrl[6])
+        self.coulomb = float(ctrl[7])
+        vector = dict(zip(_axis_names(), axis.vector(), strict=True))
+        self.axis_values = {define: float(vector[key]) for define, key, _ in _AXIS_DEFINES}
+        self.source = str(getattr(model, "source", None) or "a FrictionModel")
+
+    def scalars(self):
+        """(C name, value, description) of the controller constants."""
+        return (
+            ("CYLFRIC_SAMPLE_TIME", self.sample_time, "controller sample time T [s]"),
+            ("CYLFRIC_SMOOTHING_VELOCITY", self.smoothing, "sign smoothing v_s [m/s]"),
+            ("CYLFRIC_OBSERVER_GAIN", self.observer_gain, "LuGre observer gain k_o [1/s]"),
+            (
+                "CYLFRIC_COULOMB_FORCE",
+                self.coulomb,
+                "Coulomb level F_c at the rest operating pressure [N]",
+            ),
+        )
+
+
+def _axis_names() -> tuple[str, ...]:
+    from .axis import _VECTOR
+
+    return tuple(_VECTOR)
+
+
+# ------------------------------------------------------------------------------- C
+def _params_header(k: _Constants) -> str:
+    rows = []
+    for i, name in enumerate(FRICTION_ROWS):
+        code = int(k.table[i, 0])
+        values = ", ".join(_number(v) for v in k.table[i])
+        rows.append(f"    {{{values}}}, /* {name} [{_ROW_UNITS[i]}]: {_LAW_NAMES[code]} */")
+    lines = [
+        "/* Generated by cylfric.control.export: the constants of the friction compensator (SI).",
+        f" * Datasheet: {c_comment(k.source)}",
+        f" * Friction law: {c_comment(k.model.friction_law)}; operating pressure "
+        f"{_REFERENCE_C[k.reference]}.",
+        " * FRICTION rows: F_c, F_s, sigma_2, v_r, alpha, sigma_0, sigma_1; columns: law code",
+        " * (0 constant c0; 1 linear c0 + c1 p; 2 quadratic c0 + c1 p + c2 p^2; 3 exponential",
+        " * c0 + c1 (exp(c2 p) - 1)), c0, c1, c2, with p the operating pressure [Pa]. */",
+        "#ifndef CYLFRIC_COMPENSATOR_PARAMS_H",
+        "#define CYLFRIC_COMPENSATOR_PARAMS_H",
+        f"#define CYLFRIC_REFERENCE {REFERENCE_CODES[k.reference]} "
+        f"/* {_REFERENCE_C[k.reference]} */",
+        "static const double CYLFRIC_FRICTION[7][4] = {",
+        *rows,
+        "};",
+    ]
+    for define, value, text in k.scalars():
+        lines.append(f"#define {define} ({_number(value)}) /* {text} */")
+    for define, _, text in _AXIS_DEFINES:
+        lines.append(f"#define {define} ({_number(k.axis_values[define])}) /* {text} */")
+    lines += ["#endif", ""]
+    return "\n".join(lines)
+
+
+def _c_sources(k: _Constants) -> dict[str, bytes]:
+    return {
+        "cylfric_compensator.h": _template("cylfric_compensator.h"),
+        "cylfric_compensator.c": _template("cylfric_compensator.c"),
+        "cylfric_compensator_params.h": _params_header(k).encode(),
+    }
+
+
+# ------------------------------------------------------------------------------- FMU
+def _fmu_description(k: _Constants, name: str, guid: str, kind: str) -> str:
+    from .. import __version__
+    from ..export.fmu import _BASE, _unit_xml
+
+    pa, pb = k.axis.rest_pressures()
+    starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0]
+    description = (
+        f"cylfric friction compensator ({kind}) of the datasheet {k.source}: one controller "
+        f"sample every {k.sample_time!r} s; {_REFERENCE_C[k.reference]}"
+    )
+    every = (*FMU_INPUTS.values(), *FMU_OUTPUTS.values())
+    units = {u: _BASE[u.replace(".", "*")] for u, _ in every if u}
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        "<fmiModelDescription",
+        '  fmiVersion="2.0"',
+        f"  modelName={quoteattr(name)}",
+        f"  guid={quoteattr(guid)}",
+        f"  description={quoteattr(description)}",
+        f"  generationTool={quoteattr('cylfric ' + __version__)}",
+        '  variableNamingConvention="structured"',
+        '  numberOfEventIndicators="0">',
+        f"  <CoSimulation modelIdentifier={quoteattr(name)}"
+        ' canHandleVariableCommunicationStepSize="false">',
+        "    <SourceFiles>",
+        '      <File name="cylfric_compensator_fmu.c"/>',
+        "    </SourceFiles>",
+        "  </CoSimulation>",
+        *_unit_xml(units),
+        f'  <DefaultExperiment startTime="0.0" stopTime="1.0" stepSize="{k.sample_time!r}"/>',
+        "  <ModelVariables>",
+    ]
+    variables: list[tuple[str, str, str, str, float | None]] = [
+        (var, unit, text, "input", start)
+        for (var, (unit, text)), start in zip(FMU_INPUTS.items(), starts, strict=True)
+    ]
+    variables += [(var, unit, text, "output", None) for var, (unit, text) in FMU_OUTPUTS.items()]
+    variables.append(("z_hat", "m", "observer's bristle deflection (lugre)", "local", None))
+    for vr, (var, unit, text, causality, start) in enumerate(variables):
+        variability = "continuous" if causality == "input" else "discrete"
+        attrs = (
+            f'name={quoteattr(var)} valueReference="{vr}" description={quoteattr(text)}'
+            f' causality="{causality}" variability="{variability}"'
+        )
+        if causality != "input":
+            attrs += ' initial="calculated"'
+        real = [f"unit={quoteattr(unit)}"] if unit else []
+        if start is not None:
+            real.append(f'start="{float(start)!r}"')
+        out += [
+            f"    <!-- index {vr + 1} -->",
+            f"    <ScalarVariable {attrs}>",
+            f"      <Real {' '.join(real)}/>" if real else "      <Real/>",
+            "    </ScalarVariable>",
+        ]
+    out += [
+        "  </ModelVariables>",
+        "  <ModelStructure>",
+        "    <Outputs>",
+        '      <Unknown index="6"/>',
+        '      <Unknown index="7"/>',
+        "    </Outputs>",
+        "    <InitialUnknowns>",
+        '      <Unknown index="6"/>',
+        '      <Unknown index="7"/>',
+        "    </InitialUnknowns>",
+        "  </ModelStructure>",
+        "</fmiModelDescription>",
+        "",
+    ]
+    return "\n".join(out)
+
+
+def _fmu_header(k: _Constants, name: str, guid: str, kind: str) -> str:
+    pa, pb = k.axis.rest_pressures()
+    starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0, 0.0, 0.0, 0.0]
+    return "\n".join(
+        [
+            "/* Generated by cylfric.control.export: identifier, GUID, kind and start values. */",
+            "#ifndef CYLFRIC_COMPENSATOR_FMU_H",
+            "#define CYLFRIC_COMPENSATOR_FMU_H",
+            f"#define MODEL_IDENTIFIER_STRING {c_string(name)}",
+            f"#define MODEL_GUID {c_string(guid)}",
+            f"#define CYLFRIC_FMU_KIND {COMPENSATOR_CODES[kind]} /* {kind} */",
+            "#define CYLFRIC_FMU_STARTS {" + ", ".join(_number(s) for s in starts) + "}",
+            "#endif",
+            "",
+        ]
+    )
+
+
+def _fmu_bytes(k: _Constants, name: str, kind: str) -> bytes:
+    import platform
+    import sys
+
+    from ..export.fmu import (
+        _build_description,
+        _compile,
+        _zip,
+        compiler,
+        datasheet_text,
+        fmi_platform,
+    )
+    from ..export.fmu import _template as fmi_template
+
+    fmi_headers = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+    sources = _c_sources(k)
+    sources["cylfric_compensator_fmu.c"] = _template("cylfric_compensator_fmu.c")
+    sources.update({f: fmi_template(f) for f in fmi_headers})
+    datasheet = datasheet_text(k.model)
+    digest = hashlib.sha256()
+    parts = [name.encode(), kind.encode(), datasheet.encode()]
+    for part in [*parts, *(sources[f] for f in sorted(sources))]:
+        digest.update(part)
+        digest.update(b"\0")
+    h = digest.hexdigest()
+    guid = f"{{{h[:8]}-{h[8:12]}-{h[12:16]}-{h[16:20]}-{h[20:32]}}}"
+    sources["cylfric_compensator_fmu.h"] = _fmu_header(k, name, guid, kind).encode()
+    entries = {f"sources/{f}": data for f, data in sources.items()}
+    entries["sources/buildDescription.xml"] = _build_description(
+        name, "cylfric_compensator_fmu.c"
+    ).encode()
+    entries["modelDescription.xml"] = _fmu_description(k, name, guid, kind).encode()
+    entries["resources/datasheet.json"] = datasheet.encode()
+    target, cc = fmi_platform(), compiler()
+    if target is None or cc is None:
+        why = (
+            "no C compiler ($CC, cc, gcc, clang)"
+            if cc is None
+            else f"no FMI 2.0 platform name for {sys.platform}/{platform.machine()}"
+        )
+        warnings.warn(
+            f"{why}: the compensator FMU carries its C sources only; compile them on the "
+            "target (fmpy.util.compile_platform_binary) before simulating",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+    else:
+        folder, suffix = target
+        entries[f"binaries/{folder}/{name}{suffix}"] = _compile(
+            sources, name, suffix, cc, main="cylfric_compensator_fmu.c"
+        )
+    return _zip(entries)
+
+
+# ------------------------------------------------------------------------------- MATLAB
+def _matlab(k: _Constants, name: str) -> str:
+    table = ";\n         ".join(" ".join(_number(v) for v in row) for row in k.table)
+    rule = {
+        "a": "p = pressure_a;",
+        "b": "p = pressure_b;",
+        "sum": "p = pressure_a + pressure_b;",
+        "mean": "p = 0.5 * (pressure_a + pressure_b);",
+        "max": "p = max(pressure_a, pressure_b);",
+    }[k.reference]
+    ax = {key: _number(v) for key, v in k.axis_values.items()}
+    fn = f"{name}_step"
+    signature = (
+        f"function [force, command, state] = {fn}(kind, position, pressure_a, pressure_b, "
+        "position_reference, velocity_reference, state)"
+    )
+    law = matlab_comment(k.model.friction_law)
+    vs = _number(k.smoothing)
+    return f"""{signature}
+%{fn.upper()} One sample of the cylfric friction compensator (SI units).
+%   [force, command, state] = {fn}(kind, position, pressure_a, pressure_b,
+%       position_reference, velocity_reference, state)
+%   kind: 0 none, 1 coulomb, 2 static, 3 lugre; position [m], pressure_a, pressure_b [Pa],
+%   position_reference [m], velocity_reference [m/s]; state: 4-vector [x_prev [m];
+%   z_hat [m]; f_prev [N]; started [-]], zeros(4, 1) before the first sample.
+%   force: the friction force estimate [N]; command: the valve command [-] that changes the
+%   cylinder force by the estimate's change (add it to the position controller's command).
+%   Call once per controller sample, T = {k.sample_time!r} s. Fixed sizes and subfunctions
+%   only: usable as a Simulink MATLAB Function block.
+%
+%   Written by cylfric (cylfric.control.export; docs/control.md), the same step as
+%   cylfric.control.kernel.compensator_step. Datasheet: {matlab_comment(k.source)}
+%   Friction law: {law}; operating pressure {_REFERENCE_C[k.reference]}.
+T = {_number(k.sample_time)};  % sample time [s]
+started = state(4) > 0;
+if started
+    v = (position - state(1)) / T;
+else
+    v = 0;
+end
+state(1) = position;
+comp = 0;
+if kind == 1
+    comp = {_number(k.coulomb)} * tanh(velocity_reference / {vs});
+elseif kind == 2
+    q = params_at(pressure_a, pressure_b);
+    comp = g_of(abs(velocity_reference), q) * tanh(velocity_reference / {vs}) ...
+        + q(3) * velocity_reference;
+elseif kind == 3
+    q = params_at(pressure_a, pressure_b);
+    state(2) = z_step(state(2), v, T, q);
+    state(2) = state(2) + {_number(k.observer_gain)} * (position_reference - position) * T;
+    g = g_of(abs(v), q);
+    dz = v - q(6) * abs(v) * state(2) / g;
+    comp = q(6) * state(2) + q(7) * dz + q(3) * v;
+elseif kind ~= 0
+    error('cylfric:kind', 'kind = %g; expected 0 none, 1 coulomb, 2 static or 3 lugre', kind);
+end
+command = 0;
+if started && kind ~= 0
+    rate = (comp - state(3)) / T;
+    if rate >= 0
+        direction = 1;
+    else
+        direction = -1;
+    end
+    command = rate / force_rate_gain(direction, position, pressure_a, pressure_b);
+end
+state(3) = comp;
+state(4) = 1;
+force = comp;
+end
+
+function q = params_at(pressure_a, pressure_b)
+% (F_c, F_s, sigma_2, v_r, alpha, sigma_0, sigma_1) at the operating pressure, kept physical
+{rule}
+F = [{table}];
+q = zeros(1, 7);
+for i = 1:7
+    if F(i, 1) == 0
+        q(i) = F(i, 2);
+    elseif F(i, 1) == 1
+        q(i) = F(i, 2) + F(i, 3) * p;
+    elseif F(i, 1) == 2
+        q(i) = F(i, 2) + p * (F(i, 3) + F(i, 4) * p);
+    else
+        q(i) = F(i, 2) + F(i, 3) * expm1(F(i, 4) * p);
+    end
+end
+q = max(q, [1e-9 1e-9 0 1e-12 1e-3 1e-9 0]);
+end
+
+function y = exp_neg(x)
+if x < 1e-3
+    y = 1 - x * (1 - x * (0.5 - x * (1 / 6 - x * (1 / 24 - x * (1 / 120)))));
+elseif x > 746
+    y = 0;
+else
+    y = exp(-x);
+end
+end
+
+function g = g_of(speed, q)
+% g(|v|) of thesis eq. 2.5 [N]
+u = speed * (1 / q(4));
+if q(5) == 2
+    d = exp_neg(u * u);
+elseif q(5) == 1
+    d = exp_neg(u);
+else
+    d = exp_neg(u ^ q(5));
+end
+g = q(1) + (q(2) - q(1)) * d;
+end
+
+function z = z_step(z0, v, h, q)
+% exact bristle deflection after h at constant v (eq. 2.5)
+if v == 0
+    z = z0;
+    return;
+end
+g = g_of(abs(v), q);
+x = q(6) * abs(v) / g * h;
+if v > 0
+    z_ss = g / q(6);
+else
+    z_ss = -g / q(6);
+end
+if x < 1e-5
+    one_minus_e = x * (1 - x * (0.5 - x / 6));
+else
+    one_minus_e = -expm1(-x);
+end
+z = z_ss + (z0 - z_ss) * (1 - one_minus_e);
+end
+
+function r = root_of(dp)
+lam = {ax["CYLFRIC_LAMINAR_DROP"]};  % laminar transition [Pa]
+if abs(dp) < lam
+    r = dp / sqrt(lam);
+elseif dp > 0
+    r = sqrt(abs(dp));
+else
+    r = -sqrt(abs(dp));
+end
+end
+
+function G = force_rate_gain(direction, x, pa, pb)
+% d(A_A p_A - A_B p_B)/dt per unit valve opening [N/s]
+aa = {ax["CYLFRIC_AREA_A"]};  % [m^2]
+ab = {ax["CYLFRIC_AREA_B"]};  % [m^2]
+va = {ax["CYLFRIC_DEAD_VOLUME_A"]} + aa * x;  % [m^3]
+vb = {ax["CYLFRIC_DEAD_VOLUME_B"]} + ab * ({ax["CYLFRIC_STROKE"]} - x);  % [m^3]
+ps = {ax["CYLFRIC_SUPPLY"]};  % [Pa]
+pt = {ax["CYLFRIC_TANK"]};  % [Pa]
+k = {ax["CYLFRIC_VALVE_K"]};  % [m^3/(s*sqrt(Pa))]
+floor_ = sqrt({ax["CYLFRIC_LAMINAR_DROP"]});
+if direction >= 0
+    ka = k * max(root_of(ps - pa), floor_);
+    kb = k * max(root_of(pb - pt), floor_);
+else
+    ka = k * max(root_of(pa - pt), floor_);
+    kb = k * max(root_of(ps - pb), floor_);
+end
+G = {ax["CYLFRIC_BULK_MODULUS"]} * (aa * ka / va + ab * kb / vb);
+end
+"""
+
+
+# ------------------------------------------------------------------------------- API
+def export_compensator(
+    model: FrictionModel | StrPath | Mapping[str, Any],
+    out: StrPath,
+    *,
+    targets: Iterable[str] = EXPORT_TARGETS,
+    axis: Axis = DEFAULT_AXIS,
+    compensator: str = "lugre",
+    name: str = "cylfric_compensator",
+    smoothing_velocity: float = SMOOTHING_VELOCITY,
+    observer_gain: float = OBSERVER_GAIN,
+) -> list[Path]:
+    """Write the compensator step as C source, an FMU and/or a MATLAB function.
+
+    Parameters
+    ----------
+    model : FrictionModel, path or dict
+        The datasheet the compensator uses.
+    out : path
+        Output folder (created if needed).
+    targets : iterable of {"c", "fmu", "matlab"}
+        What to write (see the module notes).
+    axis : Axis
+        The axis (areas, volumes, valve, supply; its sample time is the compensator's).
+    compensator : {"none", "coulomb", "static", "lugre"}
+        The kind the FMU carries (structural); the C and MATLAB steps take it as an argument.
+    name : str
+        FMU model identifier and MATLAB function prefix (a C identifier).
+    smoothing_velocity, observer_gain : float
+        Sign smoothing v_s [m/s] and LuGre observer gain k_o [1/s], as in the loop.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    from .._atomic import atomic_write_bytes, atomic_write_text
+    from .._paths import make_folder
+    from ..export.fmu import _as_model, _check_name
+
+    targets = list(targets)
+    unknown = [t for t in targets if t not in EXPORT_TARGETS]
+    if unknown or not targets:
+        raise ValueError(f"export targets {targets}: expected some of {list(EXPORT_TARGETS)}")
+    if compensator not in EXPORTABLE_COMPENSATORS:
+        raise ValueError(
+            f"compensator {compensator!r} cannot be exported; valid: "
+            f"{list(EXPORTABLE_COMPENSATORS)} (the oracle needs the plant's own friction)"
+        )
+    name = _check_name(name, "cylfric_compensator")
+    model = _as_model(model)
+    constants = _Constants(model, axis, smoothing_velocity, observer_gain)
+    out = Path(out)
+    make_folder(out)
+    written: list[Path] = []
+    if "c" in targets:
+        for filename, data in _c_sources(constants).items():
+            written.append(atomic_write_bytes(out / filename, data))
+    if "fmu" in targets:
+        written.append(
+            atomic_write_bytes(out / f"{name}.fmu", _fmu_bytes(constants, name, compensator))
+        )
+    if "matlab" in targets:
+        written.append(atomic_write_text(out / f"{name}_step.m", _matlab(constants, name)))
+    return written
