@@ -647,7 +647,7 @@ def _documentation(model, name) -> str:
     for a new session (user text through :func:`cylfric.escape.html_text`)."""
     from .scatter import summary_lines
 
-    paragraphs = "\n".join(f"<p>{html_text(line)}</p>" for line in summary_lines(model))
+    paragraphs = "\n".join(f"<p>{line}</p>" for line in summary_lines(model, html_text))
     label = html_text(model.record.get("name", "cylfric model"))
     return "\n".join(
         [

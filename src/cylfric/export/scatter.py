@@ -16,6 +16,8 @@ import math
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from cylfric.model import FrictionModel
 
 __all__ = [
@@ -179,10 +181,19 @@ def _percent(value: float | None) -> str:
     return "?" if value is None else f"{value:.3g} %"
 
 
-def summary_lines(model: FrictionModel) -> list[str]:
-    """Plain-text lines for comments and READMEs (raw user text inside: escape each line)."""
+def summary_lines(model: FrictionModel, user: Callable[[str], str] = str) -> list[str]:
+    """Lines of text for comments and READMEs: the scatter record, the lack-of-fit verdict
+    and how to form a band.
+
+    ``user`` is applied to each piece of user text (method, sources, the prior's basis, the
+    test's name and action): pass the target's escaper (e.g.
+    :func:`cylfric.escape.markdown_text`); the rest is fixed ASCII text and numbers. Without
+    it (``str``) the lines hold raw user text: escape each whole line for the target.
+    """
     numbers = scatter_numbers(model)
     texts = scatter_texts(model)
+    if texts is not None:
+        texts = {key: user(value) for key, value in texts.items()}
     lines = []
     if numbers is None or texts is None:
         lines.append("Scatter components: " + NOT_COMPUTED.format(key="fit.scatter") + ".")
@@ -197,14 +208,22 @@ def summary_lines(model: FrictionModel) -> list[str]:
             f"reproducibility s_R {_percent(numbers.get('reproducibility_percent'))} "
             "(ISO 5725-2)."
         )
-        if "prior" in texts["session_source"]:
+        prior = _percent(numbers.get("session_prior_percent"))
+        basis = texts.get("session_prior_basis", "basis not stated")
+        if texts["session_source"] == user("prior"):
             lines.append(
-                "ASSUMPTION: the between-session scatter uses a stated prior of "
-                f"{_percent(numbers.get('session_prior_percent'))} of the level: "
-                f"{texts.get('session_prior_basis', 'basis not stated')}."
+                "ASSUMPTION: one session cannot show the between-session scatter; it is the "
+                f"stated prior of {prior} of the level (pooled with the runs' scatter): {basis}."
+            )
+        elif "prior" in texts["session_source"]:  # estimated+prior
+            lines.append(
+                f"The between-session scatter pools the estimate with a stated prior of {prior} "
+                f"of the level: {basis}."
             )
         lines.append(f"Method: {texts['method']}.")
     verdict = lack_of_fit_texts(model)
+    if verdict is not None:
+        verdict = {key: user(value) for key, value in verdict.items()}
     lof = lack_of_fit_numbers(model) or {}
     if verdict is None:
         lines.append("Lack of fit: " + NOT_COMPUTED.format(key="quality.lack_of_fit") + ".")
