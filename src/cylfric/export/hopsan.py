@@ -171,7 +171,7 @@ def fit_hopsan_pressure_signal(
     }
 
 
-def _scatter_table(model) -> list[tuple[str, str, str, str]]:
+def _scatter_table(model: FrictionModel) -> list[tuple[str, str, str, str]]:
     """(record.field, value, unit, meaning) of fit.scatter and quality.lack_of_fit: numbers
     as ``repr`` text, the records' texts as they are (unit ``"text"``: escape them)."""
     from .scatter import (
@@ -203,12 +203,12 @@ def _scatter_table(model) -> list[tuple[str, str, str, str]]:
         for name, value in numbers.items():
             unit, meaning = units[name]
             table.append((f"{prefix}.{name}", repr(float(value)), unit, meaning))
-        for name, value in texts.items():
-            table.append((f"{prefix}.{name}", value, "text", "the record's text"))
+        for name, words in texts.items():
+            table.append((f"{prefix}.{name}", words, "text", "the record's text"))
     return table
 
 
-def _scatter_csv(model) -> str:
+def _scatter_csv(model: FrictionModel) -> str:
     """``<stem>_hopsan_scatter.csv``: field, value, unit, description of the scatter record."""
     import csv
 
@@ -220,7 +220,7 @@ def _scatter_csv(model) -> str:
     return buffer.getvalue()
 
 
-def _scatter_markdown(model) -> str:
+def _scatter_markdown(model: FrictionModel) -> str:
     """The README's section on the scatter record and on bands for a new session."""
     from .scatter import summary_lines
 

@@ -175,8 +175,8 @@ def scatter_struct_lines(model, prefix: str) -> list[str]:
             else:
                 text = _number(value)
             lines.append(f"{struct}.{name} = {text};  % [{unit}] {meaning}")
-        for name, value in texts.items():
-            lines.append(f"{struct}.{name} = {matlab_string(value)};")
+        for name, words in texts.items():
+            lines.append(f"{struct}.{name} = {matlab_string(words)};")
     lines.append(f"% {band_text(model)}")
     return lines
 
