@@ -30,7 +30,8 @@ _ASSIGN = re.compile(r"^P\.(\w+)(?:\.(\w+))? = (.+?);")
 
 
 def _read_params(path):
-    """The struct of a generated ``*_params.m`` as a dict (numbers as floats, [] as None)."""
+    """The struct of a generated ``*_params.m`` as a dict (numbers as floats, [] as None,
+    logicals as bool)."""
     struct = {}
     for line in path.read_text().splitlines():
         match = _ASSIGN.match(line)
@@ -41,6 +42,8 @@ def _read_params(path):
             parsed = None
         elif value.startswith("'"):
             parsed = value.strip("'")
+        elif value in ("true", "false"):  # P.scatter.computed, P.lack_of_fit.significant
+            parsed = value == "true"
         else:
             parsed = float(value)
         if sub is None:

@@ -2,7 +2,8 @@
 
 A datasheet comes from someone else: every text field of it (name, notes, fit method, source
 campaign and file names, the reasons of parameters not identified, the status reasons and
-units of the dynamic parameters, the equation text) is filled with hostile strings (quotes,
+units of the dynamic parameters, the equation text, the scatter record's method, sources and
+prior basis, the lack-of-fit test's name and action) is filled with hostile strings (quotes,
 backslashes, comment closers and openers, newlines, %, ;, NUL, non-ASCII, bidirectional
 overrides, 4 KB) and the model is exported to every target. Each payload starts with a line
 break followed by a marker call, so that a payload that escaped its comment or literal would
@@ -45,6 +46,10 @@ CALL = re.compile(rf"\s*{MARKER}\w*\s*\(")
 (an identifier mangled from a name may begin with the marker, but never with its call)."""
 
 
+MATLAB_LITERAL = re.compile(r"P\.[A-Za-z_][\w.]* = '(?:[^']|'')*';")
+"""A MATLAB line that assigns one character literal to a struct field and does nothing else."""
+
+
 def hostile_sheet(payload: str) -> dict:
     """The coulomb_viscous test model's datasheet with ``payload`` in every text field."""
     model = MODELS["coulomb_viscous"]
@@ -63,6 +68,37 @@ def hostile_sheet(payload: str) -> dict:
     for entry in sheet["dynamic"].values():
         entry["reason"] = payload
         entry["unit"] = payload
+    component = {"std_percent": 3.0, "std_N": 2.7, "source": payload, "dof": 10}
+    sheet["fit"]["scatter"] = {  # issue 22: the scatter record's texts reach every export
+        "method": payload,
+        "relative": True,
+        "sessions": 1,
+        "runs": 3,
+        "points": 30,
+        "reference_force_N": 90.0,
+        "components": {
+            "repeatability": dict(component),
+            "run": dict(component),
+            "session": {  # the session source is an enum of the schema
+                **component,
+                "source": "prior",
+                "prior_percent": 14.0,
+                "prior_basis": payload,
+            },
+        },
+        "reproducibility": {"std_percent": 14.5, "std_N": 13.0},
+    }
+    sheet["quality"] = {
+        "lack_of_fit": {
+            "test": payload,
+            "statistic": 3.0,
+            "dof": [4, 20],
+            "p_value": 0.02,
+            "significant": True,
+            "rms_lack_N": 1.0,
+            "action": payload,
+        }
+    }
     sheet["validity"] = {
         "pressure_min": 1e5,
         "pressure_max": 100e5,
@@ -138,8 +174,9 @@ def test_matlab_and_simscape_hold_user_text_only_in_comments(hostile, tmp_path):
         if not name.endswith(".m"):
             continue
         for line in text.splitlines():
-            # every MATLAB line that carries the marker has it after a comment sign
-            if MARKER in line:
+            # every MATLAB line that carries the marker has it after a comment sign, or is
+            # one assignment of a character literal (the scatter record's texts)
+            if MARKER in line and not MATLAB_LITERAL.fullmatch(line):
                 assert "%" in line and line.index("%") < line.index(MARKER), (name, line)
 
 

@@ -64,6 +64,7 @@ def build_datasheet(
     name: str | None = None,
     pressure_reference: str | None = None,
     pressure_reference_basis: Mapping[str, Any] | None = None,
+    recipe: str | None = None,
 ) -> dict[str, Any]:
     """Datasheet dict from an :class:`~cylfric.identify.Identification`.
 
@@ -77,6 +78,7 @@ def build_datasheet(
         name=name,
         pressure_reference=pressure_reference,
         pressure_reference_basis=pressure_reference_basis,
+        recipe=recipe,
     ).to_datasheet()
 
 
@@ -89,6 +91,7 @@ def datasheet_model(
     name: str | None = None,
     pressure_reference: str | None = None,
     pressure_reference_basis: Mapping[str, Any] | None = None,
+    recipe: str | None = None,
 ) -> FrictionModel:
     """The identified model with the campaign's record: what the datasheet holds.
 
@@ -165,6 +168,8 @@ def datasheet_model(
             {"name": Path(f).name, "sha256": digests.get(f) or file_digest(f)} for f in files
         ],
     }
+    if recipe is not None:  # a campaign.toml from outside the folder (--config)
+        source["recipe"] = str(recipe)
     changes = {
         "record": clean(record),
         "provenance": {**model.provenance, "source": source},

@@ -8,6 +8,7 @@ fits to workers (:mod:`cylfric.many`) builds one too.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -39,6 +40,10 @@ class FitOptions:
         Name recorded in the datasheet (default: the campaign folder's name).
     glob : str or None
         Which files of the folder are runs (overrides ``campaign.toml [files] glob``).
+    config : str or None
+        Path of a campaign.toml to use instead of the folder's (``--config``: a recipe kept
+        outside read-only data; the folder stays untouched). Recorded in the datasheet
+        (``fit.source.recipe``).
     strict : bool
         Raise (ValueError) instead of leaving out the runs the data-quality gate flags
         (:func:`cylfric.quality.assess`); by default they are listed in ``excluded.csv``.
@@ -75,6 +80,7 @@ class FitOptions:
     report: bool = True
     name: str | None = None
     glob: str | None = None
+    config: str | None = None
     strict: bool = False
     export: tuple[str, ...] = ()
     workers: int | None = None
@@ -99,7 +105,9 @@ class FitOptions:
         _check_choice("viscosity_correction", self.viscosity_correction, (None, True, False))
         if self.viscosity_correction is not None:
             object.__setattr__(self, "viscosity_correction", bool(self.viscosity_correction))
-        for name in ("name", "glob"):
+        if isinstance(self.config, os.PathLike):
+            object.__setattr__(self, "config", os.fspath(self.config))
+        for name in ("name", "glob", "config"):
             value = getattr(self, name)
             if value is not None and not isinstance(value, str):
                 raise ValueError(f"{name} = {value!r}: expected a string or None")

@@ -129,7 +129,11 @@ def fit_campaign(
     source, folder = _source(folder, options)
     out = Path(out)
     _check_out(folder, out)
-    campaign = source if isinstance(source, Campaign) else Campaign.open(folder, options.glob)
+    campaign = (
+        source
+        if isinstance(source, Campaign)
+        else Campaign.open(folder, options.glob, config=options.config)
+    )
     if seal is not None:
         campaign = campaign.for_seal(seal)
         options = replace(options, name=_seal_name(options, folder, seal))
@@ -396,11 +400,13 @@ def _remove_leftovers(out: Path):
             shutil.rmtree(path, ignore_errors=True)
 
 
-def _sign_settings(folder) -> str:
-    """Where campaign.toml sets the force-balance signs, for an unphysical-friction error."""
+def _sign_settings(folder, config=None) -> str:
+    """Where campaign.toml (or the ``--config`` recipe) sets the force-balance signs, for an
+    unphysical-friction error."""
     from .io.campaign import CONFIG_NAME, _line_of
 
-    path = Path(folder) / CONFIG_NAME
+    source = getattr(config, "source", None)
+    path = Path(source) if source else Path(folder) / CONFIG_NAME
     if not path.is_file():
         return "; no campaign.toml: the signs are the defaults (load_cell_sign = 1)"
     found = [
@@ -423,7 +429,11 @@ def _fit(
     ``options`` say; campaign.toml and manifest.csv are read once, by :meth:`Campaign.open`."""
     timings = {}
     t0 = time.perf_counter()
-    campaign = source if isinstance(source, Campaign) else Campaign.open(source, options.glob)
+    campaign = (
+        source
+        if isinstance(source, Campaign)
+        else Campaign.open(source, options.glob, config=options.config)
+    )
     folder, config = campaign.folder, campaign.config
     dynamic_runs = campaign.dynamic_runs
     reading = start_extraction(
@@ -465,7 +475,7 @@ def _fit(
             per_direction=options.per_direction,
         )
     except UnphysicalFrictionError as exc:
-        raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder)}") from None
+        raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder, config)}") from None
     ident = _with_pressure_reference(ident, config.pressure_basis)
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
@@ -478,7 +488,13 @@ def _fit(
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    model = datasheet_model(ident, extraction=extraction, campaign=str(folder), name=options.name)
+    model = datasheet_model(
+        ident,
+        extraction=extraction,
+        campaign=str(folder),
+        name=options.name,
+        recipe=_recipe(config, folder),
+    )
     sheet, record = model.to_datasheet(), dict(model.record)
     if correction.record is not None:
         sheet["fit"]["viscosity_correction"] = correction.record
@@ -776,7 +792,11 @@ def fit_seals(
     source, folder = _source(folder, options)
     out = Path(out)
     _check_out(folder, out)
-    campaign = source if isinstance(source, Campaign) else Campaign.open(folder, options.glob)
+    campaign = (
+        source
+        if isinstance(source, Campaign)
+        else Campaign.open(folder, options.glob, config=options.config)
+    )
     if not campaign.seals:
         raise ValueError(
             f"{folder}: no run carries a seal label (the 'seal' group of campaign.toml's "
@@ -862,3 +882,13 @@ def seal_summary(results: dict[str, FitOutputs], folders: dict[str, str]) -> pd.
             }
         )
     return pd.DataFrame(rows, columns=list(SEAL_COLUMNS))
+
+
+def _recipe(config, folder) -> str | None:
+    """The campaign.toml read when it is not the folder's own (``--config``), else None."""
+    from .io.campaign import CONFIG_NAME
+
+    source = getattr(config, "source", None)
+    if source is None or Path(source).resolve() == (Path(folder) / CONFIG_NAME).resolve():
+        return None
+    return str(source)

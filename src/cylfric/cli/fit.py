@@ -38,7 +38,7 @@ def _open(campaign: Path, options: FitOptions):
 
     if options.glob is not None:
         check_glob(options.glob, campaign, key="--glob")
-    return Campaign.open(campaign, options.glob)
+    return Campaign.open(campaign, options.glob, config=options.config)
 
 
 def _fit_with_progress(campaign: Path, n_files: int, call):
@@ -218,6 +218,13 @@ def fit(
     glob: str = typer.Option(
         None, "--glob", help="Which files are runs, e.g. '*.txt' (default: campaign.toml)."
     ),
+    config: Path = typer.Option(
+        None,
+        "--config",
+        exists=True,
+        dir_okay=False,
+        help="campaign.toml to use instead of DIR/campaign.toml (the data folder stays untouched).",
+    ),
     strict: bool = typer.Option(
         False, "--strict", help="Stop (exit 2) instead of excluding runs the quality gate flags."
     ),
@@ -268,6 +275,7 @@ def fit(
         skip_bad=skip_bad,
         report=not no_report,
         glob=glob,
+        config=None if config is None else str(config),
         strict=strict,
         export=tuple(targets),
         viscosity_correction=viscosity_correction,

@@ -15,6 +15,10 @@ The element (thesis eq. 2.5, 2.7; SI throughout):
 * parameters: the coefficients of the pressure laws (``F_c.intercept`` [N],
   ``F_c.slope`` [N/Pa], ...), ``sigma_0`` [N/m], ``sigma_1`` [N*s/m], and ``max_substep`` [s]
   (longest internal step of the co-simulation ``doStep``);
+* fixed parameters ``scatter.*`` and ``lack_of_fit.*``: the datasheet's scatter components
+  (``scatter.session_percent`` [%], ``scatter.session_N`` [N], ``scatter.reproducibility_percent``,
+  ...) and lack-of-fit test, with the record's texts in their descriptions; how to form a
+  band for a new session in ``documentation/index.html``;
 * the operating-pressure rule (a, b, sum, mean, max) and the pressure law of each parameter
   are fixed at export (structural); their coefficients are tunable;
 * element ``"cylinder"``: the moving mass driven by the input ``force`` [N] and the pressure
@@ -49,7 +53,7 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from ..escape import c_comment, c_string
+from ..escape import c_comment, c_string, html_text
 from ..escape import xml_attr as quoteattr
 
 if TYPE_CHECKING:
@@ -126,6 +130,7 @@ _BASE = {
     "kg": (1, 0, 0),
     "m2": (0, 2, 0),
     "m/s2": (0, 1, -2),
+    "%": (0, 0, 0),
 }
 
 _FIXED_DATE = (1980, 1, 1, 0, 0, 0)
@@ -401,7 +406,54 @@ def _variables(model, element):
         rows.append((key, first + offset, "parameter", "tunable", None, unit, value, text))
         if unit:
             units[unit] = exponents
+    for key, value, unit, text in _scatter_rows(model):
+        rows.append((key, len(rows), "parameter", "fixed", None, unit, value, text))
+        if unit:
+            units[unit] = _BASE.get(unit, (0, 0, 0))
     return rows, law_lines, units, pressure
+
+
+def _scatter_rows(model) -> list[tuple[str, float, str, str]]:
+    """(name, value, unit, description) of the fixed parameters ``scatter.*`` and
+    ``lack_of_fit.*``: the datasheet's fit.scatter and quality.lack_of_fit records as data
+    (``*.computed`` = 0 with a "not computed" description when a record is missing)."""
+    from .scatter import (
+        LACK_OF_FIT_NUMBERS,
+        NOT_COMPUTED,
+        SCATTER_NUMBERS,
+        lack_of_fit_numbers,
+        lack_of_fit_texts,
+        scatter_numbers,
+        scatter_texts,
+    )
+
+    out = []
+    records = (
+        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
+        (
+            "lack_of_fit",
+            "quality.lack_of_fit",
+            lack_of_fit_numbers(model),
+            lack_of_fit_texts(model),
+            LACK_OF_FIT_NUMBERS,
+        ),
+    )
+    for prefix, key, numbers, texts, table in records:
+        if numbers is None or texts is None:
+            out.append((f"{prefix}.computed", 0.0, "", NOT_COMPUTED.format(key=key)))
+            continue
+        out.append((f"{prefix}.computed", 1.0, "", f"1: the datasheet carries {key}"))
+        notes = {  # the record's texts, in the description of the number they qualify
+            "repeatability_percent": f"; method: {texts.get('method', '')}",
+            "session_percent": f"; source: {texts.get('session_source', '')}",
+            "session_prior_percent": f"; basis: {texts.get('session_prior_basis', '')}",
+            "significant": f"; test: {texts.get('test', '')}; action: {texts.get('action', '')}",
+        }
+        for name, value in numbers.items():
+            unit, meaning = table[name]
+            unit = "" if unit == "1" else unit
+            out.append((f"{prefix}.{name}", value, unit, f"{meaning}{notes.get(name, '')}"))
+    return out
 
 
 def _unit_xml(units) -> list[str]:
@@ -409,6 +461,8 @@ def _unit_xml(units) -> list[str]:
     for name in sorted(units):
         kg, m, s = units[name]
         attrs = "".join(f' {k}="{v}"' for k, v in (("kg", kg), ("m", m), ("s", s)) if v)
+        if name == "%":
+            attrs += ' factor="0.01"'
         out.append(f"    <Unit name={quoteattr(name)}><BaseUnit{attrs}/></Unit>")
     out.append("  </UnitDefinitions>")
     return out
@@ -444,6 +498,10 @@ def _model_description(model, name, guid, rows, units, nominals, element) -> str
     method = model.provenance.get("method")
     if method:
         description += f"; identified by {method}"
+    description += (
+        "; scatter about the law: fixed parameters scatter.* (fit.scatter) and lack_of_fit.* "
+        "(quality.lack_of_fit), bands in documentation/index.html"
+    )
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         "<fmiModelDescription",
@@ -584,6 +642,31 @@ def _params_header(model, law_lines) -> str:
     )
 
 
+def _documentation(model, name) -> str:
+    """``documentation/index.html``: the element, its scatter record and how to form a band
+    for a new session (user text through :func:`cylfric.escape.html_text`)."""
+    from .scatter import summary_lines
+
+    paragraphs = "\n".join(f"<p>{line}</p>" for line in summary_lines(model, html_text))
+    label = html_text(model.record.get("name", "cylfric model"))
+    return "\n".join(
+        [
+            "<!DOCTYPE html>",
+            '<html><head><meta charset="utf-8"><title>' + html_text(name) + "</title></head>",
+            "<body>",
+            f"<h1>{html_text(name)}: LuGre friction of the cylfric datasheet {label}</h1>",
+            "<p>Inputs velocity [m/s], pressure_a, pressure_b [Pa]; output friction_force [N]. "
+            "The datasheet is in resources/datasheet.json.</p>",
+            "<h2>Scatter about the law</h2>",
+            "<p>Fixed parameters scatter.* (datasheet fit.scatter; *_percent in % of the "
+            "friction level, *_N in N) and lack_of_fit.* (quality.lack_of_fit).</p>",
+            paragraphs,
+            "</body></html>",
+            "",
+        ]
+    )
+
+
 def _build_description(name, source: str = "cylfric_fmu.c") -> str:
     return "\n".join(
         [
@@ -704,6 +787,7 @@ def export_fmu(
         model, name, guid, rows, units, nominals, element
     ).encode()
     entries["resources/datasheet.json"] = datasheet.encode()
+    entries["documentation/index.html"] = _documentation(model, name).encode()
     target = fmi_platform()
     cc = compiler()
     if target is None or cc is None:

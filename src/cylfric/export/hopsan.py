@@ -32,11 +32,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..escape import hcom_comment, identifier, markdown_text
+from ..escape import hcom_comment, identifier, markdown_text, printable
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import chamber_pressures, loss_grid, loss_report
 from .result import ExportResult
+from .scatter import summary_lines
 from .simscape import _num
 
 if TYPE_CHECKING:
@@ -170,6 +171,75 @@ def fit_hopsan_pressure_signal(
     }
 
 
+def _scatter_table(model: FrictionModel) -> list[tuple[str, str, str, str]]:
+    """(record.field, value, unit, meaning) of fit.scatter and quality.lack_of_fit: numbers
+    as ``repr`` text, the records' texts as they are (unit ``"text"``: escape them)."""
+    from .scatter import (
+        LACK_OF_FIT_NUMBERS,
+        NOT_COMPUTED,
+        SCATTER_NUMBERS,
+        lack_of_fit_numbers,
+        lack_of_fit_texts,
+        scatter_numbers,
+        scatter_texts,
+    )
+
+    records = (
+        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
+        (
+            "lack_of_fit",
+            "quality.lack_of_fit",
+            lack_of_fit_numbers(model),
+            lack_of_fit_texts(model),
+            LACK_OF_FIT_NUMBERS,
+        ),
+    )
+    table = []
+    for prefix, key, numbers, texts, units in records:
+        if numbers is None or texts is None:
+            table.append((f"{prefix}.computed", "0", "1", NOT_COMPUTED.format(key=key)))
+            continue
+        table.append((f"{prefix}.computed", "1", "1", f"the datasheet carries {key}"))
+        for name, value in numbers.items():
+            unit, meaning = units[name]
+            table.append((f"{prefix}.{name}", repr(float(value)), unit, meaning))
+        for name, words in texts.items():
+            table.append((f"{prefix}.{name}", words, "text", "the record's text"))
+    return table
+
+
+def _scatter_csv(model: FrictionModel) -> str:
+    """``<stem>_hopsan_scatter.csv``: field, value, unit, description of the scatter record."""
+    import csv
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["field", "value", "unit", "description"])
+    for field, value, unit, meaning in _scatter_table(model):
+        writer.writerow([field, printable(value) if unit == "text" else value, unit, meaning])
+    return buffer.getvalue()
+
+
+def _scatter_markdown(model: FrictionModel) -> str:
+    """The README's section on the scatter record and on bands for a new session."""
+    from .scatter import summary_lines
+
+    def user(text: str) -> str:
+        return markdown_text(text, limit=None)
+
+    lines = summary_lines(model, user)
+    rows = [
+        f"| `{field}` | {user(value) if unit == 'text' else value} | {unit} | {meaning} |"
+        for field, value, unit, meaning in _scatter_table(model)
+    ]
+    return "\n\n".join(
+        [
+            *lines,
+            "| field | value | unit | meaning |\n|---|---|---|---|\n" + "\n".join(rows),
+        ]
+    )
+
+
 def export_hopsan(
     model: FrictionModel,
     out: StrPath,
@@ -188,7 +258,8 @@ def export_hopsan(
         The cylfric model.
     out : path-like
         Output folder: ``<name>_hopsan.hcom``, ``<name>_hopsan_parameters.csv``,
-        ``README_hopsan.md``, ``loss_hopsan.csv/.txt/.png`` and
+        ``<name>_hopsan_scatter.csv`` (the datasheet's fit.scatter and quality.lack_of_fit,
+        :mod:`cylfric.export.scatter`), ``README_hopsan.md``, ``loss_hopsan.csv/.txt/.png`` and
         ``loss_hopsan_pressure_signal.csv/.txt/.png`` (``f_k`` wired to the pressures).
     name : str, optional
         Stem of the files; default the datasheet's name or ``cylfric``.
@@ -278,12 +349,15 @@ def export_hopsan(
         "sources": SOURCES,
         **values,
     }
+    text["scatter"] = "\n".join(
+        f"# {hcom_comment(line, limit=None)}" for line in summary_lines(model)
+    )
+    readme = {**text, "name": markdown_text(label), "scatter": _scatter_markdown(model)}
     files = [
         atomic_write_text(out / f"{stem}_hopsan.hcom", template.substitute(text)),
         atomic_write_text(out / f"{stem}_hopsan_parameters.csv", rows.getvalue()),
-        atomic_write_text(
-            out / "README_hopsan.md", note.substitute({**text, "name": markdown_text(label)})
-        ),
+        atomic_write_text(out / f"{stem}_hopsan_scatter.csv", _scatter_csv(model)),
+        atomic_write_text(out / "README_hopsan.md", note.substitute(readme)),
     ]
     files += report.write(out)
     files += signal_report.write(out)

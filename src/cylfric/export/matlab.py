@@ -7,7 +7,11 @@ default):
     ``P = cylfric_params()``: the parameter struct, every value in SI with its unit in a
     comment: the operating-pressure rule ``P.reference``, and for each friction parameter its
     pressure law ``P.F_c.law`` with the coefficients (``P.F_c.intercept`` [N],
-    ``P.F_c.slope`` [N/Pa], ...); parameters the data did not identify are ``[]``.
+    ``P.F_c.slope`` [N/Pa], ...); parameters the data did not identify are ``[]``; the
+    scatter record ``P.scatter`` (``repeatability_percent`` [%], ``run_N`` [N], ...,
+    ``reproducibility_percent``, ``session_source``, ``session_prior_basis``) and the
+    lack-of-fit test ``P.lack_of_fit`` (``p_value``, ``significant``, ``action``), each with
+    ``computed = false`` when the datasheet has none (:mod:`cylfric.export.scatter`).
 ``cylfric_params_at.m``
     ``q = cylfric_params_at(p_a, p_b, P)``: the friction parameters at the operating pressure
     of the chamber pressures [Pa].
@@ -24,17 +28,28 @@ nothing is lost. The files are written atomically and are deterministic (no date
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..escape import matlab_comment, matlab_string
 from .fmu import FRICTION_PARAMETERS, REFERENCE_TEXT, _as_model, _check_name
+from .scatter import (
+    LACK_OF_FIT_NUMBERS,
+    NOT_COMPUTED,
+    SCATTER_NUMBERS,
+    band_text,
+    lack_of_fit_numbers,
+    lack_of_fit_texts,
+    scatter_numbers,
+    scatter_texts,
+)
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
     from cylfric.model import FrictionModel
 
-__all__ = ["export_matlab", "MATLAB_FUNCTIONS"]
+__all__ = ["export_matlab", "MATLAB_FUNCTIONS", "scatter_struct_lines"]
 
 MATLAB_FUNCTIONS = ("params", "params_at", "friction", "lugre_step")
 """The functions written, as ``<name>_<function>.m``."""
@@ -79,6 +94,14 @@ def _params_file(model, name) -> str:
     method = model.provenance.get("method")
     if method:
         lines.append(f"%   Identified by: {matlab_comment(method)}.")
+    lines.append(
+        "%   P.scatter: the scatter components (repeatability, run, session: *_percent [%],"
+    )
+    lines.append(
+        "%   *_N [N]), reproducibility s_R; P.lack_of_fit: the lack-of-fit test (computed ="
+    )
+    lines.append("%   false when the datasheet has none).")
+    lines += [f"%   {line}" for line in textwrap.wrap(band_text(model), 86)]
     lines += [
         "",
         f"P.reference = {matlab_string(model.reference)};  % operating-pressure rule: a, b, sum, "
@@ -109,8 +132,53 @@ def _params_file(model, name) -> str:
         for key in ("pressure_min", "pressure_max", "velocity_min", "velocity_max"):
             value = model.validity[key]
             lines.append(f"P.validity.{key} = {_number(value)};  % [{units.get(key, 'm/s')}]")
+    lines += scatter_struct_lines(model, "P")
     lines += ["end", ""]
     return "\n".join(lines)
+
+
+def scatter_struct_lines(model, prefix: str) -> list[str]:
+    """MATLAB lines setting ``<prefix>.scatter`` and ``<prefix>.lack_of_fit`` (SI, % and N).
+
+    ``<prefix>.scatter.computed`` is false, with a ``note``, when the datasheet has no
+    ``fit.scatter`` record (an older cylfric); likewise ``lack_of_fit``. User text goes
+    through :func:`cylfric.escape.matlab_string` and :func:`~cylfric.escape.matlab_comment`.
+    """
+    lines = [
+        "% scatter about the law (datasheet fit.scatter; relative values in % of the friction",
+        "% level, forces in N at reference_force_N; docs/uncertainty.md)",
+    ]
+    records = (
+        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
+        (
+            "lack_of_fit",
+            "quality.lack_of_fit",
+            lack_of_fit_numbers(model),
+            lack_of_fit_texts(model),
+            LACK_OF_FIT_NUMBERS,
+        ),
+    )
+    for field, key, numbers, texts, table in records:
+        struct = f"{prefix}.{field}"
+        if numbers is None or texts is None:
+            note = NOT_COMPUTED.format(key=key)
+            lines.append(f"{struct}.computed = false;  % {note}")
+            lines.append(f"{struct}.note = {matlab_string(note)};")
+            continue
+        lines.append(f"{struct}.computed = true;")
+        for name, value in numbers.items():
+            unit, meaning = table[name]
+            if name == "significant":
+                text = "true" if value else "false"
+            elif unit == "1" and float(value).is_integer():
+                text = str(int(value))
+            else:
+                text = _number(value)
+            lines.append(f"{struct}.{name} = {text};  % [{unit}] {meaning}")
+        for name, words in texts.items():
+            lines.append(f"{struct}.{name} = {matlab_string(words)};")
+    lines.append(f"% {band_text(model)}")
+    return lines
 
 
 def _params_at_file(model, name) -> str:

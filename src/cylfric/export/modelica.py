@@ -8,6 +8,10 @@ The package ``<name>`` holds
   ``Modelica.Blocks.Interfaces.RealInput`` ``p_a`` and ``p_b`` [Pa], the datasheet's
   operating-pressure rule, the bristle state ``z``, and every coefficient of the datasheet as
   a parameter with its SI unit (``Modelica.Units.SI`` types where they exist);
+* ``Scatter`` and ``LackOfFit``: the datasheet's scatter components (``fit.scatter``:
+  ``Scatter.session_percent`` [%], ``Scatter.session_N`` [N], ``Scatter.reproducibility_percent``,
+  sources and the prior's basis) and lack-of-fit test (``quality.lack_of_fit``) as constants
+  with units and descriptions, ``computed = false`` when the datasheet has none;
 * ``PressureLaws``: the linear, quadratic and exponential laws as Modelica functions;
 * ``Examples.ConstantVelocity``: the element pulled at constant speed and pressure.
 
@@ -26,6 +30,16 @@ from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from ..io.writers import atomic_write_text
 from ..model.core import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 from .result import ExportResult
+from .scatter import (
+    LACK_OF_FIT_NUMBERS,
+    NOT_COMPUTED,
+    SCATTER_NUMBERS,
+    band_text,
+    lack_of_fit_numbers,
+    lack_of_fit_texts,
+    scatter_numbers,
+    scatter_texts,
+)
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
@@ -107,6 +121,68 @@ def _specs(model):
     return out
 
 
+_COUNTS = ("sessions", "runs", "points", "dof_1", "dof_2")
+
+
+def _constant(name: str, value: float, unit: str, meaning: str) -> str:
+    """One Modelica constant declaration of a scatter number, with its unit."""
+    if name == "significant":
+        declaration = f"constant Boolean {name} = {'true' if value else 'false'}"
+    elif name in _COUNTS and float(value).is_integer():
+        declaration = f"constant Integer {name} = {int(value)}"
+    elif unit == "N":
+        declaration = f"constant SI.Force {name} = {_num(value)}"
+    elif unit == "%":  # a percentage of the friction level: no SI unit, stated in the text
+        declaration = f"constant Real {name} = {_num(value)}"
+    else:
+        declaration = f'constant Real {name}(unit="{unit}") = {_num(value)}'
+    return f'    {declaration} "{modelica_string(f"{meaning} [{unit}]", quotes=False)}";'
+
+
+def scatter_packages(model: FrictionModel) -> str:
+    """Modelica source of the packages ``Scatter`` (fit.scatter) and ``LackOfFit``
+    (quality.lack_of_fit): constants with units and descriptions, ``computed = false`` when
+    the datasheet has no such record."""
+    records = (
+        (
+            "Scatter",
+            "fit.scatter",
+            "Scatter about the law: repeatability, run and session components (datasheet "
+            "fit.scatter; % of the friction level and N)",
+            scatter_numbers(model),
+            scatter_texts(model),
+            SCATTER_NUMBERS,
+        ),
+        (
+            "LackOfFit",
+            "quality.lack_of_fit",
+            "Lack-of-fit test of the law (datasheet quality.lack_of_fit)",
+            lack_of_fit_numbers(model),
+            lack_of_fit_texts(model),
+            LACK_OF_FIT_NUMBERS,
+        ),
+    )
+    out = []
+    for package, key, title, numbers, texts, table in records:
+        out += [f'  package {package} "{title}"', "    import SI = Modelica.Units.SI;"]
+        if numbers is None or texts is None:
+            note = modelica_string(NOT_COMPUTED.format(key=key), quotes=False)
+            out.append(f'    constant Boolean computed = false "{note}";')
+        else:
+            out.append(f'    constant Boolean computed = true "the datasheet carries {key}";')
+            for name, value in numbers.items():
+                unit, meaning = table[name]
+                out.append(_constant(name, value, unit, meaning))
+            for name, text in texts.items():
+                out.append(f"    constant String {name} = {modelica_string(text)};")
+        if package == "Scatter":
+            info = modelica_string(html_text(band_text(model)), quotes=False)
+            out.append(f'    annotation (Documentation(info="<html><p>{info}</p></html>"));')
+        out.append(f"  end {package};")
+        out.append("")
+    return "\n".join(out)
+
+
 def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[str, str]:
     """(package name, Modelica source text) of the model's friction package."""
     package = identifier(name or model.record.get("name") or "cylfric")
@@ -180,6 +256,8 @@ def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[
         example_pressure=_num(example_p),
         example_pressure_comment=example_comment,
         example_connect=example_connect,
+        scatter=scatter_packages(model),
+        band_html=modelica_string(html_text(band_text(model)), quotes=False),
     )
     return package, text
 

@@ -50,6 +50,7 @@ from ..friction import simscape_cylinder_friction, stribeck
 from ..friction.pressure import linear, operating_pressure
 from ..io.writers import atomic_write_text
 from .loss import chamber_pressure, chamber_pressures, loss_grid, loss_report
+from .matlab import scatter_struct_lines
 from .result import ExportResult
 
 if TYPE_CHECKING:
@@ -596,4 +597,18 @@ def _script(stem, model, il, legacy, operating, per_level, reports) -> str:
             _TF_UNITS,
         ),
         campaign=matlab_comment(source.get("campaign", "")) if isinstance(source, dict) else "",
+        scatter_comments=_scatter_comments(model),
+        scatter_struct="\n".join(scatter_struct_lines(model, "P")),
     )
+
+
+def _scatter_comments(model) -> str:
+    """Comment lines of the script header: the scatter record and how to form a band."""
+    import textwrap
+
+    from .scatter import summary_lines
+
+    lines = []
+    for line in summary_lines(model):
+        lines += textwrap.wrap(matlab_comment(line, limit=None), 86)
+    return "\n".join(f"%   {line}" for line in lines)

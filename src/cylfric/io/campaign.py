@@ -268,8 +268,12 @@ def _quantity(value, dimension, default_unit, where):
         raise BenchFileError(where, f"{exc}") from None
 
 
-def load_config(folder) -> CampaignConfig:
-    """Read ``campaign.toml`` of ``folder`` (defaults when absent).
+def load_config(folder, file=None) -> CampaignConfig:
+    """Read ``campaign.toml`` of ``folder`` (defaults when absent), or the recipe ``file``.
+
+    ``file`` (a ``--config``): a campaign.toml kept outside the data folder, e.g. a shipped
+    recipe for read-only data; it must exist, and its errors name it and their line. The
+    config's ``source`` is the path read (None for the defaults).
 
     The file has the tables ``[files]`` (``glob``, ``name_pattern``), ``[columns]``
     (``names``, ``units``, ``delimiter``, ``decimal``), ``[cylinder]`` (``bore``, ``rod``,
@@ -282,9 +286,16 @@ def load_config(folder) -> CampaignConfig:
     (``viscosity_40C``, ``viscosity_100C``, ``reference_temperature``, ``temperature``).
     Values with units are strings such as ``"25 mm"``, ``"46 mm2/s"``, ``"40 degC"``.
     """
-    path = Path(folder) / CONFIG_NAME
-    if not path.is_file():
-        return CampaignConfig()
+    if file is not None:
+        path = Path(file)
+        if not path.is_file():
+            raise BenchFileError(
+                path, "recipe not found; expected a campaign.toml file (--config FILE)"
+            )
+    else:
+        path = Path(folder) / CONFIG_NAME
+        if not path.is_file():
+            return CampaignConfig()
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
@@ -949,7 +960,7 @@ def _check_encodable(path: Path) -> None:
 def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[RunInfo]:
     """The runs of ``folder`` (its glob already checked) with their nominal metadata."""
     pattern = (
-        compile_name_pattern(config.name_pattern, folder / CONFIG_NAME)
+        compile_name_pattern(config.name_pattern, Path(config.source or folder / CONFIG_NAME))
         if config.name_pattern
         else None
     )
@@ -1107,10 +1118,14 @@ class Campaign:
         folder: str | os.PathLike[str],
         glob: str | None = None,
         *,
-        config: CampaignConfig | None = None,
+        config: CampaignConfig | str | os.PathLike[str] | None = None,
     ) -> Campaign:
         """Read the campaign in ``folder``: ``campaign.toml`` (unless ``config`` is given)
         and ``manifest.csv`` once each, and list its runs.
+
+        ``config`` is a :class:`CampaignConfig`, or the path of a campaign.toml to read
+        instead of the folder's (a recipe kept outside read-only data; the folder stays
+        untouched; :func:`load_config`).
 
         ``glob`` (e.g. a ``--glob``) replaces ``campaign.toml [files] glob``; a glob that
         reaches outside the folder is refused (:func:`check_glob`). A run file with the
@@ -1120,7 +1135,8 @@ class Campaign:
         """
         path = _campaign_folder(folder)
         _check_encodable(path)
-        config = config or load_config(path)
+        if config is None or isinstance(config, str | os.PathLike):
+            config = load_config(path, config)
         if glob is not None:
             config = replace(config, glob=glob)
         check_glob(config.glob, path, key="glob")
