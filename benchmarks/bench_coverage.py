@@ -90,7 +90,7 @@ def one_campaign(index: int, folder: str) -> dict:
     except Exception as exc:  # noqa: BLE001 - a refused fit is a result here
         return {"index": index, "fitted": False, "error": f"{type(exc).__name__}: {exc}"[:300]}
     model = FrictionModel.from_datasheet(result.datasheet)
-    row: dict = {"index": index, "fitted": True, "seconds": 0.0}
+    row: dict = {"index": index, "fitted": True, "law": model.friction_law, "seconds": 0.0}
     for scope, drawn in new.items():
         generate_campaign(root / scope, drawn, workers=1)
         points = extract_campaign(root / scope, workers=1).points
@@ -135,7 +135,13 @@ def bench_coverage():
             "per_campaign_median": float(np.median(per_campaign)),
             "per_campaign_p10": float(np.percentile(per_campaign, 10)),
             "campaigns_below_50_percent": int(sum(c < 0.5 for c in per_campaign)),
-            "half_width_rel_mean": float(np.mean([r[scope]["half_width_rel"] for r in fitted])),
+            "half_width_rel_median": float(np.median([r[scope]["half_width_rel"] for r in fitted])),
+            "half_width_rel_p90": float(
+                np.percentile([r[scope]["half_width_rel"] for r in fitted], 90)
+            ),
+            "campaigns_wider_than_the_level": int(
+                sum(r[scope]["half_width_rel"] > 1.0 for r in fitted)
+            ),
             "goal": list(GOAL),
             "goal_met": GOAL[0] <= coverage <= GOAL[1],
         }
@@ -148,6 +154,9 @@ def bench_coverage():
         "refused": len(failed),
         "refusals": sorted({r["error"].split(":")[0] for r in failed}),
         "refusal_examples": [r["error"] for r in failed[:3]],
+        "friction_laws": {
+            law: sum(r["law"] == law for r in fitted) for law in sorted({r["law"] for r in fitted})
+        },
         "scopes": scopes,
         "seconds": time.perf_counter() - t0,
     }

@@ -287,6 +287,26 @@ STRONG_EVIDENCE_BIC = 10.0
 """BIC gain [-] the Stribeck law must show over Coulomb + viscous to be kept ("very strong"
 evidence on the scale of Kass & Raftery 1995)."""
 
+SHAPE_RELATIVE_SE = 1.0
+"""Largest standard error of the Stribeck shape (v_r, alpha) relative to its value [-] for the
+shape to count as identified: beyond it (|t| < 1) the data do not tell the dip's width or
+form, and the level's standard errors, which share the shape's covariance, explode with it
+(a rough virtual campaign gave F_c = 22 N +- 1.8e5 N)."""
+
+
+def _shape_unidentified(model: FrictionModel, fixed: Mapping[str, Any]) -> list[str]:
+    """``"v_r = x +- y"`` for each free Stribeck shape parameter whose standard error exceeds
+    :data:`SHAPE_RELATIVE_SE` times its value (or is not finite)."""
+    values, errors = model.coefficients(), model.stderr()
+    found = []
+    for name in ("v_r", "alpha"):
+        value, error = values.get(name), errors.get(name)
+        if name in fixed or not isinstance(value, float) or not isinstance(error, float):
+            continue
+        if not math.isfinite(error) or error > SHAPE_RELATIVE_SE * abs(value):
+            found.append(f"{name} = {value:.3g} +- {error:.3g}")
+    return found
+
 
 def unphysical(
     model: FrictionModel, validity: Mapping[str, float], *, points: int = 41
@@ -320,16 +340,21 @@ def _linear_model(args, fixed, weights, notes):
     reduced_fixed = {k: v for k, v in fixed.items() if k in ("F_c", "sigma_2")}
     gain = None
     shape_bounds = [b for b in stribeck.at_bounds if b.split()[0] in ("amplitude", "v_r", "alpha")]
+    shape_loose = [] if shape_bounds else _shape_unidentified(stribeck.model, fixed)
     alternative = None
-    if not {"F_s", "v_r", "alpha"} & set(fixed) or shape_bounds:
+    if not {"F_s", "v_r", "alpha"} & set(fixed) or shape_bounds or shape_loose:
         alternative = fit_linear_surface(
             *args, friction_law="coulomb_viscous", fixed=reduced_fixed, **weights
         )
         gain = alternative.model.statistics["bic"] - stribeck.model.statistics["bic"]
-    if shape_bounds or (gain is not None and gain <= STRONG_EVIDENCE_BIC):
+    if shape_bounds or shape_loose or (gain is not None and gain <= STRONG_EVIDENCE_BIC):
         why = (
             "the fit pushes " + ", ".join(shape_bounds) + " to its physical bound"
             if shape_bounds
+            else "the data leave the dip's shape open ("
+            + ", ".join(shape_loose)
+            + f": standard error above {SHAPE_RELATIVE_SE:g}x the value)"
+            if shape_loose
             else f"the Stribeck law improves BIC by only {gain:.3g} (<= "
             f"{STRONG_EVIDENCE_BIC:g}) over Coulomb + viscous friction"
         )
