@@ -341,6 +341,22 @@ def _linear_model(args, fixed, weights, notes):
     gain = None
     shape_bounds = [b for b in stribeck.at_bounds if b.split()[0] in ("amplitude", "v_r", "alpha")]
     shape_loose = [] if shape_bounds else _shape_unidentified(stribeck.model, fixed)
+    if shape_loose and "alpha" not in fixed:
+        # the exponent is the first to go: the exponential Stribeck law (alpha = 1, as the
+        # thesis held it; Armstrong-Helouvry et al. 1994) often leaves v_r identified
+        held = {**fixed, "alpha": 1.0}
+        exponential = fit_linear_surface(*args, friction_law="stribeck", fixed=held, **weights)
+        if not any(
+            b.split()[0] in ("amplitude", "v_r") or b.startswith("F_c")
+            for b in exponential.at_bounds
+        ) and not _shape_unidentified(exponential.model, held):
+            notes.append(
+                f"the data leave the Stribeck exponent open ({', '.join(shape_loose)}: standard "
+                f"error above {SHAPE_RELATIVE_SE:g}x the value); the exponential Stribeck law "
+                "is fitted (alpha = 1 held, as in the thesis): alpha is a choice of law, not "
+                "a measured value"
+            )
+            stribeck, fixed, shape_loose = exponential, held, []
     alternative = None
     if not {"F_s", "v_r", "alpha"} & set(fixed) or shape_bounds or shape_loose:
         alternative = fit_linear_surface(
