@@ -368,7 +368,11 @@ def _output_grid(out, reached, dt, every):
     for j in range(reached, n_out):
         for r in range(out.shape[0]):
             out[r, j] = np.nan
-    return np.arange(n_out) * (dt * every) if every != 1 else np.arange(n_out) * dt
+    step = dt * every if every != 1 else dt
+    time = np.empty(n_out)  # one allocation (np.arange(n_out) * step takes two)
+    for j in range(n_out):
+        time[j] = j * step
+    return time
 
 
 # ------------------------------------------------------------ adaptive Dormand-Prince 5(4)
@@ -608,7 +612,7 @@ FAST_MATH = {"contract", "arcp", "nsz", "afn", "reassoc"}
 # the same RMS(F - F_ref)/F_c (4.6e-6); without the term (the textbook norm of the states) the
 # error at sigma_0 = 1e10 N/m grows tenfold (4.7e-5 at rtol 1e-6). At 0.1 the sweep 1e5..1e10
 # takes 0.6-1.0x the steps of full weight at the same or better accuracy (issue 26;
-# benchmarks/c/rodas3.c, docs/simulation.md).
+# benchmarks/c/rodas3.c mirrors it).
 FORCE_NORM = 0.1
 
 

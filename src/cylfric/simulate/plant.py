@@ -518,8 +518,9 @@ def _simulate(
         for name, value in (("pressure_a", p_a), ("pressure_b", p_b)):
             if not math.isfinite(value):
                 raise ValueError(f"{name} contains NaN or inf; expected finite values")
-        pa = np.full(n, p_a)
-        pb = pa if pressure_b is None else np.full(n, p_b)
+        # constant pressures as read-only views of one number (no 8 bytes per sample to write)
+        pa = np.broadcast_to(p_a, (n,))
+        pb = pa if pressure_b is None or p_b == p_a else np.broadcast_to(p_b, (n,))
         checked_a: float | np.ndarray = p_a
         checked_b: float | np.ndarray = p_b
     else:
@@ -533,8 +534,11 @@ def _simulate(
                 f"{name} goes down to {np.min(values):.4g} Pa; expected pressures >= 0 Pa"
             )
     # warns outside the model's validity pressures, or for pressures that look like bar
-    operating = friction.operating_pressure(checked_a, checked_b)
-    friction.check(None, operating, strict=strict)
+    if constant:
+        operating: float | np.ndarray = _operating_checked(friction, p_a, p_b, strict)
+    else:
+        operating = friction.operating_pressure(checked_a, checked_b)
+        friction.check(None, operating, strict=strict)
     if constant:
         params = _params_checked(friction, float(operating))
         f_pressure: float | np.ndarray = float(cylinder.area_a * p_a - cylinder.area_b * p_b)
@@ -741,6 +745,35 @@ _LUGRE_NAMES = ("sigma_0", "sigma_1", "sigma_2", "F_c", "F_s", "v_r", "alpha")
 _PARAMS: weakref.WeakKeyDictionary[FrictionModel, tuple[tuple[Any, ...], dict[float, dict]]] = (
     weakref.WeakKeyDictionary()
 )
+
+
+# model -> {(p_a, p_b): (reference, validity, operating pressure)} for constant chamber
+# pressures whose validity check passed without a warning (repeated runs skip it)
+_CHAMBERS: weakref.WeakKeyDictionary[FrictionModel, dict[tuple[float, float], tuple]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _operating_checked(friction, p_a, p_b, strict) -> float:
+    """The operating pressure [Pa] of constant chamber pressures ``p_a``, ``p_b`` [Pa],
+    checked against the model's validity (a warning, or a ValueError with ``strict``).
+    A check that passed silently is remembered per model, pressures, reference and
+    validity ranges (about 8 us of each repeated :func:`simulate` call)."""
+    seen = _CHAMBERS.get(friction)
+    hit = None if seen is None else seen.get((p_a, p_b))
+    if hit is not None and hit[0] == friction.reference and hit[1] is friction.validity:
+        return hit[2]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        operating = float(friction.operating_pressure(p_a, p_b))
+        friction.check(None, operating, strict=strict)
+    for w in caught:  # passed on to simulate(), which shows them at the caller's line
+        warnings.warn(w.message, w.category, stacklevel=2)
+    if not caught:
+        seen = _CHAMBERS.setdefault(friction, {})
+        if len(seen) < 256:
+            seen[(p_a, p_b)] = (friction.reference, friction.validity, operating)
+    return operating
 
 
 def _params_checked(friction, pressure):
