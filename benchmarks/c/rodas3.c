@@ -9,14 +9,22 @@
  * contraction, reciprocals and reassociation but no NaN/inf assumptions (fast-math without
  * -ffinite-math-only), see FLAGS in bench_stiff.py.
  *
+ * With PLAIN = 1 it is a plain textbook Rodas3 instead (Hairer & Wanner IV.7 step control:
+ * no breakaway guards, the error norm the RMS over the states x, v, z with
+ * atol_i + rtol max(|y_n|, |y_n+1|)): the baseline of issue 26, run by the benchmark at its
+ * loosest passing tolerance.
+ *
  * usage: rodas3 DURATION DT MASS K SPEED F_C F_S SIGMA_2 SIGMA_0 SIGMA_1 V_R ALPHA RTOL
- *               ATOL_X ATOL_V ATOL_Z ATOL_F REPS OUT.bin
- * prints: best seconds per run and the accepted steps; writes the friction force (float64)
+ *               ATOL_X ATOL_V ATOL_Z ATOL_F REPS OUT.bin [PLAIN]
+ * prints: best seconds per run, the accepted and the rejected steps; writes the friction
+ * force (float64)
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
+
+#define FORCE_NORM 0.1 /* kernels.FORCE_NORM: weight of the force term of the error norm */
 
 static inline double exp_neg(double x) {
     if (x < 1e-3)
@@ -120,7 +128,8 @@ static inline void outputs(const Plant *p, double tj, int i_grid, double x, doub
 }
 
 static long run(const Plant *p, double rtol, double atol_x, double atol_v, double atol_z,
-                double atol_f, long max_steps, int n_out, double *out /* 5 x n_out */) {
+                double atol_f, long max_steps, int n_out, double *out /* 5 x n_out */,
+                int plain, long *n_rejected) {
     double dt = p->dt, t_end = dt * (p->n_grid - 1);
     double atol_e = atol_x * (t_end > 1.0 ? t_end : 1.0);
     double inv_m = p->inv_m, k = p->k, c = p->c, ki = p->ki, s0 = p->s0, s1 = p->s1;
@@ -141,17 +150,17 @@ static long run(const Plant *p, double rtol, double atol_x, double atol_v, doubl
         double f_v = s1 * d_v + in.s2, f_z = s0 + s1 * d_z;
         double load = k * (in.xr - x) + c * (in.vr - v) + ki * e + in.fe;
         double rate = k * (in.sxr - v) + c * in.svr + in.sfe + ki * (in.xr - x);
-        if (load * rate > 0.0) {
+        if (!plain && load * rate > 0.0) {
             double margin = (in.fc + (in.fs - in.fc) * decay0) - fabs(load);
             if (margin > 0.0) h = fmin(h, fmax(0.5 * margin / fabs(rate), 1e-3 * dt));
         }
-        if (v * a0 < 0.0 && fabs(v) > 1e-3 * p->v_r)
+        if (!plain && v * a0 < 0.0 && fabs(v) > 1e-3 * p->v_r)
             h = fmin(h, fmax(0.5 * fabs(v / a0), 1e-3 * dt));
         double b_ = (c + f_v) * inv_m, cz = f_z * inv_m;
         double trace = d_z - b_, det = cz * d_v - b_ * d_z;
         double disc = 0.25 * trace * trace - det;
         double growth = disc > 0.0 ? 0.5 * trace + sqrt(disc) : 0.5 * trace;
-        if (growth > 0.0) h = fmin(h, 1.0 / growth);
+        if (!plain && growth > 0.0) h = fmin(h, 1.0 / growth);
         int stiff = h * (fabs(trace) + sqrt(fabs(det))) > 1.0;
         if (t + h > t_end) h = t_end - t;
         double dzdt_t = d_fc * in.sfc + d_fs * in.sfs;
@@ -187,11 +196,16 @@ static long run(const Plant *p, double rtol, double atol_x, double atol_v, doubl
         err += q * q;
         q = k4z / (atol_z + rtol * fmax(fabs(z), fabs(z1)));
         err += q * q;
-        q = k4e / (atol_e + rtol * fmax(fabs(e), fabs(e1)));
-        err += q * q;
-        q = (f_v * k4v + f_z * k4z) / (atol_f + rtol * fabs(s0 * z + s1 * dz0 + in.s2 * v));
-        err += q * q;
-        err = sqrt(err / 5);
+        if (plain) { /* textbook: RMS over the plant's states x, v, z */
+            err = sqrt(err / 3);
+        } else {
+            q = k4e / (atol_e + rtol * fmax(fabs(e), fabs(e1)));
+            err += q * q;
+            q = FORCE_NORM * (f_v * k4v + f_z * k4z)
+                / (atol_f + rtol * fabs(s0 * z + s1 * dz0 + in.s2 * v));
+            err += q * q;
+            err = sqrt(err / 5);
+        }
         double factor;
         if (err <= 1.0 && isfinite(err)) {
             rhs_at(p, x1, v1, z1, e1, &in1, &a1, &dz1, &de1, &decay1);
@@ -236,11 +250,16 @@ static long run(const Plant *p, double rtol, double atol_x, double atol_v, doubl
         }
         h *= factor;
     }
+    *n_rejected = rejected;
     return accepted;
 }
 
 int main(int argc, char **argv) {
-    if (argc != 20) { fprintf(stderr, "usage: see the header of rodas3.c\n"); return 2; }
+    if (argc != 20 && argc != 21) {
+        fprintf(stderr, "usage: see the header of rodas3.c\n");
+        return 2;
+    }
+    int plain = argc == 21 ? atoi(argv[20]) : 0;
     double a[18];
     for (int i = 1; i < 19; i++) a[i - 1] = atof(argv[i]);
     double duration = a[0], dt = a[1];
@@ -251,11 +270,11 @@ int main(int argc, char **argv) {
     Plant p = {2, n, 1, n == 2 ? 0 : 1, dt * (n - 1), 1.0 / (dt * (n - 1)), a[4], dt,
                1.0 / a[2], a[2], a[3], 0.0, 0.0, a[8], a[9], a[10], 1.0 / a[10], a[11], 0.0, sig};
     double best = 1e30;
-    long steps = 0;
+    long steps = 0, rejected = 0;
     for (int r = 0; r < reps; r++) {
         struct timespec t0, t1;
         clock_gettime(CLOCK_MONOTONIC, &t0);
-        steps = run(&p, a[12], a[13], a[14], a[15], a[16], 50000000L, n, out);
+        steps = run(&p, a[12], a[13], a[14], a[15], a[16], 50000000L, n, out, plain, &rejected);
         clock_gettime(CLOCK_MONOTONIC, &t1);
         double s = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
         if (s < best) best = s;
@@ -264,6 +283,6 @@ int main(int argc, char **argv) {
     if (!f) { perror(argv[19]); return 1; }
     fwrite(out + 3 * (size_t)n, sizeof(double), n, f);
     fclose(f);
-    printf("%.9f %ld\n", best, steps);
+    printf("%.9f %ld %ld\n", best, steps, rejected);
     return 0;
 }
