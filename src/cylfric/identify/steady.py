@@ -291,7 +291,7 @@ SHAPE_RELATIVE_SE = 1.0
 """Largest standard error of the Stribeck shape (v_r, alpha) relative to its value [-] for the
 shape to count as identified: beyond it (|t| < 1) the data do not tell the dip's width or
 form, and the level's standard errors, which share the shape's covariance, explode with it
-(a rough virtual campaign gave F_c = 22 N +- 1.8e5 N)."""
+(a rough virtual campaign of 3 pressures x 4 speeds gave F_c = 22 N +- 1.8e5 N)."""
 
 
 def _shape_unidentified(model: FrictionModel, fixed: Mapping[str, Any]) -> list[str]:
