@@ -134,3 +134,36 @@ def test_old_datasheet_loads_and_refuses_the_wider_scopes():
         old.prediction_band(0.01, 5e6, scope="session")
     with pytest.raises(ValueError, match="unknown band scope"):
         old.prediction_band(0.01, 5e6, scope="day")
+
+
+def test_the_runs_test_equals_statsmodels():
+    """lack_of_fit.runs_test: the textbook Wald-Wolfowitz test (imports no statsmodels into a
+    fit) gives statsmodels' runstest_1samp(x, cutoff=0, correction=True) to rounding."""
+    from statsmodels.sandbox.stats.runs import runstest_1samp
+
+    from cylfric.identify.lack_of_fit import runs_test
+
+    rng = np.random.default_rng(0)
+    for n in (10, 11, 49, 50, 51, 200):
+        for curved in (False, True):
+            x = rng.normal(size=n) + (3 * np.linspace(-1, 1, n) ** 2 - 1 if curved else 0)
+            expected = runstest_1samp(x, cutoff=0.0, correction=True)
+            assert runs_test(x) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+    assert runs_test(np.ones(12)) == pytest.approx(runstest_1samp(np.ones(12), cutoff=0.0))
+
+
+def test_one_session_anova_equals_reml_on_balanced_runs():
+    """One session: the ISO 5725-2 one-way analysis of variance of the runs gives what
+    statsmodels' REML gives on balanced runs (and needs neither statsmodels nor iterations)."""
+    from statsmodels.regression.mixed_linear_model import MixedLM
+
+    from cylfric.identify.scatter import _one_way
+
+    rng = np.random.default_rng(4)
+    runs = np.repeat(np.arange(12), 8)
+    r = rng.normal(0, 0.05, 12)[runs] + rng.normal(0, 0.02, runs.size)
+    table = pd.DataFrame({"r": r, "run": runs.astype(str), "session": "s"})
+    _, run_var, repeat_var = _one_way(table)
+    fit = MixedLM(r, np.ones((r.size, 1)), groups=runs).fit(reml=True)
+    assert run_var == pytest.approx(float(np.asarray(fit.cov_re)[0, 0]), rel=1e-3)  # REML iterates
+    assert repeat_var == pytest.approx(float(fit.scale), rel=1e-3)

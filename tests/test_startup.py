@@ -1,6 +1,7 @@
 """Start-up (issue 11): the core pipeline loads no matplotlib, and scipy.io only for .mat
-files; `cylfric --version` imports no numerical library. (scipy.stats is loaded since issue
-22: the fit's scatter components are a statsmodels mixed model, which imports it.)"""
+files; `cylfric --version` imports no numerical library. A one-session fit loads neither
+statsmodels nor scipy.stats (issue 22: its scatter is a one-way analysis of variance and its
+runs test textbook arithmetic; statsmodels' mixed model comes in from two sessions on)."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from cylfric.pipeline import fit_campaign
 from cylfric.simulate.bench import BenchSettings, generate_campaign
 generate_campaign(sys.argv[1], BenchSettings.clean(pressures_bar=(0.1, 80.0), speeds_mm_s=(2, 5, 10, 30, 80)))
 fit_campaign(sys.argv[1], sys.argv[2], report=False)
-loaded = [m for m in ("matplotlib", "scipy.io") if m in sys.modules]
+loaded = [m for m in ("matplotlib", "scipy.io", "scipy.stats", "statsmodels") if m in sys.modules]
 print("LOADED", loaded)
 """
 

@@ -66,6 +66,13 @@ METHOD = (
     "(ISO 5725-2 s_r, s_R)"
 )
 
+METHOD_ONE_SESSION = (
+    "one-way analysis of variance of the runs (ISO 5725-2 sec. 7.4, the runs as groups; "
+    "for one session it is what REML gives on balanced data, without its iterations): "
+    "relative residuals about the fitted law; run variance component, residual = "
+    "repeatability (ISO 5725-2 s_r, s_R)"
+)
+
 MIN_FORCE = 1e-6
 """Smallest model friction [N] a relative residual is taken at."""
 
@@ -110,34 +117,49 @@ def _reml(model):
     raise ValueError(f"the mixed model of the scatter could not be fitted ({error})")
 
 
+def _one_way(table: pd.DataFrame) -> tuple[float, float, float]:
+    """(0, s_run^2, s_r^2) [-] of one session's relative residuals by the one-way analysis of
+    variance of ISO 5725-2 (sec. 7.4.4-7.4.5; unbalanced groups: n-bar = (N - sum n_i^2 / N)
+    / (p - 1)); a negative run component is set to 0 as the standard says."""
+    grouped = table.groupby("run", sort=False)["r"]
+    n = grouped.count().to_numpy(dtype=float)
+    means = grouped.mean().to_numpy()
+    variances = grouped.var(ddof=1).fillna(0.0).to_numpy()
+    total, groups = float(n.sum()), len(n)
+    within = float(np.sum((n - 1) * variances) / max(total - groups, 1))
+    grand = float(np.sum(n * means) / total)
+    between = float(np.sum(n * (means - grand) ** 2) / max(groups - 1, 1))
+    n_bar = (total - float(np.sum(n**2)) / total) / max(groups - 1, 1)
+    run_var = max((between - within) / n_bar, 0.0) if n_bar > 0 else 0.0
+    return 0.0, run_var, within
+
+
 def _mixed_model(table: pd.DataFrame, sessions: int) -> tuple[float, float, float]:
-    """(s_session^2, s_run^2, s_r^2) [-] of the relative residuals by REML."""
+    """(s_session^2, s_run^2, s_r^2) [-] of the relative residuals by REML (one session: the
+    one-way analysis of variance, :func:`_one_way`)."""
+    if sessions < 2:
+        return _one_way(table)
     from statsmodels.regression.mixed_linear_model import MixedLM
 
     endog = table["r"].to_numpy()
     exog = np.ones((len(table), 1))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # boundary (zero) variances: statsmodels warns
-        if sessions >= 2:
-            groups = table["session"].to_numpy()
-            runs = {  # each session's run indicators (its own runs only)
-                g: pd.get_dummies(table.loc[groups == g, "run"]).to_numpy(dtype=float)
-                for g in pd.unique(groups)
-            }
-            model = MixedLM(
-                endog,
-                exog,
-                groups=groups,
-                exog_re=np.ones((len(table), 1)),
-                exog_vc={"run": runs},
-            )
-            fit = _reml(model)
-            session_var = float(np.asarray(fit.cov_re)[0, 0])
-            run_var = float(fit.vcomp[0]) if len(fit.vcomp) else 0.0
-        else:
-            model = MixedLM(endog, exog, groups=table["run"].to_numpy())
-            fit = _reml(model)
-            session_var, run_var = 0.0, float(np.asarray(fit.cov_re)[0, 0])
+        groups = table["session"].to_numpy()
+        runs = {  # each session's run indicators (its own runs only)
+            g: pd.get_dummies(table.loc[groups == g, "run"]).to_numpy(dtype=float)
+            for g in pd.unique(groups)
+        }
+        model = MixedLM(
+            endog,
+            exog,
+            groups=groups,
+            exog_re=np.ones((len(table), 1)),
+            exog_vc={"run": runs},
+        )
+        fit = _reml(model)
+        session_var = float(np.asarray(fit.cov_re)[0, 0])
+        run_var = float(fit.vcomp[0]) if len(fit.vcomp) else 0.0
     residual_var = float(fit.scale)
     values = (max(session_var, 0.0), max(run_var, 0.0), max(residual_var, 0.0))
     if not all(math.isfinite(v) for v in values):
@@ -219,7 +241,7 @@ def scatter_components(
     repeat, run, session = (math.sqrt(v) for v in (repeat_var, run_var, session_var))
     reproducibility = math.sqrt(repeat_var + between)
     return {
-        "method": METHOD,
+        "method": METHOD if sessions >= 2 else METHOD_ONE_SESSION,
         "relative": True,
         "sessions": sessions,
         "runs": runs,
