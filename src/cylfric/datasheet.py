@@ -9,13 +9,13 @@ with the model (:mod:`cylfric.model.serialize`, ``datasheet.schema.json``).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 from . import __version__
+from .io.campaign import file_sha256
 from .io.writers import atomic_write_text
 from .model import SCHEMA, SCHEMA_ID, DatasheetError, FrictionModel, read_datasheet, validate
 from .model.serialize import clean
@@ -46,13 +46,9 @@ __all__ = [
 _PARAM_UNITS = {"F_c": "N", "F_s": "N", "sigma_2": "N*s/m", "v_r": "m/s", "alpha": "-"}
 
 
-def file_digest(path: StrPath) -> str:
-    """SHA-256 of a file's bytes (hex)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+file_digest = file_sha256
+"""SHA-256 of a file's bytes (hex): :func:`cylfric.io.campaign.file_sha256`, which finds a
+campaign's duplicate files with the same digest."""
 
 
 def build_datasheet(

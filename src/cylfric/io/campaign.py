@@ -214,8 +214,9 @@ class Duplicate(NamedTuple):
         return f"duplicate of {self.original} (the same bytes, SHA-256): counted once, not read"
 
 
-def file_sha256(path) -> str:
-    """SHA-256 of a file's bytes (hex), read in blocks."""
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """SHA-256 of a file's bytes (hex), read in blocks (also the datasheet's
+    ``file_digest``)."""
     import hashlib
 
     with open(path, "rb") as handle:
