@@ -76,7 +76,11 @@ FMU_INPUTS = {
 """Inputs of the compensator FMU (value references 0-4) with their units."""
 FMU_OUTPUTS = {
     "force": ("N", "friction force estimate, positive in the direction of motion"),
-    "command": ("", "valve command that changes the cylinder force by the estimate's change"),
+    "command": (
+        "",
+        "valve command that changes the cylinder force by the estimate's change and holds it "
+        "against the cross-piston leakage",
+    ),
 }
 """Outputs of the compensator FMU (value references 5, 6)."""
 
@@ -91,6 +95,7 @@ _AXIS_DEFINES = (
     ("CYLFRIC_TANK", "tank_pressure", "tank pressure [Pa]"),
     ("CYLFRIC_VALVE_K", "valve_coefficient", "valve flow coefficient [m^3/(s*sqrt(Pa))]"),
     ("CYLFRIC_LAMINAR_DROP", "valve_laminar_drop", "laminar transition of the orifices [Pa]"),
+    ("CYLFRIC_LEAKAGE", "leakage", "cross-piston leakage coefficient C_i [m^3/(s*Pa)]"),
 )
 _ROW_UNITS = ("N", "N", "N*s/m", "m/s", "-", "N/m", "N*s/m")
 _LAW_NAMES = {0: "constant", 1: "linear", 2: "quadratic", 3: "exponential"}
@@ -365,7 +370,8 @@ def _matlab(k: _Constants, name: str) -> str:
 %   position_reference [m], velocity_reference [m/s]; state: 4-vector [x_prev [m];
 %   z_hat [m]; f_prev [N]; started [-]], zeros(4, 1) before the first sample.
 %   force: the friction force estimate [N]; command: the valve command [-] that changes the
-%   cylinder force by the estimate's change (add it to the position controller's command).
+%   cylinder force by the estimate's change and holds it against the cross-piston leakage
+%   (add it to the position controller's command).
 %   Call once per controller sample, T = {k.sample_time!r} s. Fixed sizes and subfunctions
 %   only: usable as a Simulink MATLAB Function block.
 %
@@ -399,7 +405,7 @@ elseif kind ~= 0
 end
 command = 0;
 if started && kind ~= 0
-    rate = (comp - state(3)) / T;
+    rate = (comp - state(3)) / T + leakage_force_rate(comp, position);
     if rate >= 0
         direction = 1;
     else
@@ -504,6 +510,16 @@ else
     kb = k * max(root_of(ps - pb), floor_);
 end
 G = {ax["CYLFRIC_BULK_MODULUS"]} * (aa * ka / va + ab * kb / vb);
+end
+
+function r = leakage_force_rate(force, x)
+% force rate [N/s] that holds the cylinder force [N] against the cross-piston leakage
+aa = {ax["CYLFRIC_AREA_A"]};  % [m^2]
+ab = {ax["CYLFRIC_AREA_B"]};  % [m^2]
+va = {ax["CYLFRIC_DEAD_VOLUME_A"]} + aa * x;  % [m^3]
+vb = {ax["CYLFRIC_DEAD_VOLUME_B"]} + ab * ({ax["CYLFRIC_STROKE"]} - x);  % [m^3]
+r = {ax["CYLFRIC_BULK_MODULUS"]} * {ax["CYLFRIC_LEAKAGE"]} * force / (0.5 * (aa + ab)) ...
+    * (aa / va + ab / vb);
 end
 """
 

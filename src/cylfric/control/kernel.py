@@ -34,6 +34,7 @@ __all__ = [
     "params_at",
     "operating_pressure",
     "force_rate_gain",
+    "leakage_force_rate",
     "compensator_step",
     "run_compensator",
     "COMPENSATOR_STATE",
@@ -69,7 +70,7 @@ CTRL = (
     "ki",
     "kd",
     "feedforward",
-    "reserved_1",
+    "feedforward_lead",
     "smoothing_velocity",
     "observer_gain",
     "coulomb_force",
@@ -77,7 +78,8 @@ CTRL = (
     "sample_time",
 )
 """Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
-(0), unused, sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
+(0), the feedforward's lead time [s] (the reference velocity fed forward is ``v_ref + lead
+a_ref``), sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
 constant command offset [-] (valve null bias; open-loop tests), sample time [s]."""
 
 
@@ -191,6 +193,17 @@ def force_rate_gain(direction, x, pa, pb, ax):
 
 
 @njit(cache=True, inline="always")
+def leakage_force_rate(force, x, ax):
+    """Force rate [N/s] the valve must supply to hold a cylinder force ``force`` [N] against the
+    cross-piston leakage: ``beta C_i dp (A_A/V_A + A_B/V_B)`` with the pressure difference
+    ``dp = force / ((A_A + A_B)/2)`` (exact for a double-rod cylinder)."""
+    aa, ab, stroke, va0, vb0 = ax[0], ax[1], ax[2], ax[3], ax[4]
+    va = va0 + aa * x
+    vb = vb0 + ab * (stroke - x)
+    return ax[6] * ax[7] * force / (0.5 * (aa + ab)) * (aa / va + ab / vb)
+
+
+@njit(cache=True, inline="always")
 def velocity_gain(direction, pa, pb, ax):
     """Piston speed per unit opening [m/s] at the pressures: the mean of the two chambers'
     ``K r(dp) / A`` in ``direction`` (+-1)."""
@@ -240,8 +253,8 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
     elif kind == 4:
         comp = oracle
     u_c = 0.0
-    if started and kind != 0:
-        rate = (comp - state[2]) / T
+    if started and kind != 0:  # the force's rate and its hold against leakage, through the valve
+        rate = (comp - state[2]) / T + leakage_force_rate(comp, x, ax)
         u_c = rate / force_rate_gain(1.0 if rate >= 0 else -1.0, x, pa, pb, ax)
     state[2] = comp
     state[3] = 1.0
@@ -306,7 +319,9 @@ def closed_loop(
         z_hat = cstate[1]
         ff = 0.0
         if ff_ext > 0.0:  # flow linearisation at the measured pressures
-            ff = vr / velocity_gain(1.0 if vr >= 0 else -1.0, pa, pb, ax)
+            ar = (v_ref[min(k + 1, n - 1)] - v_ref[max(k - 1, 0)]) / (2.0 * T)
+            vl = vr + ctrl[4] * ar
+            ff = vl / velocity_gain(1.0 if vl >= 0 else -1.0, pa, pb, ax)
         u_fb = kp * err + integ + kd * (vr - v_meas)
         u = ff + u_fb + u_c + ctrl[8]
         if u > 1.0:

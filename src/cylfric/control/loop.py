@@ -244,7 +244,7 @@ def controller_vector(
         [
             *gains,
             1.0,
-            1.0,
+            0.0,
             smoothing_velocity,
             observer_gain,
             coulomb,

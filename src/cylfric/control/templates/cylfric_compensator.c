@@ -124,6 +124,16 @@ static double cylfric_force_rate_gain(double direction, double x, double pa, dou
     return CYLFRIC_BULK_MODULUS * (CYLFRIC_AREA_A * ka / va + CYLFRIC_AREA_B * kb / vb);
 }
 
+/* force rate [N/s] that holds a cylinder force against the cross-piston leakage:
+ * beta C_i dp (A_A/V_A + A_B/V_B) with dp = force / ((A_A + A_B)/2) */
+static double cylfric_leakage_force_rate(double force, double x) {
+    double va = CYLFRIC_DEAD_VOLUME_A + CYLFRIC_AREA_A * x;
+    double vb = CYLFRIC_DEAD_VOLUME_B + CYLFRIC_AREA_B * (CYLFRIC_STROKE - x);
+    return CYLFRIC_BULK_MODULUS * CYLFRIC_LEAKAGE * force /
+           (0.5 * (CYLFRIC_AREA_A + CYLFRIC_AREA_B)) *
+           (CYLFRIC_AREA_A / va + CYLFRIC_AREA_B / vb);
+}
+
 void cylfric_compensator_init(cylfric_compensator_state *state) {
     state->x_prev = 0.0;
     state->z_hat = 0.0;
@@ -159,7 +169,7 @@ int cylfric_compensator_step(int kind, const cylfric_compensator_input *in,
     }
     out->force = comp;
     if (started && kind != CYLFRIC_NONE) {
-        rate = (comp - state->f_prev) / T;
+        rate = (comp - state->f_prev) / T + cylfric_leakage_force_rate(comp, in->position);
         out->command = rate / cylfric_force_rate_gain(rate >= 0 ? 1.0 : -1.0, in->position,
                                                        in->pressure_a, in->pressure_b);
     }

@@ -34,7 +34,7 @@ typedef struct {
 
 typedef struct {
     double force;   /* friction force estimate F [N], positive in the direction of motion */
-    double command; /* valve command u_c [-] that changes the cylinder force by dF */
+    double command; /* valve command u_c [-]: changes the cylinder force by dF, holds F against leakage */
 } cylfric_compensator_output;
 
 void cylfric_compensator_init(cylfric_compensator_state *state);
