@@ -17,10 +17,18 @@ import pytest
 from numpy.testing import assert_allclose
 
 from cylfric.control.axis import DEFAULT_AXIS, Axis, AxisError, load_axis
-from cylfric.control.kernel import COMPENSATOR_CODES, closed_loop
-from cylfric.control.loop import make_reference, read_reference, rest_state, simulate_loop
-from cylfric.control.study import compare_compensators
-from cylfric.control.tuning import tune
+from cylfric.control.kernel import COMPENSATOR_CODES, closed_loop, friction_table
+from cylfric.control.loop import (
+    PlantFriction,
+    compensator_outputs,
+    controller_vector,
+    make_reference,
+    read_reference,
+    rest_state,
+    simulate_loop,
+)
+from cylfric.control.study import compare_compensators, robustness_cases
+from cylfric.control.tuning import feedforward_lead, tune
 from cylfric.model import FrictionModel
 
 NO_FRICTION = np.array([[0, 1e-9, 0, 0, 0]] * 7, dtype=float)[:, :4]
@@ -95,6 +103,86 @@ def test_tuning_has_a_six_db_gain_margin():
     assert tuning.kp == pytest.approx(tuning.critical_kp / 2)
     assert 0 < tuning.loop_gain_1_s < tuning.omega_h_rad_s
     assert tuning.phase_margin_deg > 30
+
+
+def test_feedforward_lead_is_the_delay_of_the_velocity_path():
+    # the ZOH's half sample plus the spool's low-frequency delay (2 zeta/omega or tau)
+    axis = DEFAULT_AXIS
+    spool = 2 * axis.spool_damping / (2 * math.pi * axis.spool_frequency)
+    assert_allclose(feedforward_lead(axis), axis.sample_time / 2 + spool, rtol=1e-12)
+    first = axis.replace(spool_order=1, spool_time_constant=3e-3)
+    assert_allclose(feedforward_lead(first), axis.sample_time / 2 + 3e-3, rtol=1e-12)
+    # a plant with viscous friction only: without the lead the loop lags the sine by the
+    # velocity path's delay; with it the error falls by more than a factor 5
+    viscous = NO_FRICTION.copy()
+    viscous[2, 1] = 380.0  # sigma_2 [N*s/m]
+    ref = make_reference("sine", axis, duration=5.0)
+    tuning = tune(axis, viscous=380.0)
+
+    def rms(lead):
+        ctrl = controller_vector(axis, tuning, FrictionModel())
+        ctrl[4] = lead
+        out = closed_loop(
+            axis.vector(), viscous, 3, viscous, 3, 0, ctrl, ref.position, ref.velocity,
+            axis.substeps, rest_state(axis),
+        )  # fmt: skip
+        return np.sqrt(np.mean((ref.position - out[:, 0]) ** 2))
+
+    assert rms(feedforward_lead(axis)) < 0.2 * rms(0.0)
+
+
+def test_compensation_holds_its_force_against_leakage():
+    # a constant force estimate (coulomb, constant reference velocity) on a symmetric
+    # cylinder at rest: the steady command opens the valve for exactly the leakage flow
+    # C_i dp with dp = F / A (Jelali & Kroll eq. 3.8 at dp_A/dt = dp_B/dt = 0)
+    axis = DEFAULT_AXIS.replace(leakage=5e-12)
+    model = FrictionModel()
+    pa, pb = 52e5, 48e5
+    rows = np.tile([axis.start_position, pa, pb, axis.start_position, 0.01], (5, 1))
+    force, command = compensator_outputs(model, "coulomb", rows, axis=axis)[-1]
+    area, k = axis.area_a, axis.valve_coefficient
+    flow_a = k * command * math.sqrt(axis.supply_pressure - pa)  # into chamber A
+    flow_b = k * command * math.sqrt(pb - axis.tank_pressure)  # out of chamber B
+    leak = axis.leakage * force / area
+    va, vb = axis.volumes(axis.start_position)
+    # the force rate of the two flows against the leakage's
+    rate = axis.bulk_modulus * area * ((flow_a - leak) / va + (flow_b - leak) / vb)
+    assert force > 0
+    assert_allclose(rate, 0.0, atol=1e-9 * axis.bulk_modulus * area * leak / va)
+    # in the loop: on a leaky axis the oracle removes nearly all the friction error
+    result = compare_compensators(
+        model, axis=axis, reference=make_reference("sine", axis, duration=5.0),
+        robustness=False,
+    )  # fmt: skip
+    oracle, none = result.metrics["oracle"], result.metrics["none"]
+    assert oracle["rms_error_m"] < 0.1 * none["rms_error_m"]
+
+
+def test_session_scatter_cases_use_the_reproducibility_band():
+    model = FrictionModel()
+    assert [c.name for c in robustness_cases(model)][:4] == [
+        "level +20 %",
+        "level -20 %",
+        "pressure slope x2",
+        "pressure slope x0.5",
+    ]
+    sheet = model.to_datasheet()
+    # the demo datasheet's record: a 14 % between-session prior (docs/uncertainty.md)
+    component = {"std_percent": 0.0, "std_N": 0.0, "source": "estimated"}
+    scatter = {
+        "method": "one-way analysis of variance of the runs",
+        "relative": True,
+        "components": {
+            "repeatability": component,
+            "run": component,
+            "session": {"std_percent": 14.0, "std_N": 19.4, "source": "prior"},
+        },
+        "reproducibility": {"std_percent": 14.0, "std_N": 19.4},
+    }
+    sheet.setdefault("fit", {})["scatter"] = scatter
+    cases = {c.name: c for c in robustness_cases(FrictionModel.from_datasheet(sheet))}
+    assert cases["session scatter +2 s_R"] == PlantFriction("session scatter +2 s_R", level=1.28)
+    assert cases["session scatter -2 s_R"].level == pytest.approx(0.72)
 
 
 def test_lugre_compensation_beats_pid_alone_on_the_thesis_law():

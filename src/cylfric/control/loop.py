@@ -2,19 +2,24 @@
 
 The controller (at the axis's ``control_rate``, zero-order hold):
 
-    u = v_ref / K_vel(p_A, p_B) + k_p e + k_i sum(e T) + k_d (v_ref - v_meas) + u_c
+    u = (v_ref + t_l a_ref) / K_vel(p_A, p_B) + k_p e + k_i sum(e T) + k_d (v_ref - v_meas) + u_c
 
 with ``e = x_ref - x``, ``K_vel`` the piston speed per unit opening at the measured chamber
 pressures (the reference-velocity feedforward with the valve's flow linearised: the mean of
 ``K sqrt(p_S - p_A) / A_A`` and ``K sqrt(p_B - p_T) / A_B`` for extension, and of the
-mirrored pair for retraction; Jelali & Kroll 2003 sec. 7.2), ``v_meas`` the
+mirrored pair for retraction; Jelali & Kroll 2003 sec. 7.2), ``a_ref`` the reference
+acceleration (central difference of the reference velocity) and ``t_l`` the lead of
+:func:`~.tuning.feedforward_lead` (half a sample plus the spool's delay), ``v_meas`` the
 backward difference of the sampled position, and the integral held while ``u`` saturates
 (conditional integration). The compensation ``u_c`` turns the compensator's friction force
-estimate ``F`` [N] into the flow that changes the cylinder force by as much: ``u_c = (dF/dt) /
-G_F``, ``dF/dt = (F_k - F_{k-1}) / T`` and ``G_F = beta (A_A K_A / V_A + A_B K_B / V_B)`` the
-force rate per unit opening at the measured pressures and position (the inverse of the
-pressure build-up equations; the force appears as the integral of the flow, as in the
-backstepping designs of hydraulic force control, e.g. Jelali & Kroll 2003 sec. 7.4).
+estimate ``F`` [N] into the flow that changes the cylinder force by as much and holds it
+against the cross-piston leakage: ``u_c = (dF/dt + R_L(F)) / G_F``, ``dF/dt = (F_k -
+F_{k-1}) / T``, ``R_L(F) = beta C_i (F / A_m) (A_A / V_A + A_B / V_B)`` the force rate the
+leakage ``C_i (p_A - p_B)`` takes away from a force F (``A_m = (A_A + A_B)/2``, exact for a
+double-rod cylinder) and ``G_F = beta (A_A K_A / V_A + A_B K_B / V_B)`` the force rate per
+unit opening at the measured pressures and position (the inverse of the pressure build-up
+equations, Jelali & Kroll 2003 eq. 3.8; the force appears as the integral of the flow, as in
+the backstepping designs of hydraulic force control, e.g. Jelali & Kroll 2003 sec. 7.4).
 
 Compensators (:data:`COMPENSATORS`):
 
@@ -53,7 +58,7 @@ from .kernel import (
     friction_table,
     run_compensator,
 )
-from .tuning import Tuning, tune
+from .tuning import Tuning, feedforward_lead, tune
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -244,7 +249,7 @@ def controller_vector(
         [
             *gains,
             1.0,
-            0.0,
+            feedforward_lead(axis),
             smoothing_velocity,
             observer_gain,
             coulomb,

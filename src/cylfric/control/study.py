@@ -29,7 +29,7 @@ from .loop import (
     simulate_loop,
 )
 from .metrics import tracking_metrics
-from .tuning import Tuning, tune
+from .tuning import Tuning, feedforward_lead, tune
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
@@ -44,19 +44,28 @@ def robustness_cases(
     scatter: FrictionModel | None = None,
 ) -> list[PlantFriction]:
     """The plants the datasheet is wrong about: +-20 % friction level, half and double the
-    pressure slope, a session at the upper edge of the datasheet's scatter (F_c and F_s
-    raised by twice the fit's residual standard deviation, the 95 % prediction band of the
-    points), and (when given) another session's datasheet as the plant."""
+    pressure slope, two sessions at the edges of the datasheet's between-session band
+    (friction level x (1 +- 2 s_R), s_R the relative reproducibility standard deviation of
+    its ``fit.scatter`` record: a remounted seal on another day, ISO 5725-2), and (when
+    given) another session's datasheet as the plant. A datasheet without a scatter record
+    gets the points' band instead (F_c and F_s raised by twice the residual standard
+    deviation), labelled as such."""
     cases = [
         PlantFriction("level +20 %", level=1.2),
         PlantFriction("level -20 %", level=0.8),
         PlantFriction("pressure slope x2", slope=2.0),
         PlantFriction("pressure slope x0.5", slope=0.5),
     ]
-    statistics: dict = dict(model.statistics or {})
-    residual = statistics.get("residual_std")
-    if residual:
-        cases.append(PlantFriction("session scatter +2 s", offset=2.0 * float(residual)))
+    record = model.scatter or {}
+    relative = (record.get("reproducibility") or {}).get("std_percent")
+    if relative and record.get("relative", True):
+        s_r = float(relative) / 100.0
+        cases.append(PlantFriction("session scatter +2 s_R", level=1.0 + 2.0 * s_r))
+        cases.append(PlantFriction("session scatter -2 s_R", level=max(1.0 - 2.0 * s_r, 0.05)))
+    else:
+        residual = dict(model.statistics or {}).get("residual_std")
+        if residual:
+            cases.append(PlantFriction("point scatter +2 s", offset=2.0 * float(residual)))
     if scatter is not None:
         cases.append(PlantFriction("other session", model=scatter))
     return cases
@@ -67,7 +76,9 @@ ROBUSTNESS_CASES = (
     "level -20 %",
     "pressure slope x2",
     "pressure slope x0.5",
-    "session scatter +2 s",
+    "session scatter +2 s_R",
+    "session scatter -2 s_R",
+    "point scatter +2 s",
     "other session",
 )
 
@@ -108,6 +119,7 @@ class ControlResult:
             "omega_h_rad_s": self.axis.natural_frequency(),
             "controller": {
                 **self.tuning.to_dict(),
+                "feedforward_lead_s": feedforward_lead(self.axis),
                 "sign_smoothing_m_s": SMOOTHING_VELOCITY,
                 "observer_gain_1_s": OBSERVER_GAIN,
             },

@@ -23,7 +23,7 @@ import numpy as np
 
 from .axis import Axis
 
-__all__ = ["Tuning", "tune", "linear_model"]
+__all__ = ["Tuning", "tune", "linear_model", "feedforward_lead"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,24 @@ class Tuning:
     def to_dict(self) -> dict:
         """The fields by name (JSON-ready)."""
         return asdict(self)
+
+
+def feedforward_lead(axis: Axis) -> float:
+    """Lead time [s] of the reference-velocity feedforward: the delay of the velocity path.
+
+    The command reaches the piston speed through the zero-order hold (half a sample, ``T/2``)
+    and the spool, whose low-frequency equivalent delay is ``tau`` for a first-order spool and
+    ``2 zeta_v / omega_v`` for a second-order one (the phase slope of ``1/(tau s + 1)`` and of
+    ``omega_v^2/(s^2 + 2 zeta_v omega_v s + omega_v^2)`` at omega -> 0). The feedforward sends
+    ``v_ref + lead a_ref`` (velocity and acceleration feedforward; Jelali & Kroll 2003 sec.
+    7.2), so the piston follows the reference velocity without that lag. The hydraulic mode's
+    own delay ``2 zeta_h / omega_h`` is left out (tens of microseconds on the default axis).
+    """
+    if axis.spool_order == 1:
+        spool = axis.spool_time_constant
+    else:
+        spool = 2.0 * axis.spool_damping / (2.0 * math.pi * axis.spool_frequency)
+    return 0.5 * axis.sample_time + spool
 
 
 def linear_model(axis: Axis, viscous: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
