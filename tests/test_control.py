@@ -17,7 +17,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from cylfric.control.axis import DEFAULT_AXIS, Axis, AxisError, load_axis
-from cylfric.control.kernel import COMPENSATOR_CODES, closed_loop, friction_table
+from cylfric.control.kernel import COMPENSATOR_CODES, closed_loop
 from cylfric.control.loop import (
     PlantFriction,
     compensator_outputs,
