@@ -171,7 +171,8 @@ class Axis:
     """Controller sample rate [Hz]."""
     substeps: int = 10
     """Integration steps of the plant per controller sample [-] (10 at 1 kHz: 100 us, where
-    the demo loop's RMS error agrees with 50 substeps to 1e-4 relative)."""
+    the demo loop's PI-alone RMS error agrees with 100 substeps to 1e-4 relative, the LuGre
+    loop's 0.1 um residual to 1.5 %)."""
 
     def __post_init__(self) -> None:
         positive = (
