@@ -356,7 +356,9 @@ def simulate(
         higher limit).
     """
     n = _output_samples(duration, dt)
-    if n is not None:
+    if n is not None and not (  # the message is formatted only when it is needed
+        0 < max_output_bytes and n * PEAK_BYTES_PER_SAMPLE <= max_output_bytes
+    ):
         _check_output_size(
             n * PEAK_BYTES_PER_SAMPLE, max_output_bytes, f"{n:.4g} samples (duration "
             f"{duration:g} s every dt = {dt:g} s) x {PEAK_BYTES_PER_SAMPLE} bytes measured per "
@@ -478,6 +480,8 @@ _STATE_UNITS = {"x0": "m", "v0": "m/s", "z0": "m"}
 def _check_initial_state(**states: float) -> None:
     """ValueError naming an initial state (x0 [m], v0 [m/s], z0 [m]) that is not a finite
     real number (a NaN or inf start ended in a ZeroDivisionError inside the integrator)."""
+    if all(type(value) is float and math.isfinite(value) for value in states.values()):
+        return  # the common case, without the conversions below
     for name, value in states.items():
         unit = _STATE_UNITS[name]
         try:
@@ -512,7 +516,7 @@ def _simulate(
     if method == "fixed" and not (0 < step < math.inf):
         raise ValueError(f"step = {step} s is out of range; expected a finite step > 0 s")
     n = int(round(duration / dt)) + 1
-    constant = (
+    constant = (type(pressure_a) is float and pressure_b is None) or (
         np.ndim(pressure_a) == 0
         and (pressure_b is None or np.ndim(pressure_b) == 0)
         and not callable(pressure_a)
