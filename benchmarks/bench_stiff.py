@@ -823,8 +823,20 @@ def _versus_c(case, rounds=7):
     c_goal = _loosest_rtol(c_force, meets_goal)
     c_equal = _loosest_rtol(c_force, as_good)
     tuned = _loosest_rtol(lambda r: sim(r).outputs["friction_force"], meets_goal)
+    from cylfric.simulate import kernels
+    from cylfric.simulate.plant import MAX_STEPS, ROSENBROCK_RTOL, rosenbrock_tolerances
+
+    p, n = case["params"], _grid(case).size
+    sig = np.array([[0.0, 0.0, 0.0, p["F_c"], p["F_s"], p["sigma_2"]]] * 2)
+    kernel_args = (
+        sig, 1e-3 * (n - 1), case["speed"], 1e-3, n, 0.0, 0.0, 0.0, case["mass"], case["k"],
+        0.0, 0.0, p["sigma_0"], p["sigma_1"], p["v_r"], p["alpha"], ROSENBROCK_RTOL,
+        *rosenbrock_tolerances(ROSENBROCK_RTOL, p), MAX_STEPS, 0.0,
+    )  # fmt: skip
     contenders = {
         "simulate_default": lambda: _best(sim, 3)[0],
+        # the compiled kernel alone on the arrays simulate() builds (output arrays allocated)
+        "kernel_default": lambda: _best(lambda: kernels.rosenbrock(*kernel_args), 3)[0],
         "simulate_tuned": lambda: _best(lambda: sim(tuned), 3)[0] if tuned else math.nan,
         "c_textbook_goal": lambda: _c_rodas3(case, c_goal, True, 3)[0] if c_goal else math.nan,
         "c_textbook_equal": lambda: _c_rodas3(case, c_equal, True, 3)[0] if c_equal else math.nan,
@@ -869,6 +881,8 @@ def _versus_c(case, rounds=7):
         "ratio_simulate_over_c_textbook_equal": med["simulate_default"] / med["c_textbook_equal"],
         "ratio_tuned_simulate_over_c_textbook_goal": med["simulate_tuned"] / med["c_textbook_goal"],
         "ratio_simulate_over_c_same_scheme": med["simulate_default"] / med["c_same_scheme_default"],
+        "ratio_kernel_over_c_same_scheme": med["kernel_default"] / med["c_same_scheme_default"],
+        "ratio_kernel_over_c_textbook_goal": med["kernel_default"] / med["c_textbook_goal"],
     }
     print(
         f"  {case['name']}: simulate {med['simulate_default'] * 1e3:.3f} ms "
@@ -877,10 +891,20 @@ def _versus_c(case, rounds=7):
         f"{med['c_textbook_equal'] * 1e3:.3f} ms (rtol {c_equal}); ratios "
         f"{row['ratio_simulate_over_c_textbook_goal']:.2f} / "
         f"{row['ratio_simulate_over_c_textbook_equal']:.2f}, tuned "
-        f"{row['ratio_tuned_simulate_over_c_textbook_goal']:.2f} (rtol {tuned})",
+        f"{row['ratio_tuned_simulate_over_c_textbook_goal']:.2f} (rtol {tuned}); kernel "
+        f"{med['kernel_default'] * 1e3:.3f} ms, {row['ratio_kernel_over_c_same_scheme']:.2f}x "
+        f"the same scheme in C ({med['c_same_scheme_default'] * 1e3:.3f} ms)",
         flush=True,
     )
     return row
+
+
+def _load():
+    """The 1-minute load average of the machine (other jobs share it) [-], or None."""
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return None
 
 
 def bench_simulate_vs_c():
@@ -893,6 +917,7 @@ def bench_simulate_vs_c():
         "accuracy": f"RMS(F - F_ref)/F_c <= {TOL} and slip instants within {TOL} x duration, "
         "against Radau rtol 1e-10",
         "timing": "median of 7 rounds, each the best of 3 runs per contender, alternating",
+        "load": _load(),
         "c_textbook": "benchmarks/c/rodas3.c PLAIN=1: no breakaway guards, RMS norm over x, v, z "
         "with atol = rtol x (1 mm, v_r, F_c/sigma_0)",
         "rows": [_versus_c(c) for c in cases],

@@ -4,6 +4,7 @@ dynamic parameters."""
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
@@ -151,3 +152,48 @@ def test_non_finite_initial_states_are_named_in_a_batch(state):
 def test_an_initial_state_that_is_not_a_number_is_named():
     with pytest.raises(ValueError, match=r"^z0 = 'a'; expected a finite number in m"):
         simulate(Cylinder(2.5), _canudas(), SpringPull(2e3, 1e-3), duration=0.05, dt=1e-3, z0="a")
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+@pytest.mark.parametrize("name", ["sigma_0", "sigma_1", "sigma_2", "F_c", "F_s", "v_r", "alpha"])
+def test_non_finite_friction_parameters_are_named(name, value):
+    """Issue 26: every LuGre parameter that is NaN or infinite gives a ValueError naming it
+    (at the model for the pressure coefficients, or before the integrator runs)."""
+    with pytest.raises(ValueError, match=rf"parameter {name} (= -?inf|= nan|is NaN)"):
+        simulate(Cylinder(1.0), _canudas(**{name: value}), SpringPull(2.0, 0.1), 0.1)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf])
+@pytest.mark.parametrize(
+    "run, shown",
+    [
+        (lambda v: simulate(Cylinder(v), _canudas(), SpringPull(2.0, 0.1), 0.1), "mass = {}"),
+        (
+            lambda v: simulate(Cylinder(1.0), _canudas(), SpringPull(v, 0.1), 0.1),
+            "stiffness = {}",
+        ),
+        (lambda v: simulate(Cylinder(1.0), _canudas(), SpringPull(2.0, v), 0.1), "speed = {}"),
+        (
+            lambda v: simulate(Cylinder(1.0), _canudas(), SpringPull(2.0, 0.1), 0.1, dt=v),
+            "dt = {} s",
+        ),
+        (lambda v: simulate(Cylinder(1.0), _canudas(), SpringPull(2.0, 0.1), v), "duration = {} s"),
+        (
+            lambda v: simulate(Cylinder(1.0), _canudas(), SpringPull(2.0, 0.1), 0.1, rtol=v),
+            "rtol = {}",
+        ),
+        (
+            lambda v: simulate(Cylinder(1.0), _canudas(), SpringPull(2.0, 0.1), 0.1, pressure_a=v),
+            "pressure_a contains NaN or inf",
+        ),
+        (
+            lambda v: simulate_batch(Cylinder(1.0), [_canudas(sigma_0=v)], SpringPull(2, 0.1), 0.1),
+            "parameter sigma_0 ",
+        ),
+    ],
+)
+def test_non_finite_plant_and_run_parameters_are_named(run, shown, value):
+    """Issue 26: a NaN or inf mass, spring, speed, grid, tolerance or pressure gives a
+    ValueError whose message names the parameter (with its value where it has one)."""
+    with pytest.raises(ValueError, match=re.escape(shown.format(value))):
+        run(value)

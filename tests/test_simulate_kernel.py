@@ -113,3 +113,23 @@ def test_remembered_parameters_follow_the_pressure():
     force = [r.outputs["friction_force"] for r in runs]
     assert_allclose(force[0], force[2], rtol=0, atol=0)
     assert force[1][-1] > force[0][-1] + 5.0  # [N]; F_c(100 bar) - F_c(20 bar) is about 40 N
+
+
+@pytest.mark.parametrize("alpha", [1.0, 2.0])
+def test_vectorised_output_is_the_lugre_force_on_the_states(alpha):
+    """Issue 26: the output loop takes g(v) without math.exp where exp_neg needs none (the
+    series below 1e-3, zero above 746) and fixes up the other points after. The friction it
+    writes is eq. 2.5 on the returned states at every point, in all three ranges."""
+    _, p = _canudas(1e5)
+    p = {**p, "alpha": alpha}
+    model = FrictionModel(p, pressure_law="constant")
+    result = simulate(Cylinder(1.0), model, SpringPull(2.0, 0.1), 10.0)
+    v, z = result.states["velocity"], result.states["z"]
+    arg = (np.abs(v) / p["v_r"]) ** alpha
+    assert np.any(arg < 1e-3)  # sticking: the series
+    assert np.any(arg > 746.0) == (alpha == 2.0)  # slipping at 0.1 m/s: zero for alpha 2
+    assert np.count_nonzero((arg >= 1e-3) & (arg <= 746.0)) > 10  # fixed-up points exist
+    g = p["F_c"] + (p["F_s"] - p["F_c"]) * np.exp(-arg)
+    expected = p["sigma_0"] * z + p["sigma_1"] * (v - p["sigma_0"] * np.abs(v) * z / g)
+    expected += p["sigma_2"] * v
+    assert_allclose(result.outputs["friction_force"], expected, rtol=1e-12, atol=1e-12)

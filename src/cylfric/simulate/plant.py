@@ -356,7 +356,9 @@ def simulate(
         higher limit).
     """
     n = _output_samples(duration, dt)
-    if n is not None:
+    if n is not None and not (  # the message is formatted only when it is needed
+        0 < max_output_bytes and n * PEAK_BYTES_PER_SAMPLE <= max_output_bytes
+    ):
         _check_output_size(
             n * PEAK_BYTES_PER_SAMPLE, max_output_bytes, f"{n:.4g} samples (duration "
             f"{duration:g} s every dt = {dt:g} s) x {PEAK_BYTES_PER_SAMPLE} bytes measured per "
@@ -478,6 +480,8 @@ _STATE_UNITS = {"x0": "m", "v0": "m/s", "z0": "m"}
 def _check_initial_state(**states: float) -> None:
     """ValueError naming an initial state (x0 [m], v0 [m/s], z0 [m]) that is not a finite
     real number (a NaN or inf start ended in a ZeroDivisionError inside the integrator)."""
+    if all(type(value) is float and math.isfinite(value) for value in states.values()):
+        return  # the common case, without the conversions below
     for name, value in states.items():
         unit = _STATE_UNITS[name]
         try:
@@ -486,6 +490,13 @@ def _check_initial_state(**states: float) -> None:
             raise ValueError(f"{name} = {value!r}; expected a finite number in {unit}") from None
         if isinstance(value, bool) or not math.isfinite(number):
             raise ValueError(f"{name} = {value!r} {unit}; expected a finite number in {unit}")
+
+
+@functools.lru_cache(maxsize=64)
+def _constant_signal(value: float, n: int) -> np.ndarray:
+    """``value`` (a pressure [Pa]) on n samples as a read-only view of one number, shared by
+    repeated runs (np.broadcast_to costs about 2.5 us of each short simulation)."""
+    return np.broadcast_to(value, (n,))
 
 
 def _simulate(
@@ -505,7 +516,7 @@ def _simulate(
     if method == "fixed" and not (0 < step < math.inf):
         raise ValueError(f"step = {step} s is out of range; expected a finite step > 0 s")
     n = int(round(duration / dt)) + 1
-    constant = (
+    constant = (type(pressure_a) is float and pressure_b is None) or (
         np.ndim(pressure_a) == 0
         and (pressure_b is None or np.ndim(pressure_b) == 0)
         and not callable(pressure_a)
@@ -519,8 +530,8 @@ def _simulate(
             if not math.isfinite(value):
                 raise ValueError(f"{name} contains NaN or inf; expected finite values")
         # constant pressures as read-only views of one number (no 8 bytes per sample to write)
-        pa = np.broadcast_to(p_a, (n,))
-        pb = pa if pressure_b is None or p_b == p_a else np.broadcast_to(p_b, (n,))
+        pa = _constant_signal(p_a, n)
+        pb = pa if pressure_b is None or p_b == p_a else _constant_signal(p_b, n)
         checked_a: float | np.ndarray = p_a
         checked_b: float | np.ndarray = p_b
     else:
@@ -704,8 +715,8 @@ def _signal_block(drive, n, dt, x0, f_pressure, params, time=None):
             if not math.isfinite(f_ext):
                 raise ValueError("force contains NaN or inf; expected finite values")
         if ramp is not None:
-            row = [x0, 0.0, f_ext + f_pressure, *(float(params[name]) for name in names)]
-            return (np.array([row, row]), dt * (n - 1), ramp, *gains)
+            row = (x0, 0.0, f_ext + f_pressure, params["F_c"], params["F_s"], params["sigma_2"])
+            return (_two_rows(row), dt * (n - 1), ramp, *gains)
     time = np.arange(n) * dt if time is None else time
     x_ref, v_ref, f_ext, k, c, ki = _drive_signals(drive, time, x0)
     sig = np.empty((n, 6))
@@ -713,6 +724,13 @@ def _signal_block(drive, n, dt, x0, f_pressure, params, time=None):
     for column, name in enumerate(names, 3):
         sig[:, column] = params[name]
     return sig, dt, 0.0, k, c, ki
+
+
+@functools.lru_cache(maxsize=256)
+def _two_rows(row: tuple[float, ...]) -> np.ndarray:
+    """The (2, 6) input block of constant inputs ``row`` (kernels order), shared by repeated
+    runs: the kernels only read it, and it never leaves :func:`_simulate`."""
+    return np.array([row, row])
 
 
 def _plant_args(cylinder, friction, params, n, x0, v0, z0, k, c, ki, x_ref, v_ref, f_ext):
