@@ -40,7 +40,7 @@ def strokes(a):
 
 
 def main(folder: Path) -> None:
-    rows, slopes, startup = [], [], []
+    rows, slopes, startup, spread, stroke = [], [], [], [], []
     steps = {k: [] for k in ("force [N]", "position [mm]", "pressure [bar]")}
     for path in sorted(folder.glob("*_O-ring257_*bar.csv")):
         session, bar = re.match(r"(\d+)_O-ring257_(\d+)bar", path.name).groups()
@@ -54,6 +54,16 @@ def main(folder: Path) -> None:
         offset = np.array([(ext[k][1] + ret[k][1]) / 2 for k in range(n)])  # [N]
         rows.append(dict(session=session, bar=bar, level=level.mean(), offset=offset.mean()))
         slopes.append(np.polyfit(np.arange(n), level / level.mean(), 1)[0])
+        spread.append(level.std(ddof=1) / level.mean())
+        # one stroke's friction (each direction about the file's mean offset), less the
+        # file's linear drift: the stroke-to-stroke repeatability
+        k = np.arange(n)
+        for one in (
+            np.array([q[1] for q in ext[:n]]) - offset.mean(),
+            offset.mean() - np.array([q[1] for q in ret[:n]]),
+        ):
+            detrended = one - np.polyval(np.polyfit(k, one, 1), k)
+            stroke.append(detrended.std(ddof=2) / level.mean())
         net = a[:, 6] - a[:, 5] * 1e5 * AREA
         move = np.nonzero(np.abs(a[:, 4] - a[0, 4]) > 0.02)[0][0]
         w = net[move : move + 40] - ext[0][1]
@@ -77,6 +87,12 @@ def main(folder: Path) -> None:
     print(
         f"trend of the level with stroke index: {100 * np.mean(slopes):+.2f} %/stroke "
         f"(s.d. {100 * np.std(slopes, ddof=1):.2f} % over {len(slopes)} files)"
+    )
+    print(
+        f"s.d. of the stroke-pair levels inside a file: {100 * np.median(spread):.1f} % "
+        f"(median; {100 * min(spread):.1f}-{100 * max(spread):.1f} %); of one stroke's level "
+        f"about the file's linear drift: {100 * np.median(stroke):.2f} % (median of both "
+        f"directions; {100 * min(stroke):.1f}-{100 * max(stroke):.1f} %)"
     )
     peaks, settle = np.array(startup).T
     print(

@@ -215,3 +215,24 @@ def test_cli_generate_rough_sessions_and_clean(tmp_path):
 def test_bad_rough_settings_are_refused(change, message):
     with pytest.raises(ValueError, match=message):
         BenchSettings(**change)
+
+
+def test_each_stroke_draws_its_own_level_from_the_noise_seed():
+    """stroke_scatter: the two strokes of a run scatter about the run's level (lognormal
+    s.d. as set), drawn from the noise stream: another noise seed, other strokes."""
+    clean = BenchSettings.clean()
+    base = _run(clean)
+    ratios = []
+    for seed in range(40):
+        run = run_virtual_test(
+            55.0, 60, replace(clean, stroke_scatter=0.05), rng=np.random.default_rng(seed)
+        )
+        for segment in (0, 1):
+            steady = base.steady & (base.segment == segment)
+            level = np.median(np.abs(base.friction[steady]))
+            ratios.append(np.median(np.abs(run.friction[steady])) / level)
+    spread = np.std(np.log(ratios), ddof=1)
+    assert 0.035 < spread < 0.065  # 0.05 with 80 draws
+    assert ratios[0] != ratios[1]  # the strokes of one run differ
+    assert BenchSettings().stroke_scatter == pytest.approx(0.010)  # the calibrated default
+    assert BenchSettings.clean().stroke_scatter == 0.0
