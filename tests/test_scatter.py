@@ -167,3 +167,74 @@ def test_one_session_anova_equals_reml_on_balanced_runs():
     fit = MixedLM(r, np.ones((r.size, 1)), groups=runs).fit(reml=True)
     assert run_var == pytest.approx(float(np.asarray(fit.cov_re)[0, 0]), rel=1e-3)  # REML iterates
     assert repeat_var == pytest.approx(float(fit.scale), rel=1e-3)
+
+
+def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
+    """Scopes point and run: the mean's term is the model-based covariance (new data of the
+    same mount share its effects); session: the cluster-robust one. The run band's Student-t
+    quantile takes the run component's degrees of freedom, not the session prior's."""
+    rng = np.random.default_rng(2)
+    rows = []
+    for run, (bar, mm_s) in enumerate(
+        (b, v) for b in (10, 40, 70, 100) for v in (1, 3, 10, 30, 100)
+    ):
+        scale = 1 + rng.normal(0, 0.05)  # the run's level
+        level = (30 + 0.4 * bar) * (1 + 0.5 * np.exp(-mm_s / 10)) + 2.0 * mm_s
+        for d in (1, -1):
+            rows.append(
+                {
+                    "velocity [m/s]": d * mm_s * 1e-3,
+                    "pressure [Pa]": bar * 1e5,
+                    "friction [N]": level * scale * (1 + rng.normal(0, 0.01)),
+                    "direction [-]": d,
+                    "flag": "ok",
+                    "run": run,
+                    "session": "1",
+                }
+            )
+    model = _identify(pd.DataFrame(rows)).model
+    assert model.covariance_nonrobust is not None
+    assert model.covariance_nonrobust[0] == model.covariance[0]
+    v, p = np.full(3, 0.01), np.array([20e5, 50e5, 80e5])
+    robust = model.standard_error(v, p)
+    nonrobust = model.standard_error(v, p, robust=False)
+    assert not np.allclose(robust, nonrobust)
+    # the point band by hand: the internally studentised residual's 95 % quantile with
+    # the residuals' dof nu, sqrt(nu B^-1(0.95; 1/2, (nu-1)/2)), x sqrt(se_model^2 + s_res^2)
+    from scipy import stats
+
+    n_dof = model.statistics["n_points"] - model.statistics["n_variables"]
+    s_res = model.statistics["residual_std"]
+    low, high = model.prediction_band(v, p, scope="point")
+    quantile = np.sqrt(n_dof * stats.beta.ppf(0.95, 0.5, (n_dof - 1) / 2))
+    assert 1.9 < quantile < stats.norm.ppf(0.975) < stats.t.ppf(0.975, n_dof)
+    expected = quantile * np.sqrt(nonrobust**2 + s_res**2)
+    np.testing.assert_allclose(0.5 * (high - low), expected, rtol=1e-9)
+    # the session band: Student-t with the cluster-robust se (a new mount shares nothing)
+    assert np.all(np.subtract(*model.prediction_band(v, p, scope="session")[::-1]) > (high - low))
+    # without the model-based covariance (an older datasheet) the robust one serves
+    sheet = model.to_datasheet()
+    assert validate(sheet)["fit"]["covariance_nonrobust"]["names"] == list(model.covariance[0])
+    back = FrictionModel.from_datasheet(sheet)
+    np.testing.assert_allclose(
+        back.prediction_band(v, p, scope="run"), model.prediction_band(v, p, scope="run")
+    )
+    del sheet["fit"]["covariance_nonrobust"]
+    old = FrictionModel.from_datasheet(validate(sheet))
+    assert old.covariance_nonrobust is None
+    np.testing.assert_allclose(old.standard_error(v, p, robust=False), robust)
+    # the run band's quantile: the run component's dof
+    from cylfric.model.core import _band_parts
+
+    part = _band_parts(model.scatter, "run")
+    assert part["between_dof"] == model.scatter["components"]["run"]["dof"]
+    session = _band_parts(model.scatter, "session")
+    assert session["between_dof"] == model.scatter["components"]["session"]["dof"]
+    # one session: s_L^2 + (s_L^2 - s_run^2) / 1 (the fitted curve carries the session's
+    # shared offset, not its run-to-run scatter)
+    s_l = model.scatter["components"]["session"]["between_percent"] / 100
+    s_run = model.scatter["components"]["run"]["std_percent"] / 100
+    assert model.scatter["sessions"] == 1
+    assert session["between"] == pytest.approx(np.sqrt(2 * s_l**2 - s_run**2), rel=1e-12)
+    # replacing the covariance drops the model-based one (it belongs to the fit)
+    assert model.replace(covariance=model.covariance).covariance_nonrobust is None

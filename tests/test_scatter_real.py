@@ -80,7 +80,7 @@ def test_session_band_covers_other_sessions_and_is_not_absurdly_wide(fits):
             assert inside >= 0.85, (used, left_out, inside)
             half = 0.5 * (high - low)
             # the band's mean half-width against the mean ideal over the same points (the
-            # ideal per pressure); per pressure the one-session bands reach 2.45-2.88x at
+            # ideal per pressure); per pressure the one-session bands reach 1.96-2.57x at
             # 1 bar, where these sessions scatter least (8 % against the 14 % prior; the
             # table in docs/uncertainty.md)
             ideal_here = np.array([ideal[level] for level in (p / 1e5).round()])

@@ -173,7 +173,8 @@ def band_text(model: FrictionModel) -> str:
         "draw of n sessions), se the standard error of the mean curve [N] "
         "(cylfric FrictionModel.standard_error) and k = 1.96 (the Student-t quantile; "
         "cylfric's FrictionModel.prediction_band(v, p, scope='session') gives it exactly); "
-        "for a new run on the same mount s = sqrt(s_r^2 + s_run^2); "
+        "for a new run on the same mount s = sqrt(s_r^2 + s_run^2) and se the model-based "
+        "(not cluster-robust) standard error (FrictionModel.standard_error(robust=False)); "
         "never narrower than k sqrt(se^2 + s_res^2) (docs/uncertainty.md)."
     )
 

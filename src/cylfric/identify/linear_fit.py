@@ -148,7 +148,7 @@ def fit_linear_surface(
     n_free = result.x.size
     rss = float(res @ res)
     dof = max(force.size - n_free, 1)
-    cov_x, dof, influence = _covariance(residuals, result.x, groups, dof)
+    cov_x, dof, influence, nonrobust = _covariance(residuals, result.x, groups, dof)
     names, transform, coefficients = _to_model(
         result.x, blocks, shape, fixed, friction_law, p_lo, span
     )
@@ -166,6 +166,7 @@ def fit_linear_surface(
         fixed=tuple(fixed),
         covariance=(names, covariance),
         influence=None if influence is None else (names, influence @ transform.T),
+        covariance_nonrobust=(names, transform @ nonrobust @ transform.T),
         statistics={
             "n_points": int(force.size),
             "n_variables": int(n_free),

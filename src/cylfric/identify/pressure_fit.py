@@ -314,7 +314,7 @@ def fit_surface(
     n_free = len(result.x)
     dof = max(force.size - n_free, 1)
     rss = float(res @ res)
-    cov_x, dof, influence = _covariance(residuals, result.x, groups, dof)
+    cov_x, dof, influence, nonrobust = _covariance(residuals, result.x, groups, dof)
     # to SI and the model's coefficient names, block by block (delta rule)
     transform = np.eye(n_free)
     coefficients, cov_names = {}, []
@@ -339,6 +339,7 @@ def fit_surface(
         fixed=tuple(fixed),
         covariance=(cov_names, covariance),
         influence=None if influence is None else (cov_names, influence @ transform.T),
+        covariance_nonrobust=(cov_names, transform @ nonrobust @ transform.T),
         statistics={
             "n_points": int(force.size),
             "n_variables": int(n_free),
@@ -367,7 +368,9 @@ def _covariance(residuals, x, groups, dof):
     degrees of freedom. The third value is the influence of each run, ``D`` (runs x
     coefficients, None without groups) with ``covariance = D.T @ D``: it gives the model's
     bands each point's effective degrees of freedom, as Imbens & Kolesar (2016) recommend
-    with CR2 when few runs carry a coefficient.
+    with CR2 when few runs carry a coefficient. The fourth is the model-based
+    ``s^2 (J^T J)^-1`` (the first, where there are no groups): the bands of new data of the
+    same mount use it (FrictionModel.prediction_band).
     """
     r = residuals(x)
     steps = 1e-6 * np.maximum(np.abs(x), 1e-3)
@@ -382,12 +385,13 @@ def _covariance(residuals, x, groups, dof):
     scaled = jac / scale
     bread = np.linalg.pinv(scaled.T @ scaled) / np.outer(scale, scale)
     n, k = jac.shape
+    nonrobust = bread * float(r @ r) / dof
     if groups is None:
-        return bread * float(r @ r) / dof, dof, None
+        return nonrobust, dof, None, nonrobust
     labels, index = np.unique(np.asarray(groups), return_inverse=True)
     g = labels.size
     if g <= k:
-        return bread * float(r @ r) / dof, dof, None
+        return nonrobust, dof, None, nonrobust
     # cluster-robust CR2 (Bell & McCaffrey 2002): each run's residuals scaled by
     # (I - H_gg)^(-1/2), robust to unequal scatter and to the high leverage of the few
     # fastest runs; with each point's effective degrees of freedom (FrictionModel.band)
@@ -401,7 +405,7 @@ def _covariance(residuals, x, groups, dof):
         leverage, vectors = np.linalg.eigh(js @ inverse @ js.T)
         adjust = (vectors / np.sqrt(np.clip(1.0 - leverage, 1e-12, None))) @ vectors.T
         influence[label] = (inverse @ (js.T @ (adjust @ r[rows]))) / scale
-    return influence.T @ influence, g - k, influence
+    return influence.T @ influence, g - k, influence, nonrobust
 
 
 def _block_jacobian(law, coef):

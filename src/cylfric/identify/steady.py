@@ -882,6 +882,7 @@ def _level_only(points, levels, fixed, notes, validity):
         stderr=stderr,
         fixed=tuple(fixed),
         covariance=(names, cov) if names else None,
+        covariance_nonrobust=(names, cov) if names else None,  # the same: no clusters here
         statistics={
             "n_points": int(f.size),
             "n_variables": len(coef),

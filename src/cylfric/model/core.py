@@ -222,6 +222,11 @@ class FrictionModel:
         covariance's names): the cluster-robust (CR2) contributions with
         ``covariance = matrix.T @ matrix``. With it, :meth:`band` uses each point's effective
         degrees of freedom (few runs carrying a coefficient give few).
+    covariance_nonrobust : (names, matrix), optional
+        The model-based covariance ``s^2 (J^T W J)^-1`` [SI] of the same coefficients (the
+        covariance's names), where ``covariance`` is cluster-robust: the mean's share of a
+        band for new data of the same mount (:meth:`prediction_band` scopes "point" and
+        "run", docs/uncertainty.md). None: ``covariance`` serves both.
     statistics : mapping, optional
         ``n_points``, ``n_variables``, ``rmse`` [N], ``residual_std`` [N], ``dof``, ``aic``,
         ``bic`` of the fit that made the model.
@@ -259,6 +264,7 @@ class FrictionModel:
         record: Mapping[str, Any] | None = None,
         influence: tuple[Sequence[str], np.ndarray] | None = None,
         pressure_reference_basis: Mapping[str, Any] | None = None,
+        covariance_nonrobust: tuple[Sequence[str], np.ndarray] | None = None,
     ) -> None:
         if coefficients is None:
             coefficients = THESIS_2016.coefficients
@@ -383,6 +389,20 @@ class FrictionModel:
             matrix.setflags(write=False)
             influence = (names, matrix)
         self.influence = influence
+        if covariance_nonrobust is not None:
+            names, matrix = (
+                tuple(covariance_nonrobust[0]),
+                np.array(covariance_nonrobust[1], dtype=float),
+            )
+            if covariance is None or names != covariance[0] or matrix.shape != covariance[1].shape:
+                raise ValueError(
+                    "covariance_nonrobust needs a covariance with the same names and shape"
+                )
+            if not np.all(np.isfinite(matrix)):
+                raise ValueError("covariance_nonrobust has non-finite values")
+            matrix.setflags(write=False)
+            covariance_nonrobust = (names, matrix)
+        self.covariance_nonrobust = covariance_nonrobust
         self.statistics = MappingProxyType(dict(statistics or {}))
         self.validity = None if validity is None else MappingProxyType(dict(validity))
         self.provenance = MappingProxyType(dict(provenance or {}))
@@ -407,6 +427,7 @@ class FrictionModel:
             "bounds": bounds,
             "covariance": self.covariance,
             "influence": self.influence,
+            "covariance_nonrobust": self.covariance_nonrobust,
             "statistics": dict(self.statistics),
             "validity": None if self.validity is None else dict(self.validity),
             "provenance": dict(self.provenance),
@@ -438,6 +459,10 @@ class FrictionModel:
         kwargs.update(changes)
         if kwargs["covariance"] is None or ("covariance" in changes and "influence" not in changes):
             kwargs["influence"] = None  # the runs' influence belongs to its covariance
+        if kwargs["covariance"] is None or (
+            "covariance" in changes and "covariance_nonrobust" not in changes
+        ):
+            kwargs["covariance_nonrobust"] = None  # so does the model-based covariance
         model = FrictionModel(**kwargs)
         if source is not None:
             model.source, model.replaced = str(source), replaced
@@ -701,17 +726,32 @@ class FrictionModel:
                 }
         return out
 
-    def _quantile(self, level, dof=None):
-        """Student-t quantile of a two-sided ``level`` band (normal without a dof) [-]."""
+    def _quantile(self, level, dof=None, *, in_sample=False):
+        """Student-t quantile of a two-sided ``level`` band (normal without a dof) [-].
+
+        ``in_sample``: the quantile of an internally studentised residual instead,
+        ``sqrt(nu B^-1(level; 1/2, (nu - 1)/2))`` (Cook & Weisberg 1982, *Residuals and
+        Influence in Regression*, sec. 2.2.1): for data that repeat the fitted data's own
+        effects, whose deviations are the residuals the scale was estimated from, not data
+        independent of it. Below the Student-t quantile, and the normal one for many dof.
+        """
         if not 0 < level < 1:
             raise ValueError(f"level = {level} is out of range; expected 0 < level < 1")
-        from scipy.special import stdtrit
+        from scipy.special import betaincinv, stdtrit
 
         dof = self.statistics.get("dof") if dof is None else dof
         q = 0.5 + level / 2
         if dof is None or np.all(np.asarray(dof) == 0):
             return float(_normal_quantile(q))
-        return stdtrit(dof, q)
+        if not in_sample:
+            return stdtrit(dof, q)
+        nu = np.asarray(dof, dtype=float)
+        with np.errstate(invalid="ignore"):
+            inside = np.sqrt(nu * betaincinv(0.5, np.maximum(nu - 1.0, 1e-9) / 2.0, level))
+        # a million dof or more: the normal quantile (betaincinv loses digits there); one or
+        # fewer: no residual scatter to repeat, the Student-t quantile
+        inside = np.where(nu >= 1e6, _normal_quantile(q), inside)
+        return np.where(nu > 1.0, inside, stdtrit(nu, q))
 
     def effective_dof(self, velocity: ArrayLike, pressure: ArrayLike) -> np.ndarray:
         """Degrees of freedom [-] of :meth:`standard_error` at (velocity [m/s], pressure [Pa]).
@@ -733,10 +773,15 @@ class FrictionModel:
             effective = np.where(total > 0, total**2 / (share**2).sum(axis=-1), np.inf)
         return np.clip(effective, 1.0, np.inf if dof is None else float(dof))
 
-    def standard_error(self, velocity: ArrayLike, pressure: ArrayLike) -> np.ndarray:
+    def standard_error(
+        self, velocity: ArrayLike, pressure: ArrayLike, *, robust: bool = True
+    ) -> np.ndarray:
         """Standard error [N] of the mean friction at (velocity [m/s], pressure [Pa]).
 
-        First-order propagation of the coefficient covariance: ``sqrt(J C J^T)``.
+        First-order propagation of the coefficient covariance: ``sqrt(J C J^T)``, with the
+        cluster-robust :attr:`covariance` (default), or with ``robust=False`` the
+        model-based :attr:`covariance_nonrobust` where the model carries one (else the
+        covariance).
         """
         if self.covariance is None:
             raise ValueError(
@@ -747,7 +792,10 @@ class FrictionModel:
             np.asarray(velocity, dtype=float), np.asarray(pressure, dtype=float)
         )
         jac = self._jacobian(v, p)
-        var = np.einsum("...i,ij,...j->...", jac, self.covariance[1], jac)
+        matrix = self.covariance[1]
+        if not robust and self.covariance_nonrobust is not None:
+            matrix = self.covariance_nonrobust[1]
+        var = np.einsum("...i,ij,...j->...", jac, matrix, jac)
         return np.sqrt(np.clip(var, 0.0, None))
 
     def band(
@@ -800,11 +848,21 @@ class FrictionModel:
 
             u_point^2   = se^2 + s_res^2
             u_run^2     = se^2 + max(s_res^2, F^2 (s_r^2 + s_run^2))
-            u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2 (1 + 1/n))),  s_L >= s_run
+            u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2 + (s_L^2 - s_run^2) / n))
 
-        half-width = Student-t quantile (Welch-Satterthwaite degrees of freedom) x u; the
-        run band is never narrower than the point band, nor the session band than the run
-        band. The lack of fit is not added: it
+        with ``s_L >= s_run`` and ``n`` the sessions fitted (the fitted curve carries what
+        every run of its sessions shared, ``s_L^2 - s_run^2``, over n). Half-width = a
+        quantile (Welch-Satterthwaite degrees of freedom) x u; the run band is never
+        narrower than the point band, nor the session band than the run band. ``se`` is the
+        standard error of the mean curve. For "point" and "run", new data of the same
+        mount: the model-based ``se`` (``standard_error(robust=False)``, the residuals'
+        dof) and the quantile of an internally studentised residual: such data repeat the
+        mount's effects, so their deviations from the curve are distributed as the fitted
+        residuals the scatter was estimated from (the curve adds its leverage on the
+        scatter that is new). For "session": the cluster-robust ``se`` (each point's
+        effective dof) and the Student-t quantile: a new mount shares nothing with the fit.
+        A model without ``covariance_nonrobust`` (an older datasheet) keeps the
+        cluster-robust ``se`` and the Student-t quantile for every scope. The lack of fit is not added: it
         is already in s_res and s_run (docs/uncertainty.md). A model without a scatter
         record (an older datasheet) raises ValueError for "run" and "session" rather than
         give the point band under their name. Warns outside the validity ranges (raises
@@ -824,25 +882,26 @@ class FrictionModel:
             )
         self.check(velocity, pressure, strict=strict)
         f = self._friction(velocity, pressure, self.coefficients())
-        se = self.standard_error(velocity, pressure)
+        n_dof = max(self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1)
+        same_mount = scope != "session" and self.covariance_nonrobust is not None
+        se = self.standard_error(velocity, pressure, robust=not same_mount)
         if scope == "point":
             scatter_sd = residual_std
             dof = None
-            if self.influence is not None:  # Welch-Satterthwaite: the mean's and the scatter's
-                scatter_dof = max(
-                    self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1
-                )
+            if same_mount:  # s^2 (1 + h): one variance estimate, the residuals' dof
+                dof = np.full(np.shape(se), float(n_dof))
+            elif self.influence is not None:  # Welch-Satterthwaite: the mean's and the scatter's
                 mean_dof = self.effective_dof(velocity, pressure)
                 with np.errstate(invalid="ignore", divide="ignore"):
-                    dof = (se**2 + scatter_sd**2) ** 2 / (
-                        se**4 / mean_dof + scatter_sd**4 / scatter_dof
-                    )
-            half = self._quantile(level, dof) * np.sqrt(se**2 + scatter_sd**2)
+                    dof = (se**2 + scatter_sd**2) ** 2 / (se**4 / mean_dof + scatter_sd**4 / n_dof)
+            quantile = self._quantile(level, dof, in_sample=same_mount)
+            half = quantile * np.sqrt(se**2 + scatter_sd**2)
             return f - half, f + half
-        n_dof = max(self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1)
         fit_dof = self.statistics.get("dof")
         band_dof = np.asarray(
-            self.effective_dof(velocity, pressure)
+            n_dof
+            if same_mount
+            else self.effective_dof(velocity, pressure)
             if self.influence is not None
             else (np.inf if fit_dof is None else fit_dof),
             dtype=float,
@@ -865,7 +924,8 @@ class FrictionModel:
         with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
             denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
             dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
-        half = self._quantile(level, np.minimum(dof, 1e9)) * np.sqrt(variance)
+        half = self._quantile(level, np.minimum(dof, 1e9), in_sample=same_mount)
+        half = half * np.sqrt(variance)
         # a new run is never predicted better than a new point, a new session than a new run
         narrower = "run" if scope == "session" else "point"
         with warnings.catch_warnings():
@@ -968,19 +1028,21 @@ def _band_parts(scatter: Mapping, scope: str) -> dict[str, float]:
     repeat = c["repeatability"]["std_percent"] / 100.0
     run = c["run"]["std_percent"] / 100.0
     session = c["session"]
-    between_dof = float(session.get("dof") or np.inf)
-    if scope == "run":
-        between = run
+    if scope == "run":  # the run component's own degrees of freedom
+        between, between_dof = run, float(c["run"].get("dof") or np.inf)
     else:
+        between_dof = float(session.get("dof") or np.inf)
         between = session.get("between_percent")
         between = (
             math.hypot(run, session["std_percent"] / 100.0) if between is None else between / 100
         )
         between = max(between, run)
-        # the fitted curve is the mean of the fitted sessions, itself a draw of the sessions'
-        # population: a new session differs from it by s_L sqrt(1 + 1/n_sessions)
+        # the fitted curve is the mean of the fitted sessions, itself off the sessions'
+        # population by what every run of a session shares, s_session^2 = s_L^2 - s_run^2,
+        # over n sessions (the run-to-run part averages out over the runs and stays in the
+        # residuals): a new session differs from it by s_L^2 + s_session^2 / n
         sessions = max(int(scatter.get("sessions") or 1), 1)
-        between *= math.sqrt(1.0 + 1.0 / sessions)
+        between = math.sqrt(between**2 + max(between**2 - run**2, 0.0) / sessions)
     return {
         "repeat": repeat,
         "repeat_dof": float(c["repeatability"].get("dof") or np.inf),

@@ -3,8 +3,8 @@
 The datasheet is the serialised :class:`~cylfric.model.FrictionModel`: the model owns the
 keys ``model``, ``parameters``, ``stderr``, ``not_identified``, ``dynamic``, ``validity`` and,
 under ``fit``, ``method``, ``rmse``, ``n_points``, ``fixed``, ``bounds``, ``covariance``,
-``influence``, ``correlations``, ``statistics`` and ``source``. Every other key (the
-per-pressure table, the offset, notes, ...) is kept verbatim in
+``influence``, ``covariance_nonrobust``, ``correlations``, ``statistics`` and ``source``.
+Every other key (the per-pressure table, the offset, notes, ...) is kept verbatim in
 :attr:`FrictionModel.record`, so that datasheet -> model -> datasheet is the identity.
 """
 
@@ -66,6 +66,7 @@ UNITS = {
 
 _MODEL_FIT_KEYS = (
     "influence",
+    "covariance_nonrobust",
     "method",
     "rmse",
     "n_points",
@@ -143,6 +144,7 @@ def to_datasheet(model: FrictionModel) -> dict[str, Any]:
         "covariance": _matrix(model.covariance),
         "correlations": _matrix(model.correlations()),
         "influence": _matrix(model.influence),
+        "covariance_nonrobust": _matrix(model.covariance_nonrobust),
         "statistics": stats,
         "source": dict(model.provenance.get("source", {"campaign": "", "files": []})),
         **record_fit,
@@ -197,6 +199,7 @@ def from_datasheet(cls: type[_M], source: StrPath | Mapping[str, Any]) -> _M:
     dynamic = sheet.get("dynamic") or {}
     covariance = fit.get("covariance")
     influence = fit.get("influence")
+    nonrobust = fit.get("covariance_nonrobust")
     bounds = {
         name: (-math.inf if lo is None else lo, math.inf if hi is None else hi)
         for name, (lo, hi) in (fit.get("bounds") or {}).items()
@@ -225,6 +228,9 @@ def from_datasheet(cls: type[_M], source: StrPath | Mapping[str, Any]) -> _M:
             bounds=bounds,
             covariance=None if covariance is None else (covariance["names"], covariance["matrix"]),
             influence=None if influence is None else (influence["names"], influence["matrix"]),
+            covariance_nonrobust=None
+            if nonrobust is None
+            else (nonrobust["names"], nonrobust["matrix"]),
             statistics=stats,
             validity=sheet.get("validity"),
             provenance={"method": fit["method"], "source": fit["source"]},
