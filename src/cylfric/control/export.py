@@ -26,6 +26,14 @@ constants fixed at export:
     1 coulomb, 2 static, 3 lugre and ``state`` a 4-vector (``zeros(4, 1)`` at the start):
     fixed sizes and subfunctions only, so that it serves as a Simulink MATLAB Function block.
 
+The ``command`` output depends on the axis (areas, volumes, valve, supply, tank, bulk
+modulus, leakage fixed at export), ``force`` does not: every target states the axis it bakes
+in, with units (the comment of ``cylfric_compensator_params.h`` and its
+``CYLFRIC_DEFAULT_AXIS``, the FMU's model description, the MATLAB help), and the interface
+contract (one call per sample at the sample time, position absolute from the cap end, gauge
+pressures, command > 0 = flow P->A = extension, command 0 at the first sample;
+``templates/cylfric_compensator.h``, docs/control.md).
+
 Every user string that reaches the generated code (the datasheet's source) goes through
 :mod:`cylfric.escape`. The files are deterministic (no dates) and written atomically.
 """
