@@ -9,8 +9,10 @@ with the reason where its tool is missing.
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
+import zipfile
 
 import numpy as np
 import pytest
@@ -260,3 +262,117 @@ def test_cli_export_compensator(tmp_path):
     assert done.exit_code == 2 and "simulink" in done.output
     done = runner.invoke(app, [*args, "--export-compensator", "c", "--fmu-compensator", "oracle"])
     assert done.exit_code == 2 and "oracle" in done.output
+
+
+# another axis: 50/36 x 300 mm, 140 bar, a 20 L/min valve, 500 Hz control (the values the
+# generated texts must state; an axis.toml with the same values for the CLI test)
+OTHER_AXIS = dict(
+    bore=0.050,
+    rod=0.036,
+    rod_a=0.036,
+    stroke=0.300,
+    supply_pressure=140e5,
+    valve_nominal_flow=20e-3 / 60,
+    control_rate=500.0,
+)
+OTHER_AXIS_TOML = """[axis]
+bore = "50 mm"
+rod = "36 mm"
+rod_a = "36 mm"
+stroke = "300 mm"
+supply_pressure = "140 bar"
+valve_nominal_flow = "20 L/min"
+control_rate = "500 Hz"
+"""
+OTHER_AXIS_TEXT = (
+    "bore 50 mm, rod 36 mm",
+    "stroke 300 mm",
+    "supply 140 bar",
+    "valve 20 L/min",
+    "control rate 500 Hz (sample time T = 0.002 s)",
+)
+
+
+def _defines(header: str) -> dict[str, float]:
+    found = re.findall(r"^#define (CYLFRIC_\w+) \(([^)]*)\)", header, flags=re.MULTILINE)
+    return {name: float(value) for name, value in found}
+
+
+def test_generated_files_state_the_axis_they_bake_in(model, exported, tmp_path):
+    """The command depends on the axis: every generated text names the axis, with units."""
+    from cylfric.control.axis import DEFAULT_AXIS
+
+    # the default axis (no axis given): said so, in the C header, the FMU and the MATLAB help
+    header = (exported / "cylfric_compensator_params.h").read_text()
+    with zipfile.ZipFile(exported / "cylfric_compensator.fmu") as fmu:
+        description = fmu.read("modelDescription.xml").decode()
+    matlab = (exported / "cylfric_compensator_step.m").read_text()
+    help_text = matlab[: matlab.index("\nT = ")]
+    bore = f"bore {DEFAULT_AXIS.bore * 1e3:g} mm"
+    for text in (header, description, help_text):
+        assert "DEFAULT axis" in text and bore in text and "`force`" in text
+    assert "#define CYLFRIC_DEFAULT_AXIS 1" in header
+    assert "exactly once per sample" in header
+    words = " ".join(help_text.replace("%", " ").split())
+    assert "exactly once per controller sample" in words and "absolute from the cap end" in words
+    # another axis: its values with units, and the defines are its SI values to the bit
+    axis = DEFAULT_AXIS.replace(**OTHER_AXIS)
+    export_compensator(model, tmp_path, targets=["c", "matlab"], axis=axis)
+    header = (tmp_path / "cylfric_compensator_params.h").read_text()
+    help_text = (tmp_path / "cylfric_compensator_step.m").read_text().split("\nT = ")[0]
+    for text in (header, help_text):
+        assert "DEFAULT axis" not in text and "the axis given at export" in text
+        for fact in OTHER_AXIS_TEXT:
+            assert fact in text, fact
+    assert "#define CYLFRIC_DEFAULT_AXIS 0" in header
+    defines = _defines(header)
+    assert defines["CYLFRIC_AREA_A"] == axis.area_a
+    assert defines["CYLFRIC_SUPPLY"] == axis.supply_pressure
+    assert defines["CYLFRIC_VALVE_K"] == axis.valve_coefficient
+    assert defines["CYLFRIC_SAMPLE_TIME"] == axis.sample_time
+
+
+@needs_cc
+def test_c_step_on_another_axis_reproduces_python(model, recorded, tmp_path):
+    from cylfric.control.axis import DEFAULT_AXIS
+
+    axis = DEFAULT_AXIS.replace(**OTHER_AXIS)
+    export_compensator(model, tmp_path, targets=["c"], axis=axis)
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver"
+    sources = [str(tmp_path / "driver.c"), str(tmp_path / "cylfric_compensator.c")]
+    subprocess.run(
+        [CC, "-O2", "-std=c99", f"-I{tmp_path}", *sources, "-o", str(exe), "-lm"], check=True
+    )
+    rows = recorded[:500]
+    text = "\n".join(" ".join(repr(float(v)) for v in row) for row in rows)
+    done = subprocess.run([str(exe), "3"], input=text, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    expected = compensator_outputs(model, "lugre", rows, axis=axis)
+    _close(np.loadtxt(done.stdout.splitlines()), expected)
+    # the command is the axis's: the default axis's command differs on the same samples
+    default = compensator_outputs(model, "lugre", rows)
+    assert not np.allclose(default[:, 1], expected[:, 1], rtol=1e-3, atol=0)
+
+
+def test_cli_notes_the_default_axis_on_stderr(tmp_path):
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    sheet = tmp_path / "datasheet.json"
+    sheet.write_text(json.dumps(FrictionModel().to_datasheet()))
+    axis_toml = tmp_path / "axis.toml"
+    axis_toml.write_text(OTHER_AXIS_TOML)
+    runner = CliRunner()
+    args = ["control", str(sheet), "--export-only", "--export-compensator", "c"]
+    done = runner.invoke(app, [*args, "--out", str(tmp_path / "a")])
+    assert done.exit_code == 0, done.output
+    note = " ".join(done.stderr.split())  # rich wraps the note
+    assert "no --axis given" in note and "DEFAULT axis" in note and "`force` output" in note
+    assert "DEFAULT axis" not in done.stdout
+    done = runner.invoke(app, [*args, "--out", str(tmp_path / "b"), "--axis", str(axis_toml)])
+    assert done.exit_code == 0, done.output
+    assert "--axis" not in done.stderr
+    header = (tmp_path / "b" / "compensator" / "cylfric_compensator_params.h").read_text()
+    assert all(fact in header for fact in OTHER_AXIS_TEXT)

@@ -7,7 +7,23 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import JSON_HELP, BadInput, console, guarded, print_json
+from .common import JSON_HELP, BadInput, console, err_console, guarded, print_json
+
+
+def default_axis_note() -> str:
+    """What ``cylfric control --export-compensator`` prints on stderr without ``--axis``."""
+    from ..control.axis import DEFAULT_AXIS as a
+
+    kind = "double-rod" if a.rod_a > 0 else "single-rod"
+    return (
+        "note: no --axis given: the exported compensator's `command` output is computed for "
+        f"cylfric's DEFAULT axis ({a.bore * 1e3:g}/{a.rod * 1e3:g} x {a.stroke * 1e3:g} mm "
+        f"{kind} cylinder, {a.supply_pressure / 1e5:g} bar supply, "
+        f"{a.valve_nominal_flow * 6e4:g} L/min valve; every value is listed in the generated "
+        "files). On another axis that command is wrong: export again with --axis axis.toml, "
+        "or use the `force` output [N], which does not depend on the axis's hydraulics, "
+        "through your own force-to-valve path (docs/control.md)."
+    )
 
 
 def register(app) -> None:
@@ -39,7 +55,8 @@ def register(app) -> None:
             None,
             "--export-compensator",
             help="Also write the compensator step into OUT/compensator: any of c, fmu, "
-            "matlab, comma-separated (C source, FMI 2.0 co-simulation FMU, MATLAB function).",
+            "matlab, comma-separated (C source, FMI 2.0 co-simulation FMU, MATLAB function). "
+            "Its valve command is computed for --axis (the default axis without it).",
         ),
         fmu_kind: str = typer.Option(
             "lugre",
@@ -100,6 +117,8 @@ def register(app) -> None:
             )
             for path in written:
                 console.print(terminal(f"written: {path}", markup=False), markup=False)
+            if axis is None:
+                err_console.print(default_axis_note(), markup=False, highlight=False)
         if export_only:
             return
         result = compare_compensators(model, axis=the_axis, reference=ref, robustness=robustness)

@@ -26,6 +26,14 @@ constants fixed at export:
     1 coulomb, 2 static, 3 lugre and ``state`` a 4-vector (``zeros(4, 1)`` at the start):
     fixed sizes and subfunctions only, so that it serves as a Simulink MATLAB Function block.
 
+The ``command`` output depends on the axis (areas, volumes, valve, supply, tank, bulk
+modulus, leakage fixed at export), ``force`` does not: every target states the axis it bakes
+in, with units (the comment of ``cylfric_compensator_params.h`` and its
+``CYLFRIC_DEFAULT_AXIS``, the FMU's model description, the MATLAB help), and the interface
+contract (one call per sample at the sample time, position absolute from the cap end, gauge
+pressures, command > 0 = flow P->A = extension, command 0 at the first sample;
+``templates/cylfric_compensator.h``, docs/control.md).
+
 Every user string that reaches the generated code (the datasheet's source) goes through
 :mod:`cylfric.escape`. The files are deterministic (no dates) and written atomically.
 """
@@ -34,6 +42,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import textwrap
 import warnings
 from importlib import resources
 from pathlib import Path
@@ -67,9 +76,13 @@ EXPORTABLE_COMPENSATORS = ("none", "coulomb", "static", "lugre")
 C_FILES = ("cylfric_compensator.h", "cylfric_compensator.c", "cylfric_compensator_params.h")
 """The C target's files."""
 FMU_INPUTS = {
-    "position": ("m", "measured rod position"),
-    "pressure_a": ("Pa", "measured pressure in chamber A (cap side)"),
-    "pressure_b": ("Pa", "measured pressure in chamber B (rod side)"),
+    "position": (
+        "m",
+        "measured rod position, absolute from the cap end (0: chamber A's dead "
+        "volume), > 0 extends",
+    ),
+    "pressure_a": ("Pa", "measured gauge pressure in chamber A (cap side)"),
+    "pressure_b": ("Pa", "measured gauge pressure in chamber B (rod side)"),
     "position_reference": ("m", "reference position"),
     "velocity_reference": ("m/s", "reference velocity"),
 }
@@ -78,8 +91,9 @@ FMU_OUTPUTS = {
     "force": ("N", "friction force estimate, positive in the direction of motion"),
     "command": (
         "",
-        "valve command that changes the cylinder force by the estimate's change and holds it "
-        "against the cross-piston leakage",
+        "valve command (> 0: flow P->A, extension) that changes the cylinder force by the "
+        "estimate's change and holds it against the cross-piston leakage; for the axis "
+        "baked in at export (see the model description)",
     ),
 }
 """Outputs of the compensator FMU (value references 5, 6)."""
@@ -88,11 +102,11 @@ _AXIS_DEFINES = (
     ("CYLFRIC_AREA_A", "area_a", "piston area of chamber A [m^2]"),
     ("CYLFRIC_AREA_B", "area_b", "piston area of chamber B [m^2]"),
     ("CYLFRIC_STROKE", "stroke", "stroke [m]"),
-    ("CYLFRIC_DEAD_VOLUME_A", "dead_volume_a", "dead volume of chamber A [m^3]"),
-    ("CYLFRIC_DEAD_VOLUME_B", "dead_volume_b", "dead volume of chamber B [m^3]"),
+    ("CYLFRIC_DEAD_VOLUME_A", "dead_volume_a", "volume of chamber A at x = 0 [m^3]"),
+    ("CYLFRIC_DEAD_VOLUME_B", "dead_volume_b", "volume of chamber B at x = stroke [m^3]"),
     ("CYLFRIC_BULK_MODULUS", "bulk_modulus", "oil bulk modulus [Pa]"),
-    ("CYLFRIC_SUPPLY", "supply_pressure", "supply pressure [Pa]"),
-    ("CYLFRIC_TANK", "tank_pressure", "tank pressure [Pa]"),
+    ("CYLFRIC_SUPPLY", "supply_pressure", "supply pressure, gauge [Pa]"),
+    ("CYLFRIC_TANK", "tank_pressure", "tank pressure, gauge [Pa]"),
     ("CYLFRIC_VALVE_K", "valve_coefficient", "valve flow coefficient [m^3/(s*sqrt(Pa))]"),
     ("CYLFRIC_LAMINAR_DROP", "valve_laminar_drop", "laminar transition of the orifices [Pa]"),
     ("CYLFRIC_LEAKAGE", "leakage", "cross-piston leakage coefficient C_i [m^3/(s*Pa)]"),
@@ -153,6 +167,60 @@ class _Constants:
         )
 
 
+def _axis_facts(k: _Constants) -> tuple[str, list[str], str]:
+    """The axis baked into the ``command`` output, with units: (heading, items, advice).
+
+    ``command`` depends on these values; ``force`` does not depend on the hydraulics (areas,
+    volumes, valve, supply, bulk modulus, leakage), only on the datasheet, the sample time
+    and, for the ``coulomb`` kind, on F_c at the axis's rest pressures.
+    """
+    a = k.axis
+    pa, pb = a.rest_pressures()
+    which = (
+        "cylfric's DEFAULT axis (no axis was given at export; see docs/control.md):"
+        if a == DEFAULT_AXIS
+        else "the axis given at export:"
+    )
+    items = [
+        f"bore {a.bore * 1e3:.6g} mm, rod {a.rod * 1e3:.6g} mm (B side), rod_a "
+        f"{a.rod_a * 1e3:.6g} mm (A side; 0 = single rod)",
+        f"piston areas A_A = {a.area_a:.6g} m^2, A_B = {a.area_b:.6g} m^2",
+        f"stroke {a.stroke * 1e3:.6g} mm; dead volumes {a.dead_volume_a * 1e3:.6g} L "
+        f"(chamber A at x = 0), {a.dead_volume_b * 1e3:.6g} L (chamber B at x = stroke)",
+        f"bulk modulus {a.bulk_modulus:.6g} Pa; cross-piston leakage C_i "
+        f"{a.leakage:.6g} m^3/(s*Pa)",
+        f"supply {a.supply_pressure / 1e5:.6g} bar, tank {a.tank_pressure / 1e5:.6g} bar (gauge)",
+        f"valve {a.valve_nominal_flow * 6e4:.6g} L/min at {a.valve_nominal_drop / 1e5:.6g} "
+        f"bar per landing (K = {a.valve_coefficient:.6g} m^3/(s*sqrt(Pa))), laminar below "
+        f"{a.valve_laminar_drop / 1e5:.6g} bar",
+        f"control rate {1.0 / k.sample_time:.6g} Hz (sample time T = {k.sample_time:.6g} s)",
+        f"kind coulomb: F_c = {k.coulomb:.6g} N at the rest pressures p_A = "
+        f"{pa / 1e5:.6g} bar, p_B = {pb / 1e5:.6g} bar",
+    ]
+    advice = (
+        "On another axis `command` is wrong: export again with that axis (cylfric control "
+        "--axis axis.toml), or use the output `force` [N] (independent of the hydraulics "
+        "above) through your own force-to-valve path."
+    )
+    return f"The valve command (output `command`) is computed for {which}", items, advice
+
+
+def _axis_lines(k: _Constants, width: int = 86) -> list[str]:
+    """:func:`_axis_facts` as comment lines (no prefix)."""
+    heading, items, advice = _axis_facts(k)
+    return [
+        *textwrap.wrap(heading, width),
+        *(f"  {item}" for item in items),
+        *textwrap.wrap(advice, width),
+    ]
+
+
+def _axis_text(k: _Constants) -> str:
+    """:func:`_axis_facts` as one paragraph."""
+    heading, items, advice = _axis_facts(k)
+    return f"{heading} {'; '.join(items)}. {advice}"
+
+
 def _axis_names() -> tuple[str, ...]:
     from .axis import _VECTOR
 
@@ -173,9 +241,16 @@ def _params_header(k: _Constants) -> str:
         f"{_REFERENCE_C[k.reference]}.",
         " * FRICTION rows: F_c, F_s, sigma_2, v_r, alpha, sigma_0, sigma_1; columns: law code",
         " * (0 constant c0; 1 linear c0 + c1 p; 2 quadratic c0 + c1 p + c2 p^2; 3 exponential",
-        " * c0 + c1 (exp(c2 p) - 1)), c0, c1, c2, with p the operating pressure [Pa]. */",
+        " * c0 + c1 (exp(c2 p) - 1)), c0, c1, c2, with p the operating pressure [Pa].",
+        " *",
+        *(f" * {line}".rstrip() for line in _axis_lines(k)),
+        " *",
+        " * Call cylfric_compensator_step exactly once per sample, every CYLFRIC_SAMPLE_TIME:",
+        " * the velocity is (x - x_prev) / CYLFRIC_SAMPLE_TIME (see cylfric_compensator.h). */",
         "#ifndef CYLFRIC_COMPENSATOR_PARAMS_H",
         "#define CYLFRIC_COMPENSATOR_PARAMS_H",
+        f"#define CYLFRIC_DEFAULT_AXIS {int(k.axis == DEFAULT_AXIS)} "
+        "/* 1: the command is for cylfric's default axis, not yours */",
         f"#define CYLFRIC_REFERENCE {REFERENCE_CODES[k.reference]} "
         f"/* {_REFERENCE_C[k.reference]} */",
         "static const double CYLFRIC_FRICTION[7][4] = {",
@@ -205,9 +280,15 @@ def _fmu_description(k: _Constants, name: str, guid: str, kind: str) -> str:
 
     pa, pb = k.axis.rest_pressures()
     starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0]
-    description = (
-        f"cylfric friction compensator ({kind}) of the datasheet {k.source}: one controller "
-        f"sample every {k.sample_time!r} s; {_REFERENCE_C[k.reference]}"
+    description = " ".join(
+        [
+            f"cylfric friction compensator ({kind}) of the datasheet {k.source}: exactly one",
+            f"doStep per controller sample, every {k.sample_time!r} s (the velocity is the",
+            "position difference over that step); position absolute from the cap end (x = 0 at",
+            "chamber A's dead volume), gauge pressures, positive command = flow P->A =",
+            f"extension; the first sample outputs command 0; {_REFERENCE_C[k.reference]}.",
+            _axis_text(k),
+        ]
     )
     every = (*FMU_INPUTS.values(), *FMU_OUTPUTS.values())
     units = {u: _BASE[u.replace(".", "*")] for u, _ in every if u}
@@ -362,6 +443,7 @@ def _matlab(k: _Constants, name: str) -> str:
     )
     law = matlab_comment(k.model.friction_law)
     vs = _number(k.smoothing)
+    axis_help = "\n".join(f"%   {line}".rstrip() for line in _axis_lines(k))
     return f"""{signature}
 %{fn.upper()} One sample of the cylfric friction compensator (SI units).
 %   [force, command, state] = {fn}(kind, position, pressure_a, pressure_b,
@@ -372,8 +454,15 @@ def _matlab(k: _Constants, name: str) -> str:
 %   force: the friction force estimate [N]; command: the valve command [-] that changes the
 %   cylinder force by the estimate's change and holds it against the cross-piston leakage
 %   (add it to the position controller's command).
-%   Call once per controller sample, T = {k.sample_time!r} s. Fixed sizes and subfunctions
+%   Call exactly once per controller sample, every T = {k.sample_time!r} s: there is no
+%   velocity input, the velocity is (position - previous position) / T. position: absolute
+%   from the cap end (x = 0 at chamber A's dead volume, > 0 extends), the reference in the
+%   same frame; pressures gauge [Pa]; command > 0 opens P->A (extension); force > 0 in the
+%   direction of motion. The first sample (state(4) = 0) outputs command 0 (no previous
+%   sample) and the observer's z_hat = state(2) starts at 0. Fixed sizes and subfunctions
 %   only: usable as a Simulink MATLAB Function block.
+%
+{axis_help}
 %
 %   Written by cylfric (cylfric.control.export; docs/control.md), the same step as
 %   cylfric.control.kernel.compensator_step. Datasheet: {matlab_comment(k.source)}

@@ -13,7 +13,17 @@
  *   lugre:   z^ <- exact solution of dz/dt = v - sigma_0 |v| z / g(v) over T, + k_o e T
  *            F = sigma_0 z^ + sigma_1 (v - sigma_0 |v| z^ / g(v)) + sigma_2 v  (eq. 2.5;
  *            Canudas de Wit et al. 1995)
- *   u_c    = ((F - F_prev) / T) / G_F,  G_F = beta (A_A K_A / V_A + A_B K_B / V_B)
+ *   from the second sample on (the first outputs u_c = 0):
+ *   R      = (F - F_prev) / T + R_L(F),  R_L(F) = beta C_i F / ((A_A + A_B) / 2)
+ *            (A_A / V_A + A_B / V_B)     (the force rate that holds F against the
+ *                                          cross-piston leakage C_i)
+ *   u_c    = R / G_F,  G_F = beta (A_A K_A / V_A + A_B K_B / V_B)  (the force rate per unit
+ *            opening; K_A, K_B = K max(r(dp), sqrt(dp_lam)) over the landings that open
+ *            for the sign of R: P->A and B->T for R >= 0, A->T and P->B otherwise)
+ *   with V_A = V_A0 + A_A x, V_B = V_B0 + A_B (L - x): x absolute from the cap end.
+ *
+ * Conventions (x > 0 extends, gauge pressures, u_c > 0 opens P->A, one call every T): see
+ * cylfric_compensator.h.
  *
  * Compile: cc -O2 -std=c99 -c cylfric_compensator.c   (link with -lm)
  */

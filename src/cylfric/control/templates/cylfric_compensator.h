@@ -8,7 +8,32 @@
  *   every sample T:  cylfric_compensator_step(CYLFRIC_LUGRE, &in, &st, &out);
  *                    valve command += out.command;  (out.force: the friction estimate [N])
  *
- * Units SI: m, m/s, Pa, N; the command is the valve opening fraction [-].
+ * Units SI: m, m/s, Pa, N; the command is the valve opening fraction [-] (1: the opening
+ * that passes the valve's nominal flow at its nominal drop), added to the position
+ * controller's command before the valve.
+ *
+ * The contract (the numbers in cylfric_compensator_params.h):
+ * - ONE CALL PER SAMPLE, EVERY CYLFRIC_SAMPLE_TIME. There is no velocity input: the step
+ *   takes v = (x - x_prev) / CYLFRIC_SAMPLE_TIME, and the command the force change over that
+ *   period. Calling it at another rate, twice in one sample, or skipping samples gives a
+ *   wrong velocity, observer and command. After a pause, call cylfric_compensator_init.
+ * - POSITION ABSOLUTE FROM THE CAP END: x = 0 with the piston against chamber A's end
+ *   (chamber A then holds its dead volume CYLFRIC_DEAD_VOLUME_A), x = CYLFRIC_STROKE fully
+ *   extended; position_reference in the same frame. The chamber volumes V_A = V_A0 + A_A x,
+ *   V_B = V_B0 + A_B (L - x) set the command's gain: an offset origin scales the command.
+ * - SIGNS: x and v > 0 extend; pressures are gauge [Pa] (as CYLFRIC_SUPPLY, CYLFRIC_TANK);
+ *   command > 0 opens the valve P->A and B->T (extension, raises A_A p_A - A_B p_B);
+ *   force > 0 is friction in the direction of motion (what the cylinder must add).
+ * - THE AXIS IS BAKED IN: the command uses the axis's areas, volumes, valve coefficient,
+ *   supply, tank, bulk modulus and leakage, written at export into
+ *   cylfric_compensator_params.h (its comment lists them with units; CYLFRIC_DEFAULT_AXIS
+ *   is 1 when they are cylfric's default axis, not yours). force does not use them (only
+ *   the datasheet and the sample time; kind coulomb: F_c at the axis's rest pressures).
+ *   On another axis, export again with its axis.toml, or use force through your own
+ *   force-to-valve path.
+ * - FIRST SAMPLE: after init, the first step outputs command 0 (no previous sample: v = 0,
+ *   no force change) and the LuGre observer's z_hat starts at 0 (no bristle deflection);
+ *   force is already the estimate at that sample. Start with the axis at rest.
  */
 #ifndef CYLFRIC_COMPENSATOR_H
 #define CYLFRIC_COMPENSATOR_H

@@ -11,7 +11,10 @@
  *
  * Value references: 0 position [m], 1 pressure_a [Pa], 2 pressure_b [Pa],
  * 3 position_reference [m], 4 velocity_reference [m/s] (inputs); 5 force [N],
- * 6 command [-] (outputs); 7 z_hat [m] (local).
+ * 6 command [-] (outputs); 7 z_hat [m] (local). Conventions as cylfric_compensator.h:
+ * position absolute from the cap end, gauge pressures, command > 0 opens P->A (extension),
+ * the first sample outputs command 0; the command is for the axis baked in at export (listed
+ * in modelDescription.xml's description and in cylfric_compensator_params.h).
  */
 #include <math.h>
 #include <stdarg.h>
