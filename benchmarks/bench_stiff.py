@@ -966,10 +966,9 @@ def _versus_numbalsoda(case, rounds=7):
     atols 1e-1..1e-10 is run; a setting qualifies when it and its next tighter rtol and atol
     neighbours meet the goal (RMS(F - F_ref)/F_c <= 1e-4 and slip instants within 1e-4 of the
     duration, as for the C), and numbalsoda gets the fastest qualifying setting (not the loosest
-    rtol: the one its
-    best user would pick). Also at simulate()'s own error. Times: medians over ``rounds``
-    rounds, each the best of 3 runs of every contender, alternating; numbalsoda timed on the
-    LSODA call alone (integration) and with the friction on the grid (compiled)."""
+    rtol: the one its best user would pick). Also at simulate()'s own error. Times: medians
+    over ``rounds`` rounds, each the best of 3 runs of every contender, alternating; numbalsoda
+    timed on the LSODA call alone (integration) and with the friction on the grid (compiled)."""
     from cylfric.model import FrictionModel
     from cylfric.simulate import Cylinder, SpringPull, simulate
 
