@@ -159,8 +159,12 @@ def test_the_estimate_bounds_the_measured_peak_of_a_servo_simulation():
     and 1000 s at 1 ms): what does not grow with the output (the interpreter, the libraries,
     a compilation) cancels. A position servo holds its input grid too (about 112 bytes per
     sample measured). The peak is counted from after a first short run (a compilation peaks
-    at about 660 MB, above what the runs themselves reach: /proc/self/clear_refs resets it)."""
-    short, long_ = _peak(400.0), _peak(1000.0)
+    at about 660 MB, above what the runs themselves reach: /proc/self/clear_refs resets it).
+    Each peak is the smaller of two processes: one that compiles inside its measured call
+    (another test process rewriting the compiled cache at that moment) is not the estimate's
+    subject."""
+    short = min(_peak(400.0), _peak(400.0), key=lambda r: r[1])
+    long_ = min(_peak(1000.0), _peak(1000.0), key=lambda r: r[1])
     assert long_[0] == 1_000_001
     slope = (long_[1] - short[1]) / (long_[0] - short[0])
     assert 0 < slope <= PEAK_BYTES_PER_SAMPLE, (slope, short, long_)
