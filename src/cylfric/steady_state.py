@@ -254,6 +254,8 @@ def find_windows(
     if not speed_ref > 0:
         windows: list[_Window] = []
         return (windows, {}) if return_components else windows
+    from ._filters import median
+
     moving = np.abs(velocity) > moving_fraction * speed_ref
     direction = np.sign(velocity) * moving
     change = np.flatnonzero(np.diff(direction) != 0) + 1
@@ -273,7 +275,7 @@ def find_windows(
             windows.append(_Window(k, d, start, max(start, stop), flag))
             continue
         v = velocity[a:b]
-        v_stroke = float(np.median(v))
+        v_stroke = median(v)
         settled = np.abs(v - v_stroke) <= settle_tolerance * abs(v_stroke)
         settled_all[a:b] = settled
         start, stop = _longest_true(settled)
@@ -321,18 +323,18 @@ def _settling_start(force, median_window, sigma, tolerance, min_samples):
     n = len(force)
     if n < 4 * max(min_samples, 1) or sigma <= 0:
         return 0
-    from ._filters import rolling_mean, rolling_median
+    from ._filters import median, median_deviation, rolling_mean, rolling_median
 
     w = max(median_window, n // 20) | 1
-    median = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
-    residual = force - median
-    noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
-    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, median, force) if noise > 0 else force
+    rolling = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
+    residual = force - rolling
+    noise = 1.4826 * median_deviation(residual)
+    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, rolling, force) if noise > 0 else force
     mean = rolling_mean(clean, w)
     half = n // 2
-    final = float(np.median(clean[half:]))
+    final = median(clean[half:])
     tail = mean[half:]
-    spread = max(1.4826 * float(np.median(np.abs(tail - np.median(tail)))), noise / math.sqrt(w))
+    spread = max(1.4826 * median_deviation(tail), noise / math.sqrt(w))
     band = max(sigma * spread, tolerance * abs(final))
     outside = np.flatnonzero(np.abs(mean[:half] - final) > band)
     if not outside.size:
@@ -349,24 +351,24 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     """Trim ends where the rolling median of the force leaves the centre level."""
     n = len(force)
     w = min(median_window, max(1, n // 3) | 1)
-    from ._filters import rolling_mean, rolling_median
+    from ._filters import median, median_deviation, rolling_mean, rolling_median
 
     rolling = rolling_median(force, w)
     centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
-    level = np.median(centre)
-    spread = 1.4826 * np.median(np.abs(force - np.median(force))) / math.sqrt(w)
+    level = median(centre)
+    spread = 1.4826 * median_deviation(force) / math.sqrt(w)
     limit = max(trim_sigma * spread, trim_floor)
     outside = np.abs(rolling - level) > limit
     # a slow drift (cushioning starting to engage) hides under the noise of a short median:
     # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
     w_long = max(w, n // 10)
     if w_long > w:
-        sigma = 1.4826 * np.median(np.abs(force - np.median(force)))
+        sigma = 1.4826 * median_deviation(force)
         # isolated spikes (a sample or a few, far from the rolling median) are replaced by
         # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
         # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
         residual = force - rolling
-        noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
+        noise = 1.4826 * median_deviation(residual)
         spikes = np.abs(residual) > SPIKE_SIGMA * noise if noise > 0 else residual != 0
         mean = rolling_mean(np.where(spikes, rolling, force), w_long)
         outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
@@ -505,6 +507,8 @@ def _point_rows(data, metadata, config, run, options):
         )
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
+    from ._filters import median, median_deviation
+
     extra = metadata.get("extra", {})
     rows = []
     for w in windows:
@@ -512,8 +516,8 @@ def _point_rows(data, metadata, config, run, options):
         v = velocity[w.start : w.stop]
         keep = np.zeros(0, bool)
         if f.size:
-            med = np.median(f)
-            sigma = 1.4826 * np.median(np.abs(f - med)) or float(np.std(f))
+            med = median(f)
+            sigma = 1.4826 * median_deviation(f) or float(np.std(f))
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
         n = int(keep.sum())
         if pressure is not None and n:
