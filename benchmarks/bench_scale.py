@@ -114,9 +114,7 @@ def measure(command: list[str], env: dict | None = None, interval: float = 0.02)
 
     cpu0, busy0 = children_cpu(), _busy_seconds()
     t0 = time.perf_counter()
-    process = subprocess.Popen(
-        command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
-    )
+    process = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     peak = 0
     while process.poll() is None:
         peak = max(peak, sum(_pss_kb(p) for p in _tree(process.pid)))
@@ -167,10 +165,13 @@ def _warm(folder: Path) -> float:
 def _ratios(size: dict, first: dict | None) -> dict:
     med = {m: v["wall_median_seconds"] for m, v in size["modes"].items()}
     pss = {m: v["peak_tree_pss_MB_max"] for m, v in size["modes"].items()}
+    cpu = {m: v["cpu_median_seconds"] for m, v in size["modes"].items()}
     ratios = {
         "fit_over_script": med["fit_no_report"] / med["script"],
+        "fit_over_script_processor_time": cpu["fit_no_report"] / cpu["script"],
         "second_core_gain": med["fit_no_report_1_core"] / med["fit_no_report"],
         "report_over_no_report": med["fit_report"] / med["fit_no_report"],
+        "report_over_no_report_processor_time": cpu["fit_report"] / cpu["fit_no_report"],
         "script_second_core_gain": med["script_1_core"] / med["script"],
         "fit_seconds_per_1000_runs": 1000 * med["fit_no_report"] / size["runs"],
         "fit_peak_tree_pss_MB": pss["fit_no_report"],
@@ -180,8 +181,8 @@ def _ratios(size: dict, first: dict | None) -> dict:
         ratios["per_run_time_vs_smallest"] = ratios["fit_seconds_per_1000_runs"] / (
             1000 * first["modes"]["fit_no_report"]["wall_median_seconds"] / first["runs"]
         )
-        ratios["peak_pss_vs_smallest"] = pss["fit_no_report"] / (
-            first["modes"]["fit_no_report"]["peak_tree_pss_MB_max"]
+        ratios["peak_pss_vs_smallest"] = (
+            pss["fit_no_report"] / (first["modes"]["fit_no_report"]["peak_tree_pss_MB_max"])
         )
     return ratios
 
@@ -216,6 +217,7 @@ def bench_scale():
                         "wall_median_seconds": statistics.median(x["wall_seconds"] for x in xs),
                         "wall_seconds": [round(x["wall_seconds"], 2) for x in xs],
                         "peak_tree_pss_MB_max": max(x["peak_tree_pss_MB"] for x in xs),
+                        "cpu_median_seconds": statistics.median(x["cpu_seconds"] for x in xs),
                         "cores_used_median": statistics.median(x["cores_used"] for x in xs),
                         "others_cores_median": statistics.median(x["others_cores"] for x in xs),
                     }

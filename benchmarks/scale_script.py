@@ -37,9 +37,7 @@ def read_run(path):
     for part in parts:
         _, _, units, data = part.split(b"\n", 3)
         data = data.split(b"\nTest run ended", 1)[0]
-        table = pv.read_csv(
-            io.BytesIO(data), pv.ReadOptions(column_names=NAMES), PARSE
-        ).to_pandas()
+        table = pv.read_csv(io.BytesIO(data), pv.ReadOptions(column_names=NAMES), PARSE).to_pandas()
         factors = [SCALE[u] for u in units.decode().strip().split("\t")]
         blocks.append(table.to_numpy() * factors)
     data = np.concatenate(blocks)
@@ -107,7 +105,9 @@ def main(folder, out=None, workers="2"):
     result = {
         "runs": len(jobs),
         "points": len(points),
-        "per_pressure": {f"{p:g}": dict(zip(names, per_pressure[p], strict=True)) for p in per_pressure},
+        "per_pressure": {
+            f"{p:g}": dict(zip(names, per_pressure[p], strict=True)) for p in per_pressure
+        },
         "linear_in_pressure": laws,
     }
     text = json.dumps(result, indent=1, default=float)

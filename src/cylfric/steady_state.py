@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -742,18 +742,17 @@ def _column(values: list):
 
 
 def _pack(results: list) -> tuple:
-    """The results (rows, summary, error) of consecutive files -> (points, rows per file,
-    summaries, errors), the points as one table of arrays (a dict of columns: one pickle of
+    """The results (rows, summary, error) of consecutive files -> (points, summaries,
+    errors), the points as one table of arrays (a dict of columns: one pickle of
     a few arrays instead of a dict per point); rows whose keys differ (a run with labels the
     others lack) stay a list of rows."""
     rows = [r for file_rows, _, _ in results if file_rows is not None for r in file_rows]
-    counts = [None if file_rows is None else len(file_rows) for file_rows, _, _ in results]
     summaries = [summary for _, summary, _ in results]
     errors = [error for _, _, error in results]
     keys = _columns(rows)
     if all(len(r) == len(keys) for r in rows):
-        return {key: _column([r[key] for r in rows]) for key in keys}, counts, summaries, errors
-    return rows, counts, summaries, errors
+        return {key: _column([r[key] for r in rows]) for key in keys}, summaries, errors
+    return rows, summaries, errors
 
 
 class PendingExtraction:
@@ -821,8 +820,8 @@ def _finish(campaign, infos, packs, skip_bad) -> Extraction:
     skipped, runs = [], []
     total = 0
     index = 0
-    for _, counts, summaries, errors in packs:
-        for count, summary, error in zip(counts, summaries, errors, strict=True):
+    for _, summaries, errors in packs:
+        for summary, error in zip(summaries, errors, strict=True):
             info = infos[index]
             index += 1
             if error is not None:
@@ -870,7 +869,7 @@ def _join(packs: list) -> dict | None:
     keys = list(tables[0])
     if any(list(t) != keys for t in tables):
         return None
-    joined = {}
+    joined: dict[str, Any] = {}
     for key in keys:
         parts = [t[key] for t in tables]
         if all(isinstance(x, np.ndarray) for x in parts) and len({x.dtype for x in parts}) == 1:

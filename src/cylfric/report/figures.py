@@ -251,9 +251,7 @@ def _plot_points(ax, x, y, fmt, *, binned, log=True, **style):
 
 def _binned_note(ax, points: int) -> None:
     """A legend entry saying the markers are bin means (``points`` points in all)."""
-    ax.plot(
-        [], [], "o", color="0.4", ms=3, label=f"mean ± s.d. per bin ({points:,} points)"
-    )
+    ax.plot([], [], "o", color="0.4", ms=3, label=f"mean ± s.d. per bin ({points:,} points)")
 
 
 @_styled
