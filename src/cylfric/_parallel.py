@@ -21,6 +21,7 @@ The results are the same whichever way the work ran.
 
 from __future__ import annotations
 
+import gc
 import multiprocessing
 import sys
 import threading
@@ -76,6 +77,13 @@ def start(
             initializer=_install,
             initargs=(task,),  # inherited by the forked workers, not pickled
         )
+        # the workers fork at the first submit; with this process's objects frozen, their
+        # garbage collector does not visit (and so copy) the pages they share with it
+        gc.freeze()
+        try:
+            return Pending(pool, _call, task, [(index,) for index in range(n)], done)
+        finally:
+            gc.unfreeze()
     return Pending(pool, _call, task, [(index,) for index in range(n)], done)
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -254,6 +254,8 @@ def find_windows(
     if not speed_ref > 0:
         windows: list[_Window] = []
         return (windows, {}) if return_components else windows
+    from ._filters import median
+
     moving = np.abs(velocity) > moving_fraction * speed_ref
     direction = np.sign(velocity) * moving
     change = np.flatnonzero(np.diff(direction) != 0) + 1
@@ -273,7 +275,7 @@ def find_windows(
             windows.append(_Window(k, d, start, max(start, stop), flag))
             continue
         v = velocity[a:b]
-        v_stroke = float(np.median(v))
+        v_stroke = median(v)
         settled = np.abs(v - v_stroke) <= settle_tolerance * abs(v_stroke)
         settled_all[a:b] = settled
         start, stop = _longest_true(settled)
@@ -321,18 +323,18 @@ def _settling_start(force, median_window, sigma, tolerance, min_samples):
     n = len(force)
     if n < 4 * max(min_samples, 1) or sigma <= 0:
         return 0
-    from ._filters import rolling_mean, rolling_median
+    from ._filters import median, median_deviation, rolling_mean, rolling_median
 
     w = max(median_window, n // 20) | 1
-    median = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
-    residual = force - median
-    noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
-    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, median, force) if noise > 0 else force
+    rolling = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
+    residual = force - rolling
+    noise = 1.4826 * median_deviation(residual)
+    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, rolling, force) if noise > 0 else force
     mean = rolling_mean(clean, w)
     half = n // 2
-    final = float(np.median(clean[half:]))
+    final = median(clean[half:])
     tail = mean[half:]
-    spread = max(1.4826 * float(np.median(np.abs(tail - np.median(tail)))), noise / math.sqrt(w))
+    spread = max(1.4826 * median_deviation(tail), noise / math.sqrt(w))
     band = max(sigma * spread, tolerance * abs(final))
     outside = np.flatnonzero(np.abs(mean[:half] - final) > band)
     if not outside.size:
@@ -349,24 +351,24 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     """Trim ends where the rolling median of the force leaves the centre level."""
     n = len(force)
     w = min(median_window, max(1, n // 3) | 1)
-    from ._filters import rolling_mean, rolling_median
+    from ._filters import median, median_deviation, rolling_mean, rolling_median
 
     rolling = rolling_median(force, w)
     centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
-    level = np.median(centre)
-    spread = 1.4826 * np.median(np.abs(force - np.median(force))) / math.sqrt(w)
+    level = median(centre)
+    spread = 1.4826 * median_deviation(force) / math.sqrt(w)
     limit = max(trim_sigma * spread, trim_floor)
     outside = np.abs(rolling - level) > limit
     # a slow drift (cushioning starting to engage) hides under the noise of a short median:
     # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
     w_long = max(w, n // 10)
     if w_long > w:
-        sigma = 1.4826 * np.median(np.abs(force - np.median(force)))
+        sigma = 1.4826 * median_deviation(force)
         # isolated spikes (a sample or a few, far from the rolling median) are replaced by
         # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
         # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
         residual = force - rolling
-        noise = 1.4826 * np.median(np.abs(residual - np.median(residual)))
+        noise = 1.4826 * median_deviation(residual)
         spikes = np.abs(residual) > SPIKE_SIGMA * noise if noise > 0 else residual != 0
         mean = rolling_mean(np.where(spikes, rolling, force), w_long)
         outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
@@ -505,6 +507,8 @@ def _point_rows(data, metadata, config, run, options):
         )
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
+    from ._filters import median, median_deviation
+
     extra = metadata.get("extra", {})
     rows = []
     for w in windows:
@@ -512,8 +516,8 @@ def _point_rows(data, metadata, config, run, options):
         v = velocity[w.start : w.stop]
         keep = np.zeros(0, bool)
         if f.size:
-            med = np.median(f)
-            sigma = 1.4826 * np.median(np.abs(f - med)) or float(np.std(f))
+            med = median(f)
+            sigma = 1.4826 * median_deviation(f) or float(np.std(f))
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
         n = int(keep.sum())
         if pressure is not None and n:
@@ -689,25 +693,66 @@ def start_extraction(
         }
         return rows, summary, None
 
-    def report(index, _result=None):
-        if progress is not None:
-            progress(infos[index].path.name)
-
     workers = 2 if workers is None else workers
     # the first file is read here: it loads the compiled reader (numba, about 0.5 s) once,
     # and the workers forked for the rest inherit it instead of each loading it again
     head = 1 if workers >= 2 and len(infos) >= PARALLEL_MIN_FILES else 0
-    first = [one(i) for i in range(head)]
-    for i in range(head):
-        report(i)
+    first = [_pack([one(i) for i in range(head)])] if head else []
+    if progress is not None:
+        for i in range(head):
+            progress(infos[i].path.name)
+    size = chunk_size(len(infos) - head, workers)
+    chunks = [range(lo, min(lo + size, len(infos))) for lo in range(head, len(infos), size)]
+
+    def report(index, _result=None):
+        if progress is not None:
+            for i in chunks[index]:
+                progress(infos[i].path.name)
+
     pending = start(
-        lambda i: one(i + head),
-        len(infos) - head,
-        workers=workers,
-        min_items=PARALLEL_MIN_FILES - head,
-        done=lambda i, result: report(i + head, result),
+        lambda c: _pack([one(i) for i in chunks[c]]),
+        len(chunks),
+        workers=workers if len(infos) >= PARALLEL_MIN_FILES else 1,
+        done=report,
     )
     return PendingExtraction(campaign, infos, first, pending, skip_bad)
+
+
+CHUNK_FILES = 64
+"""Most run files in one task of the extraction's pool: a task's files are read one after
+another by one worker and their points come back as one table of arrays (one pickle per
+task, not per file)."""
+
+
+def chunk_size(n: int, workers: int) -> int:
+    """Files per task when ``n`` files are read by ``workers`` processes [-]: about 8 tasks
+    per worker (the last ones balance the load), at most :data:`CHUNK_FILES` files each."""
+    return max(1, min(CHUNK_FILES, -(-n // (8 * max(workers, 1)))))
+
+
+def _column(values: list):
+    """A column of point rows as a numpy array when all values are floats (float64) or all
+    are ints (int64), else the list as it is (pandas infers its type as from the rows)."""
+    kinds = {type(v) for v in values}
+    if values and kinds <= {float, np.float64}:
+        return np.array(values, dtype=np.float64)
+    if kinds == {int}:
+        return np.array(values, dtype=np.int64)
+    return values
+
+
+def _pack(results: list) -> tuple:
+    """The results (rows, summary, error) of consecutive files -> (points, summaries,
+    errors), the points as one table of arrays (a dict of columns: one pickle of
+    a few arrays instead of a dict per point); rows whose keys differ (a run with labels the
+    others lack) stay a list of rows."""
+    rows = [r for file_rows, _, _ in results if file_rows is not None for r in file_rows]
+    summaries = [summary for _, summary, _ in results]
+    errors = [error for _, _, error in results]
+    keys = _columns(rows)
+    if all(len(r) == len(keys) for r in rows):
+        return {key: _column([r[key] for r in rows]) for key in keys}, summaries, errors
+    return rows, summaries, errors
 
 
 class PendingExtraction:
@@ -769,44 +814,141 @@ def extract_campaign(
     ).result()
 
 
-def _finish(campaign, infos, results, skip_bad) -> Extraction:
-    """The files' results (rows, summary, error) -> the :class:`Extraction`."""
-    per_run, skipped, runs = [], [], []
+def _finish(campaign, infos, packs, skip_bad) -> Extraction:
+    """The packed results of the files (:func:`_pack`, in file order) -> the
+    :class:`Extraction`."""
+    skipped, runs = [], []
     total = 0
-    for index, info in enumerate(infos):
-        rows, summary, error = results[index]
-        if error is not None:
-            if not skip_bad:
-                raise BenchFileError(
-                    error.path,
-                    str(error).split(": ", 1)[-1] + " (to skip such files: --skip-bad)",
-                    error.line,
-                ) from None
-            skipped.append({"file": str(info.path), "reason": str(error)})
-        else:
-            per_run.append(rows)
-            runs.append(summary)
-        total += info.path.stat().st_size if info.path.is_file() else 0
-    if not per_run:
+    index = 0
+    for _, summaries, errors in packs:
+        for summary, error in zip(summaries, errors, strict=True):
+            info = infos[index]
+            index += 1
+            if error is not None:
+                if not skip_bad:
+                    raise BenchFileError(
+                        error.path,
+                        str(error).split(": ", 1)[-1] + " (to skip such files: --skip-bad)",
+                        error.line,
+                    ) from None
+                skipped.append({"file": str(info.path), "reason": str(error)})
+            else:
+                runs.append(summary)
+            total += info.path.stat().st_size if info.path.is_file() else 0
+    if not runs:
         reasons = "; ".join(item["reason"] for item in skipped[:3])
         raise BenchFileError(
             campaign.folder,
             f"none of the {len(skipped)} run file(s) could be read; the first: {reasons}",
         )
-    run_offsets = [
-        rows[0]["offset [N]"] for rows in per_run if rows and not math.isnan(rows[0]["offset [N]"])
-    ]
-    offset = float(np.median(run_offsets)) if run_offsets else math.nan
+    columns = _join([points for points, *_ in packs])
+    if columns is None:  # runs with different labels: as rows
+        rows = [r for points, *_ in packs for r in _rows_of(points)]
+        return _finish_rows(campaign, rows, skipped, runs, total)
+    return _finish_columns(campaign, columns, skipped, runs, total)
+
+
+def _rows_of(points) -> list:
+    """A pack's points as a list of row dicts."""
+    if isinstance(points, list):
+        return points
+    keys = list(points)
+    n = len(points[keys[0]]) if keys else 0
+    return [{key: _item(points[key][i]) for key in keys} for i in range(n)]
+
+
+def _item(value):
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _join(packs: list) -> dict | None:
+    """The columns of packs with the same keys, joined (None: keys differ, or rows)."""
+    tables = [p for p in packs if not (isinstance(p, list) and not p)]  # no points: skip
+    if not tables or any(isinstance(p, list) for p in tables):
+        return None if tables else {}
+    keys = list(tables[0])
+    if any(list(t) != keys for t in tables):
+        return None
+    joined: dict[str, Any] = {}
+    for key in keys:
+        parts = [t[key] for t in tables]
+        if all(isinstance(x, np.ndarray) for x in parts) and len({x.dtype for x in parts}) == 1:
+            joined[key] = np.concatenate(parts)
+        else:
+            joined[key] = [_item(v) for x in parts for v in x]
+    return joined
+
+
+def _campaign_offset(run_offsets) -> tuple[float, float]:
+    offset = float(np.median(run_offsets)) if len(run_offsets) else math.nan
     offset_std = float(np.std(run_offsets, ddof=1)) if len(run_offsets) > 1 else math.nan
-    if not math.isnan(offset):
-        for rows in per_run:
-            if any(r["flag"] == "no_offset" for r in rows):
-                for r in rows:
-                    r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
-                _offset_rows(rows, campaign_offset=offset)
+    return offset, offset_std
+
+
+def _finish_columns(campaign, columns, skipped, runs, total) -> Extraction:
+    """The points as columns (one array per column) -> the :class:`Extraction` (the same
+    table as :func:`_finish_rows` builds from the rows)."""
     import pandas as pd
 
-    rows = [r for run_rows in per_run for r in run_rows]
+    if not columns:
+        points = pd.DataFrame(columns=POINT_COLUMNS)
+        offset = offset_std = math.nan
+    else:
+        run = np.asarray(columns["run"])
+        first = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])  # each run's first row
+        offsets = np.asarray(columns["offset [N]"], dtype=float)[first]
+        offset, offset_std = _campaign_offset(offsets[~np.isnan(offsets)])
+        flags = columns["flag"]
+        if not math.isnan(offset):
+            stops = np.r_[first[1:], len(run)]
+            for a, b in zip(first, stops, strict=True):
+                if any(flags[i] == "no_offset" for i in range(a, b)):
+                    _reoffset(columns, a, b, offset)
+        points = pd.DataFrame(columns, columns=list(columns))
+    if "session" not in points:  # the label column every points table has (None: not said)
+        points["session"] = None
+    return Extraction(
+        points,
+        skipped,
+        offset,
+        offset_std,
+        runs,
+        total,
+        list(campaign.unlisted),
+        str(campaign.folder),
+    )
+
+
+def _reoffset(columns, a, b, offset) -> None:
+    """Rows a..b-1 (one run without its own offset) at the campaign offset, in place."""
+    rows = [{key: _item(columns[key][i]) for key in columns} for i in range(a, b)]
+    for r in rows:
+        r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
+    _offset_rows(rows, campaign_offset=offset)
+    for i, r in zip(range(a, b), rows, strict=True):
+        for key in ("offset [N]", "friction [N]", "flag"):
+            columns[key][i] = r[key]
+
+
+def _finish_rows(campaign, rows, skipped, runs, total) -> Extraction:
+    """The points as rows (labels that differ between runs) -> the :class:`Extraction`."""
+    per_run: dict = {}
+    for r in rows:
+        per_run.setdefault(r["run"], []).append(r)
+    run_offsets = [
+        run_rows[0]["offset [N]"]
+        for run_rows in per_run.values()
+        if not math.isnan(run_rows[0]["offset [N]"])
+    ]
+    offset, offset_std = _campaign_offset(run_offsets)
+    if not math.isnan(offset):
+        for run_rows in per_run.values():
+            if any(r["flag"] == "no_offset" for r in run_rows):
+                for r in run_rows:
+                    r["flag"] = "ok" if r["flag"] == "no_offset" else r["flag"]
+                _offset_rows(run_rows, campaign_offset=offset)
+    import pandas as pd
+
     points = (
         pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)
     )

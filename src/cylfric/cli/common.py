@@ -18,8 +18,17 @@ from pathlib import Path
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    ProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 from rich.table import Table
+from rich.text import Text
 
 from .. import __version__
 from ..escape import terminal
@@ -182,12 +191,27 @@ class _ThreadlessProgress(Progress):
             self.refresh()
 
 
+class _RateColumn(ProgressColumn):
+    """Items per second (``unit`` a field of the task: ``add_task(..., unit="runs")``), from
+    rich's estimate over the last 30 s; blank for the first second and when finished."""
+
+    def render(self, task) -> Text:
+        speed = task.finished_speed or task.speed
+        if speed is None or task.elapsed is None or task.elapsed < 1.0:
+            return Text("")
+        unit = task.fields.get("unit", "")
+        return Text(f"{speed:,.0f} {unit}/s".replace("  ", " "), style="progress.data.speed")
+
+
 def _progress():
     return _ThreadlessProgress(
         TextColumn("{task.description}"),
         BarColumn(),
         MofNCompleteColumn(),
+        _RateColumn(),
         TimeElapsedColumn(),
+        TextColumn("eta"),
+        TimeRemainingColumn(),
         console=err_console,
         transient=True,
         auto_refresh=False,

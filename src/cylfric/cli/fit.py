@@ -46,7 +46,7 @@ def _fit_with_progress(campaign: Path, n_files: int, call):
     files and one for each later step that can take seconds (``step(description, total)``);
     warnings reach the user once, as the notes printed after it (not as Python's lines)."""
     progress = _progress()
-    task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files)
+    task = progress.add_task(terminal(f"reading {campaign.name}"), total=n_files, unit="runs")
 
     def step(description: str, total: int):
         """A new bar for a later step of the fit (the earlier ones hidden); its advance."""

@@ -223,12 +223,31 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
         return hashlib.file_digest(handle, "sha256").hexdigest()
 
 
+EDGE_BYTES = 4096
+"""Bytes read at each end of a file to tell same-size files apart before hashing them
+whole (:func:`find_duplicates`)."""
+
+
+def _edges_digest(path: Path, size: int) -> bytes:
+    """SHA-256 of a file's first and last :data:`EDGE_BYTES` bytes (all of a short one)."""
+    import hashlib
+
+    with open(path, "rb") as handle:
+        data = handle.read(EDGE_BYTES)
+        if size > 2 * EDGE_BYTES:
+            handle.seek(size - EDGE_BYTES)
+        data += handle.read(EDGE_BYTES)
+    return hashlib.sha256(data).digest()
+
+
 def find_duplicates(paths) -> dict[Path, Path]:
     """Files whose bytes equal an earlier file's of ``paths``, each -> that first file.
 
-    Files are grouped by size first and only files that share a size are hashed
-    (SHA-256), so a campaign whose files all differ in size is not read here. Files that
-    cannot be read are left to the reader (which names them).
+    Files are grouped by size, then by their first and last :data:`EDGE_BYTES` bytes; only
+    files that share both are hashed whole (SHA-256). A campaign whose files all differ in
+    size is not read here, and thousands of runs of one length (a bench's fixed sample
+    count) cost two short reads each, not a pass over every byte. Files that cannot be read
+    are left to the reader (which names them).
     """
     by_size: dict[int, list[Path]] = {}
     for path in paths:
@@ -236,8 +255,17 @@ def find_duplicates(paths) -> dict[Path, Path]:
             by_size.setdefault(os.stat(path).st_size, []).append(Path(path))
         except OSError:
             continue
+    by_edges: dict[tuple, list[Path]] = {}
+    for size, group in by_size.items():
+        if len(group) < 2:
+            continue
+        for path in group:
+            try:
+                by_edges.setdefault((size, _edges_digest(path, size)), []).append(path)
+            except OSError:
+                continue
     copies: dict[Path, Path] = {}
-    for group in by_size.values():
+    for group in by_edges.values():
         if len(group) < 2:
             continue
         first: dict[str, Path] = {}
@@ -966,13 +994,14 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
         else None
     )
     runs = []
-    candidates = sorted(
-        p
-        for p in folder.glob(config.glob)
-        if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
-    )
     if manifest:  # a row for a missing file stops its run in read_run (skippable)
         candidates = [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
+    else:
+        candidates = sorted(
+            p
+            for p in folder.glob(config.glob)
+            if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
+        )
     for path in candidates:
         _check_encodable(path)
         pressure = velocity = math.nan

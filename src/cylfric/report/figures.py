@@ -217,6 +217,43 @@ def _levels(points):
     return pts, levels, colors
 
 
+POINTS_DRAWN = 3000
+"""Most points a figure draws one marker each; a larger campaign's points are drawn as the
+mean and standard deviation of each bin (:func:`_plot_points`), so that a report's cost and
+size stay bounded at thousands of runs (issue 27) [-]."""
+
+BINS_PER_DECADE = 24
+"""Bins of a logarithmic axis per decade when the points are binned [-]."""
+
+LINEAR_BINS = 200
+"""Bins across a linear axis when the points are binned [-]."""
+
+
+def _plot_points(ax, x, y, fmt, *, binned, log=True, **style):
+    """Points (x, y) as markers ``fmt``; with ``binned``, one marker per bin of x (1/24
+    decade on a ``log`` axis, else 1/200 of the range): the mean of x and y with error bars
+    of the standard deviation of y (its points' spread)."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if not binned or x.size == 0:
+        ax.plot(x, y, fmt, **style)
+        return
+    if log:
+        key = np.round(np.log10(np.maximum(x, 1e-300)) * BINS_PER_DECADE)
+    else:
+        span = float(np.ptp(x)) or 1.0
+        key = np.round((x - x.min()) / span * LINEAR_BINS)
+    _, bin_of, count = np.unique(key, return_inverse=True, return_counts=True)
+    mean_x = np.bincount(bin_of, x) / count
+    mean_y = np.bincount(bin_of, y) / count
+    spread = np.sqrt(np.maximum(np.bincount(bin_of, y * y) / count - mean_y**2, 0.0))
+    ax.errorbar(mean_x, mean_y, yerr=spread, fmt=fmt, elinewidth=0.7, capsize=0, **style)
+
+
+def _binned_note(ax, points: int) -> None:
+    """A legend entry saying the markers are bin means (``points`` points in all)."""
+    ax.plot([], [], "o", color="0.4", ms=3, label=f"mean ± s.d. per bin ({points:,} points)")
+
+
 @_styled
 def figure_fit(ident):
     """Fig. 4.1: friction against speed (log axis) per pressure, the model and its 95 % bands.
@@ -233,13 +270,16 @@ def figure_fit(ident):
     grid = np.geomspace(max(speed.min(), 1e-4), speed.max(), 200)
     banded = model.covariance is not None
     widest, widest_mean, band_label = 0.0, 0.0, None
+    binned = len(pts) > POINTS_DRAWN
     for level, color in zip(levels, colors, strict=True):
         sel = pts[pts["level"] == level]
         p = float(ident.levels[level])
-        ax.plot(
+        _plot_points(
+            ax,
             sel["velocity [m/s]"].abs() * 1e3,
             sel["friction [N]"],
             "o",
+            binned=binned,
             ms=3.5,
             color=color,
             alpha=0.8,
@@ -259,6 +299,8 @@ def figure_fit(ident):
             ax.fill_between(grid * 1e3, mean_lower, mean_upper, color=color, alpha=0.35, lw=0)
             widest_mean = max(widest_mean, float(np.max(mean_upper - mean_lower)) / 2)
     ax.plot([], [], "-", color="0.3", lw=1.2, label="model")
+    if binned:
+        _binned_note(ax, len(pts))
     if banded and band_label is not None and not band_label.endswith("of the mean"):
         ax.fill_between(
             [],
@@ -475,15 +517,18 @@ def figure_directions(points, offset=None):
     pts, levels, colors = _levels(points)
     fig, ax = _canvas("directions")
     if "force [N]" in pts and "direction [-]" in pts:
+        binned = len(pts) > POINTS_DRAWN
         for level, color in zip(levels, colors, strict=True):
             sel = pts[pts["level"] == level]
             pressure = sel["pressure [Pa]"].mean() / 1e5
             for sign, marker in ((1, "^"), (-1, "v")):
                 part = sel[sel["direction [-]"] == sign]
-                ax.plot(
+                _plot_points(
+                    ax,
                     part["velocity [m/s]"].abs() * 1e3,
                     part["force [N]"] * sign,
                     marker,
+                    binned=binned,
                     ms=3.5,
                     color=color,
                     alpha=0.8,
@@ -491,6 +536,8 @@ def figure_directions(points, offset=None):
                 )
         ax.plot([], [], "^", color="0.4", label="ascending (extension)")
         ax.plot([], [], "v", color="0.4", label="descending, sign flipped")
+        if binned:
+            _binned_note(ax, len(pts))
         _legend_right(ax, ncol=1 if len(levels) <= 16 else 2)
         if offset is not None and np.isfinite(offset):
             ax.set_title(
@@ -555,7 +602,16 @@ def figure_sensitivity_curves(ident):
         colors = matplotlib.colormaps["plasma"](np.linspace(0, 0.85, len(cases)))
         for level in shown:
             sel = pts["level"].to_numpy() == level
-            ax.plot(speed[sel] * 1e3, force[sel], "o", ms=3, color="0.35", zorder=3)
+            _plot_points(
+                ax,
+                speed[sel] * 1e3,
+                force[sel],
+                "o",
+                binned=len(pts) > POINTS_DRAWN,
+                ms=3,
+                color="0.35",
+                zorder=3,
+            )
         for refit, color in zip(cases, colors, strict=True):
             label = (
                 f"alpha = {refit['alpha [-]']:g}"
@@ -595,10 +651,14 @@ def figure_residuals(ident):
     pts = ident.points
     res = ident.residuals
     fig, axes = _canvas("residuals")
-    axes[0].plot(pts["velocity [m/s]"].abs() * 1e3, res, ".", ms=3, label="point (window)")
+    binned = len(pts) > POINTS_DRAWN
+    label = f"mean ± s.d. per bin ({len(pts):,} points)" if binned else "point (window)"
+    speed = pts["velocity [m/s]"].abs() * 1e3
+    _plot_points(axes[0], speed, res, ".", binned=binned, ms=3, label=label)
     axes[0].set_xlabel("speed |v| [mm/s]")
     axes[0].set_ylabel("residual (data - model) [N]")
-    axes[1].plot(pts["pressure [Pa]"] / 1e5, res, ".", ms=3, label="point (window)")
+    pressure = pts["pressure [Pa]"] / 1e5
+    _plot_points(axes[1], pressure, res, ".", binned=binned, log=False, ms=3, label=label)
     axes[1].set_xlabel("pressure p [bar]")
     scatter = ident.model.statistics.get("residual_std")
     for ax in axes:
