@@ -42,18 +42,31 @@ SESSIONS = int(os.environ.get("CYLFRIC_COVERAGE_SESSIONS", "1"))
 SCOPES = ("point", "run", "session")
 LEVEL = 0.95
 GOAL = (0.90, 0.97)
-PRESSURES_BAR = (20.0, 60.0, 100.0, 150.0)
-SPEEDS_MM_S = (1, 3, 10, 30, 100)
+DESIGNS = {  # name: (pressures [bar], speeds [mm/s])
+    # the thesis' ten pressure levels (0.1-159 bar) at six speeds
+    "thesis 10 x 6": (
+        (0.1, 20.7, 38.0, 55.0, 69.0, 83.0, 103.0, 124.0, 141.0, 159.0),
+        (1, 3, 10, 20, 50, 100),
+    ),
+    # four pressure levels, as the shared real repeatability data (Zillen: 1/3/5/7 bar)
+    "four pressures 4 x 5": ((20.0, 60.0, 100.0, 150.0), (1, 3, 10, 30, 100)),
+}
+SELECTED = [
+    name
+    for name in DESIGNS
+    if os.environ.get("CYLFRIC_COVERAGE_DESIGNS", "all") in ("all", name.split()[0])
+]
 
 
-def _settings(index: int):
+def _settings(index: int, design: str):
     from cylfric.simulate.bench import BenchSettings
     from cylfric.simulate.plant import Cylinder
 
+    pressures, speeds = DESIGNS[design]
     return BenchSettings(
         cylinder=Cylinder.from_diameters(0.040, 0.028, 2.5, double_rod=True, stroke=0.060),
-        pressures_bar=PRESSURES_BAR,
-        speeds_mm_s=SPEEDS_MM_S,
+        pressures_bar=pressures,
+        speeds_mm_s=speeds,
         sessions=SESSIONS,
         seed=100_000 + index,
         session_seed=200_000 + index,
@@ -61,15 +74,16 @@ def _settings(index: int):
     )
 
 
-def one_campaign(index: int, folder: str) -> dict:
-    """Fit campaign ``index`` and count the new data of each scope inside its bands."""
+def one_campaign(index: int, folder: str, design: str) -> dict:
+    """Fit campaign ``index`` of ``design`` and count the new data of each scope inside
+    its bands."""
     from cylfric.model import FrictionModel
     from cylfric.pipeline import fit_campaign
     from cylfric.simulate.bench import generate_campaign
     from cylfric.steady_state import extract_campaign
 
     root = Path(folder) / f"c{index:04d}"
-    settings = _settings(index)
+    settings = _settings(index, design)
     new = {  # one new session's worth of runs each
         "point": replace(settings, seed=400_000 + index, sessions=1),
         "run": replace(settings, seed=400_000 + index, run_seed=500_000 + index, sessions=1),
@@ -113,12 +127,24 @@ def one_campaign(index: int, folder: str) -> dict:
 
 
 def bench_coverage():
+    payload = {
+        "level": LEVEL,
+        "campaigns": CAMPAIGNS,
+        "sessions_fitted": SESSIONS,
+        "designs": {name: _one_design(name) for name in SELECTED},
+    }
+    return _save("coverage", payload)
+
+
+def _one_design(design: str) -> dict:
     import cylfric.pipeline  # noqa: F401 - loaded once, inherited by the forked workers
     from cylfric._parallel import run
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
-        rows = run(lambda i: one_campaign(i, folder), CAMPAIGNS, workers=os.cpu_count() or 1)
+        rows = run(
+            lambda i: one_campaign(i, folder, design), CAMPAIGNS, workers=os.cpu_count() or 1
+        )
     fitted = [r for r in rows if r and r.get("fitted")]
     failed = [r for r in rows if r and not r.get("fitted")]
     scopes = {}
@@ -145,11 +171,9 @@ def bench_coverage():
             "goal": list(GOAL),
             "goal_met": GOAL[0] <= coverage <= GOAL[1],
         }
-    payload = {
-        "level": LEVEL,
-        "campaigns": CAMPAIGNS,
-        "sessions_fitted": SESSIONS,
-        "design": {"pressures_bar": PRESSURES_BAR, "speeds_mm_s": SPEEDS_MM_S},
+    pressures, speeds = DESIGNS[design]
+    return {
+        "design": {"pressures_bar": pressures, "speeds_mm_s": speeds},
         "fitted": len(fitted),
         "refused": len(failed),
         "refusals": sorted({r["error"].split(":")[0] for r in failed}),
@@ -160,7 +184,6 @@ def bench_coverage():
         "scopes": scopes,
         "seconds": time.perf_counter() - t0,
     }
-    return _save("coverage", payload)
 
 
 SECTIONS = {"coverage": bench_coverage}
