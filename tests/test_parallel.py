@@ -117,3 +117,40 @@ def test_start_runs_the_tasks_while_the_caller_works_and_close_stops_them(tmp_pa
     dropped = start(task, 200, workers=2)
     dropped.close()  # the running ones finish, the queued rest is cancelled
     assert len(list(tmp_path.glob("*.started"))) < 200
+
+
+@needs_fork
+def test_a_background_start_runs_one_worker_in_another_process():
+    """start(background=True) with one worker: a forked process (the caller goes on with its
+    own work meanwhile), one process for every task; without it, one worker means here."""
+    here = os.getpid()
+    pids = _parallel.start(lambda i: os.getpid(), 6, workers=1, background=True).results()
+    assert here not in pids and len(set(pids)) == 1
+    assert _parallel.start(lambda i: os.getpid(), 6, workers=1).results() == [here] * 6
+
+
+def test_few_files_are_read_by_one_forked_reader_many_by_several(tmp_path, monkeypatch):
+    """Below TWO_READERS_MIN_FILES the extraction starts one background reader; from it on,
+    the first file is read here and ``workers`` readers share the rest."""
+    from cylfric import steady_state
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    generate_campaign(
+        tmp_path / "c",
+        BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11))),
+    )
+    calls = []
+    real = steady_state.start
+
+    def spy(task, n, **keywords):
+        calls.append(keywords)
+        return real(task, n, **keywords)
+
+    monkeypatch.setattr(steady_state, "start", spy)
+    monkeypatch.setattr(steady_state, "TWO_READERS_MIN_FILES", 1000)
+    few = steady_state.start_extraction(tmp_path / "c").result()
+    monkeypatch.setattr(steady_state, "TWO_READERS_MIN_FILES", 10)
+    many = steady_state.start_extraction(tmp_path / "c").result()
+    assert calls[0]["workers"] == 1 and calls[0]["background"] is True
+    assert calls[1]["workers"] == 2 and calls[1]["background"] is False
+    assert few.points.equals(many.points)  # the same table either way

@@ -60,17 +60,19 @@ def start(
     workers: int = 1,
     min_items: int = 2,
     done: Callable[[int, Any], object] | None = None,
+    background: bool = False,
 ) -> Pending:
     """Start ``[task(i) for i in range(n)]`` in ``workers`` forked processes when that pays;
     :meth:`Pending.results` collects it.
 
     The workers start now and run while this process goes on with other work (``cylfric
     fit`` imports the identification meanwhile); without a pool (see :func:`run`) nothing
-    runs until :meth:`Pending.results`, which then runs the tasks here. Parameters as
-    :func:`run`.
+    runs until :meth:`Pending.results`, which then runs the tasks here. ``background``: one
+    worker is a forked process too (not this process later), for work that this process's
+    own meanwhile covers. Other parameters as :func:`run`.
     """
     pool = None
-    if workers >= 2 and n >= max(min_items, 2) and can_fork():
+    if (workers >= 2 or background) and workers >= 1 and n >= max(min_items, 2) and can_fork():
         pool = ProcessPoolExecutor(
             max_workers=min(workers, n),
             mp_context=multiprocessing.get_context("fork"),
