@@ -862,11 +862,11 @@ class FrictionModel:
         scatter that is new). For "session": the cluster-robust ``se`` (each point's
         effective dof) and the Student-t quantile: a new mount shares nothing with the fit.
         A model without ``covariance_nonrobust`` (an older datasheet) keeps the
-        cluster-robust ``se`` and the Student-t quantile for every scope. The lack of fit is not added: it
-        is already in s_res and s_run (docs/uncertainty.md). A model without a scatter
-        record (an older datasheet) raises ValueError for "run" and "session" rather than
-        give the point band under their name. Warns outside the validity ranges (raises
-        with ``strict=True``).
+        cluster-robust ``se`` and the Student-t quantile for every scope. The lack of fit
+        is not added: it is already in s_res and s_run (docs/uncertainty.md). A model
+        without a scatter record (an older datasheet) raises ValueError for "run" and
+        "session" rather than give the point band under their name. Warns outside the
+        validity ranges (raises with ``strict=True``).
         """
         if scope not in BAND_SCOPES:
             raise ValueError(f"unknown band scope {scope!r}; valid: {list(BAND_SCOPES)}")
