@@ -169,13 +169,15 @@ def band_text(model: FrictionModel) -> str:
     return (
         "Band for a new session (seal remounted, another day), level 95 %: "
         "F +/- k sqrt(se^2 + (s F)^2) with F the model's friction [N], "
-        "s^2 = s_r^2 + s_L^2 (1 + 1/n) (n the sessions fitted: the fitted law is itself one "
-        "draw of n sessions), se the standard error of the mean curve [N] "
-        "(cylfric FrictionModel.standard_error) and k = 1.96 (the Student-t quantile; "
-        "cylfric's FrictionModel.prediction_band(v, p, scope='session') gives it exactly); "
-        "for a new run on the same mount s = sqrt(s_r^2 + s_run^2) and se the model-based "
-        "(not cluster-robust) standard error (FrictionModel.standard_error(robust=False)); "
-        "never narrower than k sqrt(se^2 + s_res^2) (docs/uncertainty.md)."
+        "s^2 = s_r^2 + s_L^2 + (s_L^2 - s_run^2)/n (n the sessions fitted: the fitted law "
+        "carries what every run of its sessions shared, over n), se the standard error of "
+        "the mean curve [N] (cylfric FrictionModel.standard_error) and k = 1.96 (about: the "
+        "Student-t quantile; cylfric's FrictionModel.prediction_band(v, p, scope='session') "
+        "gives it exactly); for a new run on the same mount s = sqrt(s_r^2 + s_run^2), se the "
+        "model-based (not cluster-robust) standard error "
+        "(FrictionModel.standard_error(robust=False)) and k the internally studentised "
+        "residual's quantile (about 1.96); never narrower than k sqrt(se^2 + s_res^2) "
+        "(docs/uncertainty.md)."
     )
 
 
