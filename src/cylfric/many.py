@@ -258,16 +258,8 @@ def fit_many(
     a script under ``if __name__ == "__main__":`` (notebooks and the ``cylfric fit-many``
     command need nothing).
     """
-    unknown = set(fit_options) - set(_FIT_OPTIONS)
-    if unknown:
-        raise ValueError(f"unknown fit options {sorted(unknown)}; valid: {list(_FIT_OPTIONS)}")
-    options = FitOptions.from_keywords(options, **fit_options)
-    if options.name is not None:
-        raise ValueError(
-            f"options.name = {options.name!r}: fit_many names each datasheet after its "
-            "campaign folder; leave name None"
-        )
-    from ._paths import inside, make_folder, refuse_link
+    options = _checked_options(options, fit_options)
+    from ._paths import make_folder, refuse_link
 
     root, out = Path(root), refuse_link(out)  # a symbolic link is refused, not written through
     campaigns = find_campaigns(root, exclude=[out])
@@ -276,29 +268,8 @@ def fit_many(
             f"{root}: no campaign folder found (a folder with manifest.csv, campaign.toml or "
             "run files)"
         )
-    target, top = out.resolve(), root.resolve()
-    fitted: list[tuple[Path, Path, str]] = []  # (campaign, its output folder, its name)
-    refused: dict[str, dict[str, Any]] = {}
-    for folder in campaigns:  # one campaign that cannot be fitted is a failed row, not fatal
-        name, real = _name(folder, root), folder.resolve()
-        holds_out = real == target or real in target.parents
-        if holds_out and (real == top or top in real.parents):
-            raise ValueError(f"--out {out} is inside the campaign folder {folder}")
-        try:  # a link to a campaign elsewhere is followed, a loop back up is not
-            if holds_out or real == top or real in top.parents:
-                raise ValueError(
-                    f"{folder} leads to {real}, which holds {root} or --out {out}: not fitted"
-                )
-            fitted.append((folder, inside(out, name, "campaign"), name))
-        except ValueError as exc:
-            refused[name] = {"campaign": name, "status": "failed", "reason": str(exc)}
-            refused[name].update({"out": "", "catalog": "", "runs [-]": None})
-    if workers is not None and workers < 1:
-        raise ValueError(f"workers = {workers}; expected at least 1")
-    distributed = scheduler not in (None, "local-cluster", "serial")
-    if distributed and workers is not None:
-        raise ValueError("workers is set by the cluster behind a scheduler address; leave it out")
-    workers = workers or os.cpu_count() or 1
+    fitted, refused = _sort_campaigns(campaigns, root, out)
+    workers, distributed = _checked_workers(workers, scheduler)
     from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     make_folder(out)
@@ -318,17 +289,7 @@ def fit_many(
         if progress is not None:
             progress(row)
 
-    if scheduler == "serial":
-        used = "serial"
-        for job in jobs:
-            done(fit_one(*job))
-    elif scheduler is None:
-        from ._parallel import starmap
-
-        used = f"local process pool, {workers} process(es)"
-        starmap(fit_one, [jobs[i] for i in order], workers=workers, done=lambda _, row: done(row))
-    else:
-        used = _run_distributed([jobs[i] for i in order], scheduler, workers, done)
+    used = _run_jobs(jobs, order, scheduler, workers, done)
     for job in jobs:  # a worker lost with its task: reported like any failure
         rows.setdefault(
             job[2],
@@ -346,6 +307,74 @@ def fit_many(
             progress(row)
     atomic_write_text(out / "fit_many.csv", _summary_csv(ordered))
     return ManyResult(ordered, out, used, time.perf_counter() - t0)
+
+
+def _checked_options(options: FitOptions | None, fit_options: dict[str, Any]) -> FitOptions:
+    """The options of every fit, from ``options`` or the fit keywords; no name of its own."""
+    unknown = set(fit_options) - set(_FIT_OPTIONS)
+    if unknown:
+        raise ValueError(f"unknown fit options {sorted(unknown)}; valid: {list(_FIT_OPTIONS)}")
+    options = FitOptions.from_keywords(options, **fit_options)
+    if options.name is not None:
+        raise ValueError(
+            f"options.name = {options.name!r}: fit_many names each datasheet after its "
+            "campaign folder; leave name None"
+        )
+    return options
+
+
+def _checked_workers(workers: int | None, scheduler: str | None) -> tuple[int, bool]:
+    """(local workers, whether ``scheduler`` is a distributed address): ``workers`` or the
+    number of cores; at least 1, and not given with a scheduler address."""
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers = {workers}; expected at least 1")
+    distributed = scheduler not in (None, "local-cluster", "serial")
+    if distributed and workers is not None:
+        raise ValueError("workers is set by the cluster behind a scheduler address; leave it out")
+    return workers or os.cpu_count() or 1, distributed
+
+
+def _sort_campaigns(
+    campaigns: list[Path], root: Path, out: Path
+) -> tuple[list[tuple[Path, Path, str]], dict[str, dict[str, Any]]]:
+    """(campaign, its output folder, its name) of the campaigns to fit, and the failed
+    summary rows of those refused (a link to a folder holding ``root`` or ``out``, a name
+    leaving ``out``). An ``out`` inside a campaign under ``root`` raises ValueError."""
+    from ._paths import inside
+
+    target, top = out.resolve(), root.resolve()
+    fitted: list[tuple[Path, Path, str]] = []  # (campaign, its output folder, its name)
+    refused: dict[str, dict[str, Any]] = {}
+    for folder in campaigns:  # one campaign that cannot be fitted is a failed row, not fatal
+        name, real = _name(folder, root), folder.resolve()
+        holds_out = real == target or real in target.parents
+        if holds_out and (real == top or top in real.parents):
+            raise ValueError(f"--out {out} is inside the campaign folder {folder}")
+        try:  # a link to a campaign elsewhere is followed, a loop back up is not
+            if holds_out or real == top or real in top.parents:
+                raise ValueError(
+                    f"{folder} leads to {real}, which holds {root} or --out {out}: not fitted"
+                )
+            fitted.append((folder, inside(out, name, "campaign"), name))
+        except ValueError as exc:
+            refused[name] = {"campaign": name, "status": "failed", "reason": str(exc)}
+            refused[name].update({"out": "", "catalog": "", "runs [-]": None})
+    return fitted, refused
+
+
+def _run_jobs(jobs: list, order: list[int], scheduler: str | None, workers: int, done) -> str:
+    """Run ``fit_one`` on every job (serially in the given order, else largest first) on
+    the scheduler; ``done(row)`` for each summary row. Returns what ran them."""
+    if scheduler == "serial":
+        for job in jobs:
+            done(fit_one(*job))
+        return "serial"
+    if scheduler is None:
+        from ._parallel import starmap
+
+        starmap(fit_one, [jobs[i] for i in order], workers=workers, done=lambda _, row: done(row))
+        return f"local process pool, {workers} process(es)"
+    return _run_distributed([jobs[i] for i in order], scheduler, workers, done)
 
 
 def _summary_csv(rows) -> str:

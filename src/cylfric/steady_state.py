@@ -658,15 +658,7 @@ def start_extraction(
     other work (``cylfric fit`` imports the identification meanwhile); else the files are
     read when ``.result()`` is called.
     """
-    if isinstance(folder, Campaign):
-        if config is not None:
-            raise ValueError(
-                "config comes with the Campaign (Campaign.open(folder, config=...)); "
-                "pass config=None with a Campaign"
-            )
-        campaign = folder
-    else:
-        campaign = Campaign.open(folder, config=config)
+    campaign = _open_campaign(folder, config)
     config = campaign.config
     options = extraction_options(config, options)
     excluded = set(exclude)
@@ -679,39 +671,9 @@ def start_extraction(
         )
 
     def one(index):
-        info = infos[index]
-        try:
-            data, metadata = read_run(info, config)
-            rows = _offset_rows(
-                _point_rows(data, metadata, config, index, dict(options)), config=config
-            )
-        except BenchFileError as exc:
-            return None, None, exc
-        summary = {
-            "file": str(info.path),
-            "run": index,
-            "pressure [Pa]": metadata["pressure"],
-            "velocity [m/s]": metadata["velocity"],
-            "rows": metadata["rows"],
-            "segments": metadata.get("segments", 1),
-            "source": metadata["source"],
-            "nominal": metadata.get("nominal", {}),
-            "pressure measured": "pressure [Pa]" in data or "pressure_a [Pa]" in data,
-            "events": len(metadata.get("events", [])),
-            "sha256": metadata.get("sha256"),
-        }
-        return rows, summary, None
+        return _read_one(infos[index], index, config, options)
 
-    workers = 2 if workers is None else workers
-    pooled = workers >= 2 and len(infos) >= PARALLEL_MIN_FILES
-    # below TWO_READERS_MIN_FILES one forked reader loads the compiled reader and reads
-    # every file while this process imports the identification; from it on, the first file
-    # is read here (loading the compiled reader once: the workers forked for the rest
-    # inherit it instead of each loading it again) and ``workers`` readers share the rest
-    one_reader = pooled and len(infos) < TWO_READERS_MIN_FILES
-    head = 1 if pooled and not one_reader else 0
-    if one_reader:
-        workers = 1
+    workers, pooled, one_reader, head = _readers(len(infos), workers)
     first = [_pack([one(i) for i in range(head)])] if head else []
     if progress is not None:
         for i in range(head):
@@ -732,6 +694,62 @@ def start_extraction(
         background=one_reader,
     )
     return PendingExtraction(campaign, infos, first, pending, skip_bad)
+
+
+def _open_campaign(
+    folder: Campaign | str | os.PathLike[str], config: CampaignConfig | None
+) -> Campaign:
+    """``folder`` when it is a :class:`Campaign` (then ``config`` must be None), else the
+    campaign opened from that folder with ``config``."""
+    if not isinstance(folder, Campaign):
+        return Campaign.open(folder, config=config)
+    if config is not None:
+        raise ValueError(
+            "config comes with the Campaign (Campaign.open(folder, config=...)); "
+            "pass config=None with a Campaign"
+        )
+    return folder
+
+
+def _read_one(info, index: int, config: CampaignConfig, options: dict) -> tuple:
+    """(point rows, summary, None) of one run file, or (None, None, the BenchFileError)."""
+    try:
+        data, metadata = read_run(info, config)
+        rows = _offset_rows(
+            _point_rows(data, metadata, config, index, dict(options)), config=config
+        )
+    except BenchFileError as exc:
+        return None, None, exc
+    summary = {
+        "file": str(info.path),
+        "run": index,
+        "pressure [Pa]": metadata["pressure"],
+        "velocity [m/s]": metadata["velocity"],
+        "rows": metadata["rows"],
+        "segments": metadata.get("segments", 1),
+        "source": metadata["source"],
+        "nominal": metadata.get("nominal", {}),
+        "pressure measured": "pressure [Pa]" in data or "pressure_a [Pa]" in data,
+        "events": len(metadata.get("events", [])),
+        "sha256": metadata.get("sha256"),
+    }
+    return rows, summary, None
+
+
+def _readers(n: int, workers: int | None) -> tuple[int, bool, bool, int]:
+    """How ``n`` files are read: (workers, pooled, one background reader, files read here
+    first) for ``workers`` asked (None: 2)."""
+    workers = 2 if workers is None else workers
+    pooled = workers >= 2 and n >= PARALLEL_MIN_FILES
+    # below TWO_READERS_MIN_FILES one forked reader loads the compiled reader and reads
+    # every file while this process imports the identification; from it on, the first file
+    # is read here (loading the compiled reader once: the workers forked for the rest
+    # inherit it instead of each loading it again) and ``workers`` readers share the rest
+    one_reader = pooled and n < TWO_READERS_MIN_FILES
+    head = 1 if pooled and not one_reader else 0
+    if one_reader:
+        workers = 1
+    return workers, pooled, one_reader, head
 
 
 CHUNK_FILES = 64

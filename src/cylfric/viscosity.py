@@ -193,6 +193,53 @@ def _celsius(kelvin) -> str:
     return f"{kelvin - 273.15:.4g} degC"
 
 
+def _without_oil(
+    unchanged: ViscosityCorrection, listed: np.ndarray | None, *, enabled: bool | None
+) -> ViscosityCorrection:
+    """No ``[oil]`` table: raise when the correction was asked for, else the points
+    unchanged, with a note when the runs carry oil temperatures [K] (``listed``)."""
+    if enabled:
+        raise ValueError(
+            "--viscosity-correction: campaign.toml has no [oil] table; expected "
+            '[oil] viscosity_40C = "46 mm2/s", viscosity_100C = "6.8 mm2/s"'
+        )
+    if listed is None or not np.isfinite(listed).any():
+        return unchanged
+    t = listed[np.isfinite(listed)]
+    return replace(
+        unchanged,
+        note=f"the runs carry oil temperatures ({_celsius(t.min())} to {_celsius(t.max())}, "
+        "manifest.csv) but campaign.toml has no [oil] table: identified at the measured "
+        "speeds without viscosity correction; add [oil] viscosity_40C and viscosity_100C "
+        "to correct, or --no-viscosity-correction to silence this note",
+    )
+
+
+def _check_every_run(points: pd.DataFrame, temperature: np.ndarray) -> None:
+    """Refuse points of which some have an oil temperature [K] and others none."""
+    missing = sorted({Path(f).name for f in points.loc[~np.isfinite(temperature), "file"]})
+    if missing:
+        manifest = Path(points["file"].iloc[0]).parent / "manifest.csv"
+        raise ValueError(
+            f"{manifest}: no oil temperature for {len(missing)} run(s) "
+            f"({', '.join(missing[:3])}{', ...' if len(missing) > 3 else ''}) while others "
+            "have one; expected a temperature for every run, an [oil] temperature for the "
+            "rest, or --no-viscosity-correction"
+        )
+
+
+def _scaled_runs(runs: Sequence[Mapping[str, Any]], per_run: dict) -> list[dict]:
+    """Copies of ``runs`` with the nominal ``velocity [m/s]`` of each run in ``per_run``
+    multiplied by its speed ratio [-]."""
+    new_runs = []
+    for info in runs:
+        info = dict(info)
+        if info.get("run") in per_run:
+            info["velocity [m/s]"] = info.get("velocity [m/s]", math.nan) * per_run[info["run"]]
+        new_runs.append(info)
+    return new_runs
+
+
 def correct_campaign(
     points: pd.DataFrame,
     runs: Sequence[Mapping[str, Any]],
@@ -240,22 +287,7 @@ def correct_campaign(
             "the measured speeds, whatever the oil temperature of each run",
         )
     if oil is None:
-        if enabled:
-            raise ValueError(
-                "--viscosity-correction: campaign.toml has no [oil] table; expected "
-                '[oil] viscosity_40C = "46 mm2/s", viscosity_100C = "6.8 mm2/s"'
-            )
-        if not has_listed:
-            return unchanged
-        assert listed is not None  # has_listed
-        t = listed[np.isfinite(listed)]
-        return replace(
-            unchanged,
-            note=f"the runs carry oil temperatures ({_celsius(t.min())} to {_celsius(t.max())}, "
-            "manifest.csv) but campaign.toml has no [oil] table: identified at the measured "
-            "speeds without viscosity correction; add [oil] viscosity_40C and viscosity_100C "
-            "to correct, or --no-viscosity-correction to silence this note",
-        )
+        return _without_oil(unchanged, listed, enabled=enabled)
     temperature = listed if listed is not None else np.full(len(points), np.nan)
     sources = ["manifest.csv"] if has_listed else []
     if oil.temperature is not None and not np.isfinite(temperature).all():
@@ -274,15 +306,7 @@ def correct_campaign(
             "column in manifest.csv, no [oil] temperature): identified at the measured speeds "
             "without viscosity correction",
         )
-    missing = sorted({Path(f).name for f in points.loc[~np.isfinite(temperature), "file"]})
-    if missing:
-        manifest = Path(points["file"].iloc[0]).parent / "manifest.csv"
-        raise ValueError(
-            f"{manifest}: no oil temperature for {len(missing)} run(s) "
-            f"({', '.join(missing[:3])}{', ...' if len(missing) > 3 else ''}) while others "
-            "have one; expected a temperature for every run, an [oil] temperature for the "
-            "rest, or --no-viscosity-correction"
-        )
+    _check_every_run(points, temperature)
     table = points.copy()
     table[column] = temperature
     corrected = viscosity_corrected(
@@ -290,13 +314,7 @@ def correct_campaign(
     )
     nu_ref = walther_viscosity(oil.reference_temperature, oil.points)
     ratio = walther_viscosity(temperature, oil.points) / nu_ref
-    per_run = dict(zip(table["run"], ratio, strict=True))
-    new_runs = []
-    for info in runs:
-        info = dict(info)
-        if info.get("run") in per_run:
-            info["velocity [m/s]"] = info.get("velocity [m/s]", math.nan) * per_run[info["run"]]
-        new_runs.append(info)
+    new_runs = _scaled_runs(runs, dict(zip(table["run"], ratio, strict=True)))
     (t40, nu40), (t100, nu100) = oil.points
     record = {
         "rule": VISCOSITY_RULE,

@@ -80,20 +80,9 @@ def contact_ratio(
     """
     if contact not in CONTACTS:
         raise ValueError(f"contact = {contact!r}: unknown; valid: {list(CONTACTS)}")
-    needs = {"piston": ("bore",), "rod": ("rod",), "total": ("bore", "rod")}[contact]
     given = {"bore": (source_bore, bore), "rod": (source_rod, rod)}
-    for what in needs:
-        tested, target = given[what]
-        if tested is None:
-            raise ValueError(
-                f"the catalogue entry does not record the tested {what} diameter; "
-                f"add it (catalog add --{what}) to scale a {contact} seal"
-            )
-        if target is None:
-            raise ValueError(f"a {contact} seal needs the target {what} diameter [m] (--{what})")
-        for value in (tested, target):
-            if not (math.isfinite(value) and 0 < value <= 2.0):
-                raise ValueError(f"{what} = {value} m: expected a diameter in m, 0 < d <= 2 m")
+    for what in _NEEDS[contact]:
+        _check_diameters(what, *given[what], contact)
     if contact == "piston":
         assert bore is not None and source_bore is not None  # checked above
         ratio = bore / source_bore
@@ -123,6 +112,24 @@ def contact_ratio(
     return ratio, f"{text} = {ratio:.4g}"
 
 
+_NEEDS = {"piston": ("bore",), "rod": ("rod",), "total": ("bore", "rod")}
+"""The diameters each contact's rule needs."""
+
+
+def _check_diameters(what: str, tested: float | None, target: float | None, contact: str):
+    """Refuse a missing tested or target ``what`` diameter, or one outside 0 < d <= 2 m."""
+    if tested is None:
+        raise ValueError(
+            f"the catalogue entry does not record the tested {what} diameter; "
+            f"add it (catalog add --{what}) to scale a {contact} seal"
+        )
+    if target is None:
+        raise ValueError(f"a {contact} seal needs the target {what} diameter [m] (--{what})")
+    for value in (tested, target):
+        if not (math.isfinite(value) and 0 < value <= 2.0):
+            raise ValueError(f"{what} = {value} m: expected a diameter in m, 0 < d <= 2 m")
+
+
 def _scales(name) -> bool:
     """Whether a coefficient is a force (or force per speed) that the rule scales."""
     parameter, _, coefficient = name.partition(".")
@@ -131,6 +138,28 @@ def _scales(name) -> bool:
 
 def _factor(name, ratio):
     return ratio if _scales(name) else 1.0
+
+
+def _scaled_covariance(
+    model: FrictionModel, ratio: float, rule_stderr: float
+) -> tuple[list[str], np.ndarray]:
+    """(names, covariance) of the scaled coefficients: ``k^2 C`` over the fitted ones plus
+    ``r^2 x' x'^T`` over every scaled one (no rule term for ``k = 1``) [SI units squared]."""
+    values = {n: p.value for n, p in model.parameters.items() if p.value is not None}
+    scaled = {n: v * _factor(n, ratio) for n, v in values.items()}
+    names = list(model.covariance[0]) if model.covariance is not None else []
+    names += [n for n in scaled if _scales(n) and n not in names]
+    index = {n: i for i, n in enumerate(names)}
+    cov = np.zeros((len(names), len(names)))
+    if model.covariance is not None:
+        old_names, old = model.covariance
+        k = np.array([_factor(n, ratio) for n in old_names])
+        idx = [index[n] for n in old_names]
+        cov[np.ix_(idx, idx)] = old * np.outer(k, k)
+    if ratio != 1.0:  # the tested size itself needs no rule
+        x = np.array([scaled[n] if _scales(n) else 0.0 for n in names])
+        cov += rule_stderr**2 * np.outer(x, x)
+    return names, cov
 
 
 def scale_model(
@@ -156,20 +185,8 @@ def scale_model(
     """
     if not (math.isfinite(rule_stderr) and 0 <= rule_stderr < 1):
         raise ValueError(f"rule_stderr = {rule_stderr}: expected a fraction 0 <= r < 1")
-    values = {n: p.value for n, p in model.parameters.items() if p.value is not None}
-    scaled = {n: v * _factor(n, ratio) for n, v in values.items()}
-    names = list(model.covariance[0]) if model.covariance is not None else []
-    names += [n for n in scaled if _scales(n) and n not in names]
+    names, cov = _scaled_covariance(model, ratio, rule_stderr)
     index = {n: i for i, n in enumerate(names)}
-    cov = np.zeros((len(names), len(names)))
-    if model.covariance is not None:
-        old_names, old = model.covariance
-        k = np.array([_factor(n, ratio) for n in old_names])
-        idx = [index[n] for n in old_names]
-        cov[np.ix_(idx, idx)] = old * np.outer(k, k)
-    if ratio != 1.0:  # the tested size itself needs no rule
-        x = np.array([scaled[n] if _scales(n) else 0.0 for n in names])
-        cov += rule_stderr**2 * np.outer(x, x)
 
     coefficients = model.coefficients(include_dynamic=False)
     stderr = model.stderr()

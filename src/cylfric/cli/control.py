@@ -73,7 +73,6 @@ def register(app) -> None:
         --export-compensator, the compensator as C, FMU and/or MATLAB code."""
         from .._paths import refuse_link
         from ..control.axis import DEFAULT_AXIS, load_axis
-        from ..control.loop import REFERENCES, Reference, read_reference
         from ..control.study import compare_compensators
         from ..model import FrictionModel
 
@@ -82,43 +81,10 @@ def register(app) -> None:
         refuse_link(out)
         model = FrictionModel.from_datasheet(datasheet)
         the_axis = load_axis(axis) if axis is not None else DEFAULT_AXIS
-        ref: Reference | str
-        if reference in REFERENCES:
-            ref = reference
-        elif Path(reference).is_file():
-            ref = read_reference(reference, the_axis)
-        else:
-            raise BadInput(
-                f"--reference {reference!r}: expected one of {list(REFERENCES)} or a CSV file"
-            )
-        targets: list[str] = []
-        if export is not None:
-            from ..control.export import EXPORT_TARGETS, EXPORTABLE_COMPENSATORS
-
-            targets = [t.strip() for t in export.split(",") if t.strip()]
-            bad = [t for t in targets if t not in EXPORT_TARGETS]
-            if bad or not targets:
-                raise BadInput(
-                    f"--export-compensator {export!r}: expected some of "
-                    f"{list(EXPORT_TARGETS)}, comma-separated"
-                )
-            if fmu_kind not in EXPORTABLE_COMPENSATORS:
-                raise BadInput(
-                    f"--fmu-compensator {fmu_kind!r}: expected one of "
-                    f"{list(EXPORTABLE_COMPENSATORS)}"
-                )
-        elif export_only:
-            raise BadInput("--export-only needs --export-compensator c,fmu,matlab")
+        ref = _resolve_reference(reference, the_axis)
+        targets = _export_targets(export, fmu_kind, export_only)
         if targets:
-            from ..control.export import export_compensator
-
-            written = export_compensator(
-                model, out / "compensator", targets=targets, axis=the_axis, compensator=fmu_kind
-            )
-            for path in written:
-                console.print(terminal(f"written: {path}", markup=False), markup=False)
-            if axis is None:
-                err_console.print(default_axis_note(), markup=False, highlight=False)
+            _write_exports(model, out, targets, the_axis, fmu_kind, default_axis=axis is None)
         if export_only:
             return
         result = compare_compensators(model, axis=the_axis, reference=ref, robustness=robustness)
@@ -127,23 +93,74 @@ def register(app) -> None:
         if json_output:
             print_json(document)
             return
+        _print_metrics(result)
+        console.print(terminal(f"written: {out}", markup=False), markup=False)
+
+
+def _resolve_reference(reference: str, axis):
+    """The ``--reference`` value: a built-in name, or the trajectory read from a CSV file."""
+    from ..control.loop import REFERENCES, read_reference
+
+    if reference in REFERENCES:
+        return reference
+    if Path(reference).is_file():
+        return read_reference(reference, axis)
+    raise BadInput(f"--reference {reference!r}: expected one of {list(REFERENCES)} or a CSV file")
+
+
+def _export_targets(export: str | None, fmu_kind: str, export_only: bool) -> list[str]:
+    """The checked targets of ``--export-compensator`` (empty without it)."""
+    if export is None:
+        if export_only:
+            raise BadInput("--export-only needs --export-compensator c,fmu,matlab")
+        return []
+    from ..control.export import EXPORT_TARGETS, EXPORTABLE_COMPENSATORS
+
+    targets = [t.strip() for t in export.split(",") if t.strip()]
+    bad = [t for t in targets if t not in EXPORT_TARGETS]
+    if bad or not targets:
+        raise BadInput(
+            f"--export-compensator {export!r}: expected some of "
+            f"{list(EXPORT_TARGETS)}, comma-separated"
+        )
+    if fmu_kind not in EXPORTABLE_COMPENSATORS:
+        raise BadInput(
+            f"--fmu-compensator {fmu_kind!r}: expected one of {list(EXPORTABLE_COMPENSATORS)}"
+        )
+    return targets
+
+
+def _write_exports(model, out: Path, targets, axis, fmu_kind: str, *, default_axis: bool) -> None:
+    """Write the compensator into ``out/compensator``; note the default axis on stderr."""
+    from ..control.export import export_compensator
+
+    written = export_compensator(
+        model, out / "compensator", targets=targets, axis=axis, compensator=fmu_kind
+    )
+    for path in written:
+        console.print(terminal(f"written: {path}", markup=False), markup=False)
+    if default_axis:
+        err_console.print(default_axis_note(), markup=False, highlight=False)
+
+
+def _print_metrics(result) -> None:
+    """The loop gain and one line of errors [um] per compensator."""
+    console.print(
+        terminal(
+            f"PI loop gain K_v = {result.tuning.loop_gain_1_s:.2f} 1/s "
+            f"(omega_h {result.axis.natural_frequency():.0f} rad/s, 6 dB gain margin)",
+            markup=False,
+        ),
+        markup=False,
+    )
+    for name, m in result.metrics.items():
+        reversal = m["reversal_error_m"]
+        text = "-" if reversal is None else f"{reversal * 1e6:.2f}"
         console.print(
             terminal(
-                f"PI loop gain K_v = {result.tuning.loop_gain_1_s:.2f} 1/s "
-                f"(omega_h {result.axis.natural_frequency():.0f} rad/s, 6 dB gain margin)",
+                f"{name:8s} RMS {m['rms_error_m'] * 1e6:8.2f} um   max "
+                f"{m['max_error_m'] * 1e6:8.2f} um   reversal {text} um",
                 markup=False,
             ),
             markup=False,
         )
-        for name, m in result.metrics.items():
-            reversal = m["reversal_error_m"]
-            text = "-" if reversal is None else f"{reversal * 1e6:.2f}"
-            console.print(
-                terminal(
-                    f"{name:8s} RMS {m['rms_error_m'] * 1e6:8.2f} um   max "
-                    f"{m['max_error_m'] * 1e6:8.2f} um   reversal {text} um",
-                    markup=False,
-                ),
-                markup=False,
-            )
-        console.print(terminal(f"written: {out}", markup=False), markup=False)

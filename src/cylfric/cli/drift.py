@@ -59,12 +59,6 @@ def register(app) -> None:
         points is (a note says why). Fits whose pressure laws see different pressures
         (reference a, b, sum, mean, max) are refused (exit 2).
         """
-        from rich.markup import escape
-        from rich.table import Table
-
-        from ..drift import drift as compute
-        from ..drift import write_drift
-
         for path in (a, b):
             if path is not None and not path.exists():
                 raise BadInput(f"{path}: not found; expected a datasheet.json or a fit folder")
@@ -73,91 +67,124 @@ def register(app) -> None:
 
             make_folder(out)  # a symbolic link is refused (exit 2), not written through
         if b is None:
-            label = a.stem if a.is_file() else a.name
-            trend = _trend(a, label, out, order, campaign, quiet=json_output)
-            if trend is None:
-                raise BadInput(
-                    f"{a}: no points.csv beside the datasheet; the run-order trend needs a fit "
-                    "output folder (or give a second datasheet B to compare)"
-                )
-            if json_output:
-                print_json(
-                    {
-                        "fit": a,
-                        "order": trend.order,
-                        "between_slope [N/run]": trend.between_slope,
-                        "between_stderr [N/run]": trend.between_stderr,
-                        "within_slope [N/stroke]": trend.within_slope,
-                        "within_stderr [N/stroke]": trend.within_stderr,
-                        "runs": trend.runs.to_dict("records"),
-                    }
-                )
-            return
-        if order != "run" or campaign is not None:
-            raise BadInput(
-                "--order and --campaign apply to one campaign (cylfric drift A --order mtime "
-                "--campaign RAW); with two fits the run-order trends use the run order"
-            )
-        table = compute(a, b, level=level)
-        if json_output:
-            if out is not None:
-                write_drift(table, out)
-            print_json(
-                {
-                    "a": a,
-                    "b": b,
-                    "level": level,
-                    "z_critical": table.attrs.get("z_critical"),
-                    "notes": list(table.attrs.get("notes", [])),
-                    "rows": table.to_dict("records"),
-                }
-            )
-            return
-        from ..model.core import engineering_unit
+            _one_fit(a, out, order, campaign, json_output)
+        else:
+            _two_fits(a, b, out, level, order, campaign, json_output)
 
-        params = table[table["kind"] == "parameter"]
-        view = Table(title=terminal(f"Change of the coefficients, {b.name} - {a.name}"))
-        for column in ("coefficient", "unit", "a", "b", "change", "z", "sig."):
-            view.add_column(escape(column), justify="right", no_wrap=True)
-        for row in params.to_dict("records"):
-            unit, k = engineering_unit(row["quantity"])
-            view.add_row(
-                row["quantity"],
-                unit,
-                f"{row['a'] * k:.4g}",
-                f"{row['b'] * k:.4g}",
-                f"{row['change'] * k:+.3g}",
-                f"{row['z [-]']:+.2f}",
-                "yes" if row["significant"] else "no",
-            )
-        if len(params):
-            print_table(view)
-        for note in table.attrs.get("notes", []):
-            console.print(f"[yellow]note:[/yellow] {escape(note)}", highlight=False)
-        friction = table[table["kind"] == "friction"]
-        view = Table(title="Change of the friction over the common validity range")
-        for column in ("p [bar]", "v [mm/s]", "a [N]", "b [N]", "change [N]", "z", "sig."):
-            view.add_column(escape(column), justify="right")
-        for row in friction.to_dict("records"):
-            view.add_row(
-                f"{row['pressure [Pa]'] / 1e5:.4g}",
-                f"{row['velocity [m/s]'] * 1e3:.3g}",
-                f"{row['a']:.2f}",
-                f"{row['b']:.2f}",
-                f"{row['change']:+.2f}",
-                f"{row['z [-]']:+.2f}",
-                "yes" if row["significant"] else "no",
-            )
-        print_table(view)
-        console.print(
-            f"{int(friction['significant'].sum())} of {len(friction)} operating points changed "
-            f"more than their uncertainty (|z| > {table.attrs['z_critical']:.2f}, "
-            f"{level:.0%} two-sided); largest |z| = {friction['z [-]'].abs().max():.2f}",
-            highlight=False,
+
+def _label(source: Path) -> str:
+    """A fit's name in titles and file names: the datasheet's stem or the folder's name."""
+    return source.stem if source.is_file() else source.name
+
+
+def _one_fit(a: Path, out, order: str, campaign, json_output: bool) -> None:
+    """``cylfric drift A``: the run-order trend of one fit."""
+    trend = _trend(a, _label(a), out, order, campaign, quiet=json_output)
+    if trend is None:
+        raise BadInput(
+            f"{a}: no points.csv beside the datasheet; the run-order trend needs a fit "
+            "output folder (or give a second datasheet B to compare)"
         )
+    if json_output:
+        print_json(
+            {
+                "fit": a,
+                "order": trend.order,
+                "between_slope [N/run]": trend.between_slope,
+                "between_stderr [N/run]": trend.between_stderr,
+                "within_slope [N/stroke]": trend.within_slope,
+                "within_stderr [N/stroke]": trend.within_stderr,
+                "runs": trend.runs.to_dict("records"),
+            }
+        )
+
+
+def _two_fits(a: Path, b: Path, out, level: float, order: str, campaign, json_output: bool):
+    """``cylfric drift A B``: the change between two fits, then each fit's run-order trend."""
+    from ..drift import drift as compute
+    from ..drift import write_drift
+
+    if order != "run" or campaign is not None:
+        raise BadInput(
+            "--order and --campaign apply to one campaign (cylfric drift A --order mtime "
+            "--campaign RAW); with two fits the run-order trends use the run order"
+        )
+    table = compute(a, b, level=level)
+    if json_output:
         if out is not None:
             write_drift(table, out)
-        for source in (a, b):
-            _trend(source, source.stem if source.is_file() else source.name, out, "run", None)
-        if out is not None:
-            console.print(terminal(f"outputs in {out}"), highlight=False)
+        print_json(
+            {
+                "a": a,
+                "b": b,
+                "level": level,
+                "z_critical": table.attrs.get("z_critical"),
+                "notes": list(table.attrs.get("notes", [])),
+                "rows": table.to_dict("records"),
+            }
+        )
+        return
+    _print_coefficients(table, a, b)
+    _print_friction(table, level)
+    if out is not None:
+        write_drift(table, out)
+    for source in (a, b):
+        _trend(source, _label(source), out, "run", None)
+    if out is not None:
+        console.print(terminal(f"outputs in {out}"), highlight=False)
+
+
+def _print_coefficients(table, a: Path, b: Path) -> None:
+    """The table of the coefficients' changes (in engineering units), then the notes."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    from ..model.core import engineering_unit
+
+    params = table[table["kind"] == "parameter"]
+    view = Table(title=terminal(f"Change of the coefficients, {b.name} - {a.name}"))
+    for column in ("coefficient", "unit", "a", "b", "change", "z", "sig."):
+        view.add_column(escape(column), justify="right", no_wrap=True)
+    for row in params.to_dict("records"):
+        unit, k = engineering_unit(row["quantity"])
+        view.add_row(
+            row["quantity"],
+            unit,
+            f"{row['a'] * k:.4g}",
+            f"{row['b'] * k:.4g}",
+            f"{row['change'] * k:+.3g}",
+            f"{row['z [-]']:+.2f}",
+            "yes" if row["significant"] else "no",
+        )
+    if len(params):
+        print_table(view)
+    for note in table.attrs.get("notes", []):
+        console.print(f"[yellow]note:[/yellow] {escape(note)}", highlight=False)
+
+
+def _print_friction(table, level: float) -> None:
+    """The table of the friction's changes [N] at the operating points, and their count."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    friction = table[table["kind"] == "friction"]
+    view = Table(title="Change of the friction over the common validity range")
+    for column in ("p [bar]", "v [mm/s]", "a [N]", "b [N]", "change [N]", "z", "sig."):
+        view.add_column(escape(column), justify="right")
+    for row in friction.to_dict("records"):
+        view.add_row(
+            f"{row['pressure [Pa]'] / 1e5:.4g}",
+            f"{row['velocity [m/s]'] * 1e3:.3g}",
+            f"{row['a']:.2f}",
+            f"{row['b']:.2f}",
+            f"{row['change']:+.2f}",
+            f"{row['z [-]']:+.2f}",
+            "yes" if row["significant"] else "no",
+        )
+    print_table(view)
+    console.print(
+        f"{int(friction['significant'].sum())} of {len(friction)} operating points changed "
+        f"more than their uncertainty (|z| > {table.attrs['z_critical']:.2f}, "
+        f"{level:.0%} two-sided); largest |z| = {friction['z [-]'].abs().max():.2f}",
+        highlight=False,
+    )

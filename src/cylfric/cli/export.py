@@ -47,7 +47,7 @@ def register(app) -> None:
         targets write several files into the --out folder.
         """
         from .._paths import refuse_link
-        from ..export import SINGLE_FILE, TARGETS, export
+        from ..export import TARGETS, export
 
         target = to.strip().lower()
         if target not in TARGETS:
@@ -55,21 +55,10 @@ def register(app) -> None:
         if not datasheet.is_file():
             raise BadInput(f"{datasheet}: no such datasheet file; expected a datasheet.json")
         refuse_link(out)  # a symbolic link (folder or file) is refused, not written through
-        suffix = SINGLE_FILE.get(target)
-        as_file = suffix is not None and out.suffix.lower() == suffix and not out.is_dir()
-        if out.exists() and not out.is_dir() and not as_file:
-            files = ", ".join(f"{k}: {v}" for k, v in SINGLE_FILE.items())
-            raise BadInput(
-                f"--out {out} is a file; expected a folder (a file path only for the "
-                f"single-file targets, with their suffix: {files})"
-            )
+        _check_out(out, target)
         import warnings
 
-        options = {} if name is None else {"name": name}
-        if element is not None:
-            if target != "fmu":
-                raise BadInput(f"--element is for --to fmu only; --to {target} has one form")
-            options["element"] = element
+        options = _export_options(target, name, element)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = export(datasheet, target, out, **options)
@@ -95,3 +84,27 @@ def register(app) -> None:
             console.print(terminal(line, markup=False), markup=False, highlight=False)
         for path in result.files:
             console.print(terminal(f"  wrote {path}", markup=False), markup=False, highlight=False)
+
+
+def _check_out(out: Path, target: str) -> None:
+    """Refuse an ``--out`` that is an existing file, unless it is the target's single file."""
+    from ..export import SINGLE_FILE
+
+    suffix = SINGLE_FILE.get(target)
+    as_file = suffix is not None and out.suffix.lower() == suffix and not out.is_dir()
+    if out.exists() and not out.is_dir() and not as_file:
+        files = ", ".join(f"{k}: {v}" for k, v in SINGLE_FILE.items())
+        raise BadInput(
+            f"--out {out} is a file; expected a folder (a file path only for the "
+            f"single-file targets, with their suffix: {files})"
+        )
+
+
+def _export_options(target: str, name: str | None, element: str | None) -> dict[str, str]:
+    """The keywords of ``export`` given by ``--name`` and ``--element`` (FMU only)."""
+    options = {} if name is None else {"name": name}
+    if element is not None:
+        if target != "fmu":
+            raise BadInput(f"--element is for --to fmu only; --to {target} has one form")
+        options["element"] = element
+    return options

@@ -61,22 +61,16 @@ def register(app) -> None:
         _run(record, config, out, per_direction, validate, accept_implausible)
 
 
-def _run(record, config, out, per_direction, validate, accept_implausible=False):
-    import hashlib
-    import json
-    import warnings
-
-    from ..identify.motion import fit_motion
-    from ..io.motion_config import load_motion_config, read_motion_record
-    from ..io.writers import atomic_write_bytes, atomic_write_text
+def _check_paths(record: Path, config: Path, validate: Path | None, out: Path) -> None:
+    """Refuse missing inputs, an ``--out`` that is a link or a file, and an output that
+    would overwrite an input (exit 2, nothing written)."""
+    from .._paths import refuse_link
 
     for path, what in ((record, "RECORD"), (config, "--config")) + (
         ((validate, "--validate"),) if validate is not None else ()
     ):
         if not path.is_file():
             raise BadInput(f"{what} {path}: no such file")
-    from .._paths import make_folder, refuse_link
-
     refuse_link(out)  # a symbolic link is refused (exit 2), not written through
     if out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
@@ -85,6 +79,19 @@ def _run(record, config, out, per_direction, validate, accept_implausible=False)
     clash = [name for name in outputs if (out / name).resolve() in inputs]
     if clash:
         raise BadInput(f"--out {out}: writing {clash[0]} would overwrite an input file")
+
+
+def _run(record, config, out, per_direction, validate, accept_implausible=False):
+    import hashlib
+    import json
+    import warnings
+
+    from .._paths import make_folder
+    from ..identify.motion import fit_motion
+    from ..io.motion_config import load_motion_config, read_motion_record
+    from ..io.writers import atomic_write_bytes, atomic_write_text
+
+    _check_paths(record, config, validate, out)
     settings = load_motion_config(config)
     data = read_motion_record(record, settings)
     # warnings reach the user once each, as notes (not as Python's own lines with a path)

@@ -74,56 +74,15 @@ def register(app: typer.Typer) -> None:
         from .._paths import refuse_link
 
         refuse_link(out)  # before the design: a symbolic link is refused, not written through
-        p_range = _range(pressures, "pressure", "bar", "--pressures")
-        v_range = _range(speeds, "velocity", "mm/s", "--speeds")
-        if not v_range[0] > 0:
-            raise BadInput(
-                f"--speeds {speeds!r}: the lowest speed must be > 0 (candidate speeds are "
-                "log-spaced), e.g. --speeds 1-150mm/s"
-            )
-        if not p_range[0] >= 0:
-            raise BadInput(f"--pressures {pressures!r}: pressures must be >= 0")
-        if runs < 1 or repeats < 1:
-            raise BadInput("--runs and --repeats must be >= 1")
-        fixed = tuple(n.strip() for n in fix.split(",") if n.strip())
-        allowed = {"F_c", "F_s", "sigma_2", "v_r", "alpha"}
-        if set(fixed) - allowed:
-            raise BadInput(
-                f"--fix {fix!r}: expected names among {sorted(allowed)} (no values: a held "
-                "coefficient drops out of the design whatever its value)"
-            )
-
-        import numpy as np
-        import pandas as pd
-        from rich.table import Table
+        p_range, v_range, fixed = _checked_design(pressures, speeds, runs, repeats, fix)
 
         from ..model import FrictionModel
-        from ..plan import WindowNoise, compare, grid_uncertainty, make_plan
-        from ..simulate.bench import THESIS_PRESSURES_BAR, THESIS_SPEEDS_MM_S, BenchSettings
+        from ..plan import make_plan
+        from ..simulate.bench import BenchSettings
 
         friction = FrictionModel.from_datasheet(model) if model is not None else FrictionModel()
         settings = BenchSettings()
-        if noise_from is not None:
-            if not noise_from.is_file():
-                raise BadInput(f"--noise-from {noise_from}: not a file; expected a points.csv")
-            noise = WindowNoise.from_points(pd.read_csv(noise_from), source=str(noise_from))
-        else:
-            speeds_pilot = np.geomspace(v_range[0], v_range[1], 9)
-            if compare_grid:
-                speeds_pilot = np.geomspace(
-                    min(v_range[0], THESIS_SPEEDS_MM_S[0] * 1e-3),
-                    max(v_range[1], THESIS_SPEEDS_MM_S[-1] * 1e-3),
-                    9,
-                )
-            from ..simulate.bench import run_plan
-
-            for v in (speeds_pilot[0], speeds_pilot[-1]):
-                run_plan(v, settings)
-            with progress_bar() as progress:
-                task = progress.add_task("noise pilot on the virtual bench", total=2 * 9)
-                noise = WindowNoise.from_bench(
-                    settings, speeds=speeds_pilot, progress=lambda _: progress.advance(task)
-                )
+        noise = _window_noise(noise_from, v_range, settings, widen_to_thesis=compare_grid)
         result = make_plan(
             p_range,
             v_range,
@@ -141,31 +100,107 @@ def register(app: typer.Typer) -> None:
         table = result.uncertainty.table()
         title = f"Predicted standard errors of a {runs}-run plan"
         if compare_grid:
-            grid = grid_uncertainty(
-                friction,
-                np.array(THESIS_PRESSURES_BAR) * 1e5,
-                np.array(THESIS_SPEEDS_MM_S) * 1e-3,
-                noise,
-                fixed=fixed,
-            )
-            table = compare(grid, result.uncertainty, labels=("27 x 10 grid", f"{runs}-run plan"))
-            from ..io.writers import atomic_write_text
-
-            files["comparison"] = atomic_write_text(
-                out / "comparison.csv", table.to_csv(index=False)
-            )
+            table = _compare_thesis_grid(friction, noise, fixed, result, runs, out, files)
             title = f"Predicted standard errors: thesis grid (270 runs) and a {runs}-run plan"
-        shown = Table(title=title)
-        for column in table.columns:
-            shown.add_column(terminal(column), justify="right")
-        for row in table.itertuples(index=False):
-            shown.add_row(*(f"{x:.3g}" if isinstance(x, float) else terminal(x) for x in row))
-        print_table(shown)
-        levels = result.runs["pressure [Pa]"].nunique()
-        console.print(
-            f"{runs} runs at {levels} pressure level(s) and "
-            f"{result.runs['velocity [m/s]'].nunique()} speed(s); noise: {terminal(noise.source)}"
+        _print_plan(result, table, title, runs, noise, files)
+
+
+FIXABLE = {"F_c", "F_s", "sigma_2", "v_r", "alpha"}
+"""Coefficients ``--fix`` may hold."""
+
+
+def _checked_design(
+    pressures: str, speeds: str, runs: int, repeats: int, fix: str
+) -> tuple[tuple[float, float], tuple[float, float], tuple[str, ...]]:
+    """The pressure range [Pa], the speed range [m/s] and the held coefficients, checked."""
+    p_range = _range(pressures, "pressure", "bar", "--pressures")
+    v_range = _range(speeds, "velocity", "mm/s", "--speeds")
+    if not v_range[0] > 0:
+        raise BadInput(
+            f"--speeds {speeds!r}: the lowest speed must be > 0 (candidate speeds are "
+            "log-spaced), e.g. --speeds 1-150mm/s"
         )
-        for note in result.notes[2:]:
-            console.print(f"[yellow]note:[/yellow] {terminal(note)}")
-        console.print(terminal(f"test sheet: {files['csv']} and {files['html']}"))
+    if not p_range[0] >= 0:
+        raise BadInput(f"--pressures {pressures!r}: pressures must be >= 0")
+    if runs < 1 or repeats < 1:
+        raise BadInput("--runs and --repeats must be >= 1")
+    fixed = tuple(n.strip() for n in fix.split(",") if n.strip())
+    if set(fixed) - FIXABLE:
+        raise BadInput(
+            f"--fix {fix!r}: expected names among {sorted(FIXABLE)} (no values: a held "
+            "coefficient drops out of the design whatever its value)"
+        )
+    return p_range, v_range, fixed
+
+
+def _window_noise(noise_from: Path | None, v_range, settings, *, widen_to_thesis: bool):
+    """Window noise against speed: from an earlier fit's points.csv, else a bench pilot.
+
+    The pilot runs 9 log-spaced speeds over ``v_range`` [m/s], widened to the thesis
+    speeds when the plan is to be compared with the thesis grid.
+    """
+    import numpy as np
+
+    from ..plan import WindowNoise
+    from ..simulate.bench import THESIS_SPEEDS_MM_S, run_plan
+
+    if noise_from is not None:
+        import pandas as pd
+
+        if not noise_from.is_file():
+            raise BadInput(f"--noise-from {noise_from}: not a file; expected a points.csv")
+        return WindowNoise.from_points(pd.read_csv(noise_from), source=str(noise_from))
+    speeds_pilot = np.geomspace(v_range[0], v_range[1], 9)
+    if widen_to_thesis:
+        speeds_pilot = np.geomspace(
+            min(v_range[0], THESIS_SPEEDS_MM_S[0] * 1e-3),
+            max(v_range[1], THESIS_SPEEDS_MM_S[-1] * 1e-3),
+            9,
+        )
+    for v in (speeds_pilot[0], speeds_pilot[-1]):
+        run_plan(v, settings)
+    with progress_bar() as progress:
+        task = progress.add_task("noise pilot on the virtual bench", total=2 * 9)
+        return WindowNoise.from_bench(
+            settings, speeds=speeds_pilot, progress=lambda _: progress.advance(task)
+        )
+
+
+def _compare_thesis_grid(friction, noise, fixed, result, runs: int, out: Path, files: dict):
+    """The plan's standard errors beside the thesis' 27 x 10 grid's; writes comparison.csv."""
+    import numpy as np
+
+    from ..io.writers import atomic_write_text
+    from ..plan import compare, grid_uncertainty
+    from ..simulate.bench import THESIS_PRESSURES_BAR, THESIS_SPEEDS_MM_S
+
+    grid = grid_uncertainty(
+        friction,
+        np.array(THESIS_PRESSURES_BAR) * 1e5,
+        np.array(THESIS_SPEEDS_MM_S) * 1e-3,
+        noise,
+        fixed=fixed,
+    )
+    table = compare(grid, result.uncertainty, labels=("27 x 10 grid", f"{runs}-run plan"))
+    files["comparison"] = atomic_write_text(out / "comparison.csv", table.to_csv(index=False))
+    return table
+
+
+def _print_plan(result, table, title: str, runs: int, noise, files: dict) -> None:
+    """The standard-error table, the plan's size, its notes and where the test sheet is."""
+    from rich.table import Table
+
+    shown = Table(title=title)
+    for column in table.columns:
+        shown.add_column(terminal(column), justify="right")
+    for row in table.itertuples(index=False):
+        shown.add_row(*(f"{x:.3g}" if isinstance(x, float) else terminal(x) for x in row))
+    print_table(shown)
+    levels = result.runs["pressure [Pa]"].nunique()
+    console.print(
+        f"{runs} runs at {levels} pressure level(s) and "
+        f"{result.runs['velocity [m/s]'].nunique()} speed(s); noise: {terminal(noise.source)}"
+    )
+    for note in result.notes[2:]:
+        console.print(f"[yellow]note:[/yellow] {terminal(note)}")
+    console.print(terminal(f"test sheet: {files['csv']} and {files['html']}"))

@@ -175,6 +175,11 @@ class Axis:
     loop's 0.1 um residual to 1.5 %)."""
 
     def __post_init__(self) -> None:
+        self._check_positive()
+        self._check_ranges()
+
+    def _check_positive(self) -> None:
+        """Every size, rate and valve value must be finite and > 0."""
         positive = (
             "bore",
             "stroke",
@@ -195,6 +200,9 @@ class Axis:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise AxisError(f"axis {name} = {value!r} is out of range; expected > 0")
+
+    def _check_ranges(self) -> None:
+        """Rods inside the bore, leakage, pressures, spool order, start, substeps, load."""
         for name in ("rod", "rod_a"):
             value = getattr(self, name)
             if not (0 <= value < self.bore):

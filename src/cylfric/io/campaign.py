@@ -257,27 +257,38 @@ def find_duplicates(paths) -> dict[Path, Path]:
             continue
     by_edges: dict[tuple, list[Path]] = {}
     for size, group in by_size.items():
-        if len(group) < 2:
-            continue
-        for path in group:
-            try:
-                by_edges.setdefault((size, _edges_digest(path, size)), []).append(path)
-            except OSError:
-                continue
+        if len(group) > 1:
+            _group_by_edges(group, size, by_edges)
     copies: dict[Path, Path] = {}
     for group in by_edges.values():
-        if len(group) < 2:
+        if len(group) > 1:
+            copies.update(_copies_by_content(group))
+    return copies
+
+
+def _group_by_edges(group: list[Path], size: int, by_edges: dict[tuple, list[Path]]) -> None:
+    """Add the files of ``group`` (all ``size`` bytes) to ``by_edges`` under (size, the
+    digest of their first and last bytes); a file that cannot be read is left out."""
+    for path in group:
+        try:
+            by_edges.setdefault((size, _edges_digest(path, size)), []).append(path)
+        except OSError:
             continue
-        first: dict[str, Path] = {}
-        for path in group:
-            try:
-                digest = file_sha256(path)
-            except OSError:
-                continue
-            if digest in first:
-                copies[path] = first[digest]
-            else:
-                first[digest] = path
+
+
+def _copies_by_content(group: list[Path]) -> dict[Path, Path]:
+    """Each file of ``group`` whose SHA-256 equals an earlier one's -> that earlier file."""
+    copies: dict[Path, Path] = {}
+    first: dict[str, Path] = {}
+    for path in group:
+        try:
+            digest = file_sha256(path)
+        except OSError:
+            continue
+        if digest in first:
+            copies[path] = first[digest]
+        else:
+            first[digest] = path
     return copies
 
 
@@ -994,54 +1005,15 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
         else None
     )
     runs = []
-    if manifest:  # a row for a missing file stops its run in read_run (skippable)
-        candidates = [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
-    else:
-        candidates = sorted(
-            p
-            for p in folder.glob(config.glob)
-            if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
-        )
-    for path in candidates:
+    for path in _candidates(folder, config, manifest):
         _check_encodable(path)
-        pressure = velocity = math.nan
-        extra, source = {}, {}
-        nominal: dict[str, dict[str, tuple[float, str]]] = {"pressure": {}, "velocity": {}}
-        if path.name in manifest:
-            pressure, velocity, extra = manifest[path.name]
-            source = {"pressure": "manifest", "velocity": "manifest"}
-            where = f"{MANIFEST_NAME} line {manifest.lines[path.name]}"
-            for quantity, value in (("pressure", pressure), ("velocity", velocity)):
-                if math.isnan(value):
-                    del source[quantity]
-                else:
-                    nominal[quantity]["manifest"] = (value, where)
+        pressure, velocity, extra, source, nominal = _manifest_nominal(path, manifest)
         if pattern is not None:
             match = pattern.search(path.name)
             if match:
-                groups = {k: v for k, v in match.groupdict().items() if v is not None}
-                for quantity, key, scale in (
-                    ("pressure", "pressure_bar", 1e5),
-                    ("velocity", "velocity_mm_s", 1e-3),
-                ):
-                    if key not in groups:
-                        continue
-                    text = groups.pop(key)
-                    try:
-                        value = float(text.replace(",", ".")) * scale
-                    except ValueError:
-                        raise BenchFileError(
-                            path,
-                            f"campaign.toml name_pattern gives {key} = {text!r}; expected a number",
-                        ) from None
-                    nominal[quantity]["campaign.toml name_pattern"] = (value, f"{key} = {text}")
-                    if quantity == "pressure" and math.isnan(pressure):
-                        pressure = value
-                        source["pressure"] = "campaign.toml name_pattern"
-                    elif quantity == "velocity" and math.isnan(velocity):
-                        velocity = value
-                        source["velocity"] = "campaign.toml name_pattern"
-                extra = {**groups, **extra}
+                pressure, velocity, extra = _name_pattern_nominal(
+                    path, match, pressure, velocity, extra, source, nominal
+                )
         line = manifest.lines.get(path.name)
         listed = folder / MANIFEST_NAME if line is not None else None
         session = session_of(path, folder, config.glob, extra)
@@ -1053,6 +1025,71 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     if not runs:
         raise BenchFileError(folder, f"no run files matching {config.glob!r}")
     return runs
+
+
+def _candidates(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[Path]:
+    """The manifest's files matching the glob, in its order; without a manifest, the
+    folder's files matching the glob, sorted (hidden files and cylfric's own left out)."""
+    if manifest:  # a row for a missing file stops its run in read_run (skippable)
+        return [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
+    return sorted(
+        p
+        for p in folder.glob(config.glob)
+        if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
+    )
+
+
+def _manifest_nominal(path: Path, manifest: _Manifest):
+    """(pressure [Pa], velocity [m/s], extra labels, source, nominal) of ``path`` from
+    manifest.csv; NaN, empty labels and no source when the manifest does not list it.
+
+    ``source`` maps a quantity to where its value comes from; ``nominal`` maps each
+    quantity to {origin: (value [SI], where)}.
+    """
+    pressure = velocity = math.nan
+    extra: dict = {}
+    source: dict[str, str] = {}
+    nominal: dict[str, dict[str, tuple[float, str]]] = {"pressure": {}, "velocity": {}}
+    if path.name in manifest:
+        pressure, velocity, extra = manifest[path.name]
+        source = {"pressure": "manifest", "velocity": "manifest"}
+        where = f"{MANIFEST_NAME} line {manifest.lines[path.name]}"
+        for quantity, value in (("pressure", pressure), ("velocity", velocity)):
+            if math.isnan(value):
+                del source[quantity]
+            else:
+                nominal[quantity]["manifest"] = (value, where)
+    return pressure, velocity, extra, source, nominal
+
+
+_PATTERN_GROUPS = (("pressure", "pressure_bar", 1e5), ("velocity", "velocity_mm_s", 1e-3))
+"""(quantity, name_pattern group, scale to SI) of the nominal values a file name can give."""
+
+
+def _name_pattern_nominal(path: Path, match, pressure, velocity, extra, source, nominal):
+    """Pressure [Pa], velocity [m/s] and labels after campaign.toml's name_pattern matched
+    ``path``'s name: a value fills only what the manifest left NaN; every value given goes
+    into ``nominal``, the origin of a value used into ``source`` (both updated in place)."""
+    groups = {k: v for k, v in match.groupdict().items() if v is not None}
+    for quantity, key, scale in _PATTERN_GROUPS:
+        if key not in groups:
+            continue
+        text = groups.pop(key)
+        try:
+            value = float(text.replace(",", ".")) * scale
+        except ValueError:
+            raise BenchFileError(
+                path,
+                f"campaign.toml name_pattern gives {key} = {text!r}; expected a number",
+            ) from None
+        nominal[quantity]["campaign.toml name_pattern"] = (value, f"{key} = {text}")
+        if quantity == "pressure" and math.isnan(pressure):
+            pressure = value
+            source["pressure"] = "campaign.toml name_pattern"
+        elif quantity == "velocity" and math.isnan(velocity):
+            velocity = value
+            source["velocity"] = "campaign.toml name_pattern"
+    return pressure, velocity, {**groups, **extra}
 
 
 def session_of(path: Path, folder: Path, glob: str, labels: Mapping[str, Any]) -> str | None:

@@ -6,7 +6,8 @@ Engineering units throughout (N, bar, mm/s, N*s/mm), as the thesis and its users
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS
 from .names import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
@@ -14,7 +15,7 @@ from .names import DYNAMIC_PARAMETERS, STEADY_PARAMETERS
 if TYPE_CHECKING:
     import pandas as pd
 
-    from .core import FrictionModel
+    from .core import FrictionModel, Parameter
 
 __all__ = ["law_lines", "fit_report", "format_value", "parameter_table", "html_summary"]
 
@@ -94,7 +95,6 @@ def fit_report(model: FrictionModel, *, min_correlation: float = 0.1) -> str:
 
     No line is longer than :data:`REPORT_WIDTH` characters (longer ones wrap).
     """
-    stats = model.statistics
     lines = ["[[Model]]"]
     lines.append(
         f"    {model.friction_law} friction law; pressure laws: "
@@ -103,53 +103,85 @@ def fit_report(model: FrictionModel, *, min_correlation: float = 0.1) -> str:
     )
     if model.provenance.get("method"):
         lines.append(f"    method: {model.provenance['method']}")
-    if stats:
-        lines.append("[[Fit Statistics]]")
-        labels = (
-            ("n_points", "# data points", ""),
-            ("n_variables", "# variables", ""),
-            ("rmse", "RMSE", " N"),
-            ("residual_std", "residual std", " N"),
-            ("dof", "degrees of freedom", ""),
-            ("aic", "Akaike info crit", ""),
-            ("bic", "Bayesian info crit", ""),
-        )
-        for key, label, unit in labels:
-            if stats.get(key) is not None:
-                value = stats[key]
-                text = f"{value:d}" if isinstance(value, int) else f"{value:.5g}"
-                lines.append(f"    {label:20s} = {text}{unit}")
+    lines += _statistics_lines(model.statistics)
     lines.append("[[Variables]]")
     width = max(len(n) for n in model.parameters)
     for p in model.parameters.values():
-        if p.parameter in DYNAMIC_PARAMETERS:
-            continue
-        if p.value is None:
-            reason = model.not_identified.get(p.parameter, "")
-            lines.append(f"    {p.name:{width}s}:  not identified ({reason})")
-            continue
-        value, stderr, unit = p.engineering()
-        if not p.vary:
-            lines.append(f"    {p.name:{width}s}:  {value:.6g} {unit} (fixed)")
-            continue
-        text = f"    {p.name:{width}s}:  {value:.6g}"
-        if stderr is not None:
-            rel = abs(stderr / value) * 100 if value else math.inf
-            text += f" +/- {stderr:.3g}" + (f" ({rel:.2f}%)" if math.isfinite(rel) else "")
-        lines.append(text + f" {unit}")
+        if p.parameter not in DYNAMIC_PARAMETERS:
+            lines.append(_variable_line(model, p, width))
+    lines += _correlation_lines(model, min_correlation)
+    lines += _dynamic_lines(model)
+    if model.validity is not None:
+        val = model.validity
+        lines.append("[[Validity]]")
+        lines.append(
+            f"    {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} bar, "
+            f"{val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
+        )
+    return "\n".join(_wrapped(line) for line in lines)
+
+
+_STATISTICS_LABELS = (
+    ("n_points", "# data points", ""),
+    ("n_variables", "# variables", ""),
+    ("rmse", "RMSE", " N"),
+    ("residual_std", "residual std", " N"),
+    ("dof", "degrees of freedom", ""),
+    ("aic", "Akaike info crit", ""),
+    ("bic", "Bayesian info crit", ""),
+)
+"""(key in ``model.statistics``, label, unit) of the report's [[Fit Statistics]] lines."""
+
+
+def _statistics_lines(stats: Mapping[str, Any]) -> list[str]:
+    """The [[Fit Statistics]] section (empty without statistics); RMSE and std in N."""
+    if not stats:
+        return []
+    lines = ["[[Fit Statistics]]"]
+    for key, label, unit in _STATISTICS_LABELS:
+        if stats.get(key) is not None:
+            value = stats[key]
+            text = f"{value:d}" if isinstance(value, int) else f"{value:.5g}"
+            lines.append(f"    {label:20s} = {text}{unit}")
+    return lines
+
+
+def _variable_line(model: FrictionModel, p: Parameter, width: int) -> str:
+    """One [[Variables]] line: value +/- stderr (relative %) in engineering units."""
+    if p.value is None:
+        reason = model.not_identified.get(p.parameter, "")
+        return f"    {p.name:{width}s}:  not identified ({reason})"
+    value, stderr, unit = p.engineering()
+    if not p.vary:
+        return f"    {p.name:{width}s}:  {value:.6g} {unit} (fixed)"
+    text = f"    {p.name:{width}s}:  {value:.6g}"
+    if stderr is not None:
+        rel = abs(stderr / value) * 100 if value else math.inf
+        text += f" +/- {stderr:.3g}" + (f" ({rel:.2f}%)" if math.isfinite(rel) else "")
+    return text + f" {unit}"
+
+
+def _correlation_lines(model: FrictionModel, min_correlation: float) -> list[str]:
+    """The [[Correlations]] section: pairs with |C| >= ``min_correlation`` [-], largest first."""
     correlations = model.correlations()
-    if correlations is not None:
-        names, corr = correlations
-        pairs = [
-            (abs(corr[i, j]), names[i], names[j], corr[i, j])
-            for i in range(len(names))
-            for j in range(i + 1, len(names))
-            if abs(corr[i, j]) >= min_correlation
-        ]
-        lines.append(f"[[Correlations]] (unreported correlations are < {min_correlation:.3f})")
-        for _, a, b, c in sorted(pairs, reverse=True):
-            lines.append(f"    C({a}, {b}) = {c:+.4f}")
-    lines.append("[[Dynamic]]")
+    if correlations is None:
+        return []
+    names, corr = correlations
+    pairs = [
+        (abs(corr[i, j]), names[i], names[j], corr[i, j])
+        for i in range(len(names))
+        for j in range(i + 1, len(names))
+        if abs(corr[i, j]) >= min_correlation
+    ]
+    lines = [f"[[Correlations]] (unreported correlations are < {min_correlation:.3f})"]
+    for _, a, b, c in sorted(pairs, reverse=True):
+        lines.append(f"    C({a}, {b}) = {c:+.4f}")
+    return lines
+
+
+def _dynamic_lines(model: FrictionModel) -> list[str]:
+    """The [[Dynamic]] section: each dynamic parameter, its pressure law and its status."""
+    lines = ["[[Dynamic]]"]
     for name in DYNAMIC_PARAMETERS:
         status, reason = model.dynamic_status[name]
         law = model.laws[name]
@@ -166,14 +198,7 @@ def fit_report(model: FrictionModel, *, min_correlation: float = 0.1) -> str:
                 + " (SI)"
             )
         lines.append(f"    {name:8s} = {text} ({status}: {reason})")
-    if model.validity is not None:
-        val = model.validity
-        lines.append("[[Validity]]")
-        lines.append(
-            f"    {val['pressure_min'] / 1e5:.4g}-{val['pressure_max'] / 1e5:.4g} bar, "
-            f"{val['velocity_min'] * 1e3:.4g}-{val['velocity_max'] * 1e3:.4g} mm/s"
-        )
-    return "\n".join(_wrapped(line) for line in lines)
+    return lines
 
 
 PARAMETER_COLUMNS = (
