@@ -1094,4 +1094,5 @@ SECTIONS = {
     "batch": bench_stiff_batch,
     "candidates": bench_candidates,
     "numbalsoda": bench_simulate_vs_numbalsoda,
+    "simulate_vs_c": bench_simulate_vs_c,
 }
