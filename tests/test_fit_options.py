@@ -26,6 +26,7 @@ def test_defaults_are_those_of_fit_campaign():
     )
     assert options.export == () and options.workers is None
     assert options.viscosity_correction is None and options.name is None
+    assert options.scheduler is None  # the files read on this machine
 
 
 def test_export_targets_are_parsed_once():
@@ -83,3 +84,7 @@ def test_fit_many_refuses_a_name_for_every_campaign(tmp_path):
 
     with pytest.raises(ValueError, match="names each datasheet after its campaign"):
         fit_many(tmp_path, tmp_path / "o", FitOptions(name="one"), scheduler="serial")
+    with pytest.raises(ValueError, match="fit_many sends whole campaigns"):
+        fit_many(tmp_path, tmp_path / "o", FitOptions(scheduler="tcp://127.0.0.1:8786"))
+    with pytest.raises(ValueError, match="scheduler = 8786: expected a string"):
+        FitOptions(scheduler=8786)

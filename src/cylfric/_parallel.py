@@ -16,6 +16,10 @@ Three things in cylfric run on several cores: the run files of one campaign
 - :func:`starmap`: ``[function(*a) for a in arguments]`` with a picklable module-level
   function, forked where it can, else started fresh (a notebook: its kernel runs threads).
 
+On a Dask distributed cluster instead (``--scheduler tcp://host:8786``): :func:`connect`
+to its scheduler, then :class:`ClusterPending` submits picklable module-level calls to its
+workers (``cylfric fit``'s extraction; ``cylfric fit-many`` submits whole fits).
+
 The results are the same whichever way the work ran.
 """
 
@@ -30,7 +34,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
-__all__ = ["Pending", "can_fork", "run", "start", "starmap"]
+__all__ = ["ClusterPending", "Pending", "can_fork", "connect", "run", "start", "starmap"]
 
 
 def can_fork() -> bool:
@@ -200,4 +204,73 @@ class Pending:
                 results[index] = self._local(*arguments[index])
                 if done is not None:
                     done(index, results[index])
+        return results
+
+
+def connect(address: str) -> Any:
+    """A ``dask.distributed.Client`` of the scheduler at ``address`` (``tcp://host:8786``).
+
+    Raises ValueError naming the address when it is not a scheduler address or no
+    scheduler answers there (within Dask's connect timeout,
+    ``distributed.comm.timeouts.connect``, 30 s by default), or when the scheduler has no
+    worker.
+    """
+    from dask.distributed import Client
+
+    try:
+        client = Client(address)
+    except OSError as exc:  # TimeoutError, a refused connection
+        raise ValueError(
+            f"scheduler {address}: no Dask scheduler answered ({exc}); start one there "
+            "(`dask scheduler`) or check the address"
+        ) from None
+    except (ValueError, TypeError) as exc:
+        raise ValueError(
+            f"scheduler {address!r}: not a Dask scheduler address ({exc}); expected e.g. "
+            "tcp://10.0.0.5:8786"
+        ) from None
+    if not client.nthreads():
+        client.close()
+        raise ValueError(
+            f"scheduler {address}: no worker is connected; start some (`dask worker {address}`)"
+        )
+    return client
+
+
+class ClusterPending:
+    """Calls submitted to a Dask cluster: ``function(*a)`` for each ``a`` of ``arguments``
+    (a picklable module-level function; each ``a`` pickled to a worker, each result
+    pickled back). :meth:`results` gathers them in order and closes ``client``.
+
+    A worker lost with its tasks: the scheduler runs them on another (Dask's own
+    retries); an exception raised by a call is raised by :meth:`results`.
+    """
+
+    def __init__(self, client, function, arguments, done=None) -> None:
+        self._client, self._done = client, done
+        self._futures = [client.submit(function, *a, pure=False) for a in arguments]
+
+    def close(self) -> None:
+        """Cancel what has not finished and close the client."""
+        if self._client is not None:
+            self._client.cancel(self._futures)
+            self._client.close()
+            self._client = None
+
+    def results(self) -> list:
+        """The results in order; ``done(index, result)`` as each call finishes."""
+        from dask.distributed import as_completed
+
+        if self._client is None:
+            raise RuntimeError("these results were collected already")
+        index = {future.key: i for i, future in enumerate(self._futures)}
+        results: list = [None] * len(self._futures)
+        try:
+            for future in as_completed(self._futures):
+                i = index[future.key]
+                results[i] = future.result()
+                if self._done is not None:
+                    self._done(i, results[i])
+        finally:
+            self.close()
         return results

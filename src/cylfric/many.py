@@ -246,8 +246,9 @@ def fit_many(
     ------
     ValueError
         ``root`` is not a folder or holds no campaign, ``out`` lies inside a campaign,
-        an unknown fit option, both ``options`` and fit keywords, ``options.name`` set,
-        workers < 1.
+        an unknown fit option, both ``options`` and fit keywords, ``options.name`` or
+        ``options.scheduler`` set, workers < 1, a scheduler address where no scheduler
+        with workers answers (:func:`cylfric._parallel.connect`).
 
     Notes
     -----
@@ -319,6 +320,11 @@ def _checked_options(options: FitOptions | None, fit_options: dict[str, Any]) ->
         raise ValueError(
             f"options.name = {options.name!r}: fit_many names each datasheet after its "
             "campaign folder; leave name None"
+        )
+    if options.scheduler is not None:
+        raise ValueError(
+            f"options.scheduler = {options.scheduler!r}: fit_many sends whole campaigns to "
+            "a cluster with its own scheduler=; leave options.scheduler None"
         )
     return options
 
@@ -420,7 +426,12 @@ def _run_distributed(jobs, scheduler, workers, done) -> str:
     else:
         cluster = None
         used = f"dask.distributed scheduler at {scheduler}"
-    client = Client(cluster if cluster is not None else scheduler)
+    if cluster is not None:
+        client = Client(cluster)
+    else:
+        from ._parallel import connect
+
+        client = connect(scheduler)  # a bad address: ValueError naming it
     try:
         futures = [client.submit(fit_one, *job, pure=False) for job in jobs]
         for future in as_completed(futures):

@@ -55,6 +55,11 @@ class FitOptions:
         Processes for the extraction and the figures (default 2 on Linux, else 1; see
         :func:`~cylfric.steady_state.extract_campaign`); 1 keeps the fit on one core, as
         the workers of :func:`cylfric.many.fit_many` do when several fits run at once.
+    scheduler : str or None
+        A Dask distributed scheduler address (``"tcp://10.0.0.5:8786"``): the run files
+        are read by that cluster's workers, in tasks of consecutive files
+        (:func:`cylfric.steady_state.start_extraction`), the rest of the fit runs here
+        (``workers`` then counts only the figures' processes). None: this machine.
     viscosity_correction : bool or None
         Identify at the reference temperature of ``campaign.toml [oil]``, each point's speed
         mapped by the oil's viscosity at its run's temperature (equal Hersey number; see
@@ -85,6 +90,7 @@ class FitOptions:
     export: tuple[str, ...] = ()
     workers: int | None = None
     viscosity_correction: bool | None = None
+    scheduler: str | None = None
 
     def __post_init__(self) -> None:
         fixed = {} if self.fixed is None else self.fixed
@@ -107,7 +113,7 @@ class FitOptions:
             object.__setattr__(self, "viscosity_correction", bool(self.viscosity_correction))
         if isinstance(self.config, os.PathLike):
             object.__setattr__(self, "config", os.fspath(self.config))
-        for name in ("name", "glob", "config"):
+        for name in ("name", "glob", "config", "scheduler"):
             value = getattr(self, name)
             if value is not None and not isinstance(value, str):
                 raise ValueError(f"{name} = {value!r}: expected a string or None")

@@ -442,6 +442,7 @@ def _fit(
         progress=progress,
         exclude=[info.path.name for info in dynamic_runs],
         workers=options.workers,
+        scheduler=options.scheduler,
     )
     try:
         # while a pool reads the files, the libraries of the next steps load here (pandas,

@@ -15,7 +15,9 @@ unit, and :func:`find_windows` can return its intermediate components.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,8 +28,6 @@ from .io.campaign import Campaign, CampaignConfig, read_run
 from .io.text import BenchFileError
 
 if TYPE_CHECKING:  # pandas is imported once the points are collected: reading needs none
-    import os
-
     import pandas as pd
 
 __all__ = [
@@ -36,6 +36,7 @@ __all__ = [
     "find_windows",
     "extract_points",
     "extract_campaign",
+    "read_chunk",
     "Extraction",
     "POINT_COLUMNS",
 ]
@@ -648,6 +649,7 @@ def start_extraction(
     progress=None,
     workers=None,
     exclude=(),
+    scheduler=None,
     **options,
 ) -> PendingExtraction:
     """Start reading every run of a campaign folder; ``.result()`` gives the
@@ -656,7 +658,9 @@ def start_extraction(
     With a pool (``workers`` >= 2 and at least ``PARALLEL_MIN_FILES`` files) the first file
     is read here and the workers start on the rest at once, so the caller can go on with
     other work (``cylfric fit`` imports the identification meanwhile); else the files are
-    read when ``.result()`` is called.
+    read when ``.result()`` is called. With ``scheduler`` (a Dask distributed scheduler
+    address, ``"tcp://host:8786"``) the files are read by the cluster's workers instead
+    (``workers`` is not used): see :func:`read_chunk`.
     """
     campaign = _open_campaign(folder, config)
     config = campaign.config
@@ -669,6 +673,9 @@ def start_extraction(
             "no constant-velocity runs (only presliding/breakaway tests); the steady-state "
             "fit needs constant-velocity runs",
         )
+
+    if scheduler is not None:
+        return _start_on_cluster(campaign, infos, options, scheduler, skip_bad, progress)
 
     def one(index):
         return _read_one(infos[index], index, config, options)
@@ -694,6 +701,64 @@ def start_extraction(
         background=one_reader,
     )
     return PendingExtraction(campaign, infos, first, pending, skip_bad)
+
+
+def _start_on_cluster(campaign, infos, options, scheduler, skip_bad, progress):
+    """The files read on the Dask cluster at ``scheduler``: tasks of consecutive files
+    (:func:`chunk_size` for the cluster's threads), each :func:`read_chunk` on a worker."""
+    from ._parallel import ClusterPending, connect
+
+    client = connect(scheduler)
+    try:
+        n = len(infos)
+        size = chunk_size(n, sum(client.nthreads().values()))
+        chunks = [range(lo, min(lo + size, n)) for lo in range(0, n, size)]
+        here = os.getcwd()
+
+        def report(index, _result=None):
+            if progress is not None:
+                for i in chunks[index]:
+                    progress(infos[i].path.name)
+
+        tasks = [(campaign.config, options, [(i, infos[i]) for i in c], here) for c in chunks]
+        pending = ClusterPending(client, read_chunk, tasks, done=report)
+    except BaseException:
+        client.close()
+        raise
+    return PendingExtraction(campaign, infos, [], pending, skip_bad)
+
+
+def read_chunk(
+    config: CampaignConfig, options: dict, runs: list, here: str | os.PathLike[str]
+) -> tuple:
+    """Read the runs of one task on a Dask worker: the packed table of their points,
+    summaries and errors (:func:`_pack`), as the local pool returns it.
+
+    ``runs`` are (run index, :class:`~cylfric.io.campaign.RunInfo`) pairs (file names and
+    nominal values, not the data: the worker reads the files), ``options`` those of
+    :func:`extraction_options`. A relative path is read under ``here`` (the submitting
+    process's working folder) and reported as given, so the points name the files as a
+    local fit does. The worker must see the files at that path (a shared file system).
+    """
+    results = []
+    for index, info in runs:
+        where = replace(
+            info,
+            path=Path(here, info.path),
+            manifest=None if info.manifest is None else Path(here, info.manifest),
+        )
+        rows, summary, error = _read_one(where, index, config, options)
+        read, shown = str(where.path), str(info.path)
+        if read != shown:
+            for row in rows or ():
+                if row.get("file") == read:
+                    row["file"] = shown
+            if summary is not None:
+                summary["file"] = shown
+            if error is not None and error.path == read:
+                error = BenchFileError(shown, error.message, error.line)
+        results.append((rows, summary, error))
+    return _pack(results)
 
 
 def _open_campaign(
@@ -816,6 +881,7 @@ def extract_campaign(
     progress=None,
     workers=None,
     exclude=(),
+    scheduler=None,
     **options,
 ) -> Extraction:
     """Read every run of a campaign folder and extract its friction points.
@@ -829,7 +895,8 @@ def extract_campaign(
     reader below ``TWO_READERS_MIN_FILES``, started before this process's other work)
     (:func:`cylfric._parallel.run`; the per-file work is small numpy calls that hold the
     GIL, so threads would not help), else here, one after another; the result is the same
-    either way. ``exclude``
+    either way; with ``scheduler`` (a Dask scheduler address) the files are read by that
+    cluster's workers (:func:`start_extraction`). ``exclude``
     names files of the campaign that are not constant-velocity runs (the presliding and
     breakaway tests, identified by :mod:`cylfric.identify.dynamic`); they are not read here.
     Input files are never modified.
@@ -845,6 +912,7 @@ def extract_campaign(
         progress=progress,
         workers=workers,
         exclude=exclude,
+        scheduler=scheduler,
         **options,
     ).result()
 

@@ -247,6 +247,12 @@ def fit(
         "a 'seal' group of name_pattern or a manifest.csv 'seal' column, is otherwise "
         "fitted seal by seal into OUT/<seal>/ with the summary OUT/seals.csv).",
     ),
+    scheduler: str = typer.Option(
+        None,
+        "--scheduler",
+        help="Read the run files on a Dask distributed cluster (tcp://host:8786); the files "
+        "must be at the same path on every worker (a shared file system).",
+    ),
     json_output: bool = typer.Option(
         False, "--json", help=JSON_HELP + " The outputs are written as without it."
     ),
@@ -279,6 +285,7 @@ def fit(
         strict=strict,
         export=tuple(targets),
         viscosity_correction=viscosity_correction,
+        scheduler=scheduler,
     )
     opened = _open(campaign, options)
     if seal is None and len(opened.seals) > 1:
