@@ -1008,6 +1008,12 @@ def _finish_columns(campaign, columns, skipped, runs, total) -> Extraction:
                 if any(flags[i] == "no_offset" for i in range(a, b)):
                     _reoffset(columns, a, b, offset)
         points = pd.DataFrame(columns, columns=list(columns))
+    return _extraction(campaign, points, skipped, offset, offset_std, runs, total)
+
+
+def _extraction(campaign, points, skipped, offset, offset_std, runs, total) -> Extraction:
+    """The :class:`Extraction` of a points table (with its ``session`` column, None where the
+    campaign does not say)."""
     if "session" not in points:  # the label column every points table has (None: not said)
         points["session"] = None
     return Extraction(
@@ -1055,15 +1061,4 @@ def _finish_rows(campaign, rows, skipped, runs, total) -> Extraction:
     points = (
         pd.DataFrame(rows, columns=_columns(rows)) if rows else pd.DataFrame(columns=POINT_COLUMNS)
     )
-    if "session" not in points:  # the label column every points table has (None: not said)
-        points["session"] = None
-    return Extraction(
-        points,
-        skipped,
-        offset,
-        offset_std,
-        runs,
-        total,
-        list(campaign.unlisted),
-        str(campaign.folder),
-    )
+    return _extraction(campaign, points, skipped, offset, offset_std, runs, total)
