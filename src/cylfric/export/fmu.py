@@ -417,27 +417,10 @@ def _scatter_rows(model) -> list[tuple[str, float, str, str]]:
     """(name, value, unit, description) of the fixed parameters ``scatter.*`` and
     ``lack_of_fit.*``: the datasheet's fit.scatter and quality.lack_of_fit records as data
     (``*.computed`` = 0 with a "not computed" description when a record is missing)."""
-    from .scatter import (
-        LACK_OF_FIT_NUMBERS,
-        NOT_COMPUTED,
-        SCATTER_NUMBERS,
-        lack_of_fit_numbers,
-        lack_of_fit_texts,
-        scatter_numbers,
-        scatter_texts,
-    )
+    from .scatter import NOT_COMPUTED, scatter_records
 
     out = []
-    records = (
-        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
-        (
-            "lack_of_fit",
-            "quality.lack_of_fit",
-            lack_of_fit_numbers(model),
-            lack_of_fit_texts(model),
-            LACK_OF_FIT_NUMBERS,
-        ),
-    )
+    records = scatter_records(model)
     for prefix, key, numbers, texts, table in records:
         if numbers is None or texts is None:
             out.append((f"{prefix}.computed", 0.0, "", NOT_COMPUTED.format(key=key)))

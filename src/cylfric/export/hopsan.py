@@ -174,26 +174,9 @@ def fit_hopsan_pressure_signal(
 def _scatter_table(model: FrictionModel) -> list[tuple[str, str, str, str]]:
     """(record.field, value, unit, meaning) of fit.scatter and quality.lack_of_fit: numbers
     as ``repr`` text, the records' texts as they are (unit ``"text"``: escape them)."""
-    from .scatter import (
-        LACK_OF_FIT_NUMBERS,
-        NOT_COMPUTED,
-        SCATTER_NUMBERS,
-        lack_of_fit_numbers,
-        lack_of_fit_texts,
-        scatter_numbers,
-        scatter_texts,
-    )
+    from .scatter import NOT_COMPUTED, scatter_records
 
-    records = (
-        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
-        (
-            "lack_of_fit",
-            "quality.lack_of_fit",
-            lack_of_fit_numbers(model),
-            lack_of_fit_texts(model),
-            LACK_OF_FIT_NUMBERS,
-        ),
-    )
+    records = scatter_records(model)
     table = []
     for prefix, key, numbers, texts, units in records:
         if numbers is None or texts is None:

@@ -34,16 +34,7 @@ from typing import TYPE_CHECKING
 
 from ..escape import matlab_comment, matlab_string
 from .fmu import FRICTION_PARAMETERS, REFERENCE_TEXT, _as_model, _check_name
-from .scatter import (
-    LACK_OF_FIT_NUMBERS,
-    NOT_COMPUTED,
-    SCATTER_NUMBERS,
-    band_text,
-    lack_of_fit_numbers,
-    lack_of_fit_texts,
-    scatter_numbers,
-    scatter_texts,
-)
+from .scatter import NOT_COMPUTED, band_text, scatter_records
 
 if TYPE_CHECKING:
     from cylfric._typing import StrPath
@@ -148,16 +139,7 @@ def scatter_struct_lines(model, prefix: str) -> list[str]:
         "% scatter about the law (datasheet fit.scatter; relative values in % of the friction",
         "% level, forces in N at reference_force_N; docs/uncertainty.md)",
     ]
-    records = (
-        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
-        (
-            "lack_of_fit",
-            "quality.lack_of_fit",
-            lack_of_fit_numbers(model),
-            lack_of_fit_texts(model),
-            LACK_OF_FIT_NUMBERS,
-        ),
-    )
+    records = scatter_records(model)
     for field, key, numbers, texts, table in records:
         struct = f"{prefix}.{field}"
         if numbers is None or texts is None:

@@ -29,6 +29,7 @@ __all__ = [
     "lack_of_fit_texts",
     "band_text",
     "summary_lines",
+    "scatter_records",
     "NOT_COMPUTED",
 ]
 
@@ -157,6 +158,22 @@ def lack_of_fit_texts(model: FrictionModel) -> dict[str, str] | None:
         "test": str(record.get("test", "not stated")),
         "action": str(record.get("action", "not stated")),
     }
+
+
+def scatter_records(model: FrictionModel) -> tuple[tuple[str, str, Any, Any, Any], ...]:
+    """``(name, datasheet key, numbers, texts, number table)`` of the two records, in the
+    order every export writes them: ``scatter`` (fit.scatter) and ``lack_of_fit``
+    (quality.lack_of_fit); numbers and texts None where the datasheet has no such record."""
+    return (
+        ("scatter", "fit.scatter", scatter_numbers(model), scatter_texts(model), SCATTER_NUMBERS),
+        (
+            "lack_of_fit",
+            "quality.lack_of_fit",
+            lack_of_fit_numbers(model),
+            lack_of_fit_texts(model),
+            LACK_OF_FIT_NUMBERS,
+        ),
+    )
 
 
 def band_text(model: FrictionModel) -> str:
