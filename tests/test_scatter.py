@@ -238,3 +238,20 @@ def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
     assert session["between"] == pytest.approx(np.sqrt(2 * s_l**2 - s_run**2), rel=1e-12)
     # replacing the covariance drops the model-based one (it belongs to the fit)
     assert model.replace(covariance=model.covariance).covariance_nonrobust is None
+
+
+def test_a_model_based_covariance_that_does_not_match_is_refused():
+    names = ("F_c",)
+    with pytest.raises(ValueError, match="covariance_nonrobust needs a covariance with the same"):
+        FrictionModel(
+            {"F_c": 50.0, "F_s": 60.0, "sigma_2": 0.0, "v_r": 0.01, "alpha": 1.0},
+            pressure_law="constant",
+            covariance_nonrobust=(names, np.eye(1)),
+        )
+    with pytest.raises(ValueError, match="covariance_nonrobust has non-finite values"):
+        FrictionModel(
+            {"F_c": 50.0, "F_s": 60.0, "sigma_2": 0.0, "v_r": 0.01, "alpha": 1.0},
+            pressure_law="constant",
+            covariance=(names, np.eye(1)),
+            covariance_nonrobust=(names, np.full((1, 1), np.nan)),
+        )
