@@ -200,10 +200,12 @@ def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
     nonrobust = model.standard_error(v, p, robust=False)
     assert not np.allclose(robust, nonrobust)
     # the point band by hand: the internally studentised residual's 95 % quantile with
-    # the residuals' dof nu, sqrt(nu B^-1(0.95; 1/2, (nu-1)/2)), x sqrt(se_model^2 + s_res^2)
+    # the residual variance's dof nu, sqrt(nu B^-1(0.95; 1/2, (nu-1)/2)), x sqrt(se_model^2 +
+    # s_res^2); nu the Satterthwaite dof of the nested strata (the runs share their levels)
     from scipy import stats
 
-    n_dof = model.statistics["n_points"] - model.statistics["n_variables"]
+    n_dof = model.scatter["residual_variance"]["dof"]
+    assert 4 < n_dof < model.statistics["n_points"] - model.statistics["n_variables"]
     s_res = model.statistics["residual_std"]
     low, high = model.prediction_band(v, p, scope="point")
     quantile = np.sqrt(n_dof * stats.beta.ppf(0.95, 0.5, (n_dof - 1) / 2))
@@ -255,3 +257,77 @@ def test_a_model_based_covariance_that_does_not_match_is_refused():
             covariance=(names, np.eye(1)),
             covariance_nonrobust=(names, np.full((1, 1), np.nan)),
         )
+
+
+def _strata_design(seed, sessions=2, levels=4, runs=3, points=4):
+    """A nested design (session > pressure level > run > point) with a weighted straight line
+    in pressure fitted to it: (points table, residuals [N], jacobian, sigma [N])."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for s in range(sessions):
+        for level in range(levels):
+            for k in range(runs):
+                for _ in range(points):
+                    rows.append({"session": str(s), "level": level, "run": f"{level}-{k}"})
+    table = pd.DataFrame(rows)
+    bar = 10.0 + 30.0 * table["level"].to_numpy(float)
+    jacobian = np.column_stack([np.ones(len(table)), bar])
+    sigma = rng.uniform(0.5, 2.0, len(table))
+    y = rng.normal(0.0, 1.0, len(table))
+    w = 1.0 / sigma**2
+    coef = np.linalg.solve(jacobian.T @ (jacobian * w[:, None]), jacobian.T @ (w * y))
+    return table, y - jacobian @ coef, jacobian, sigma
+
+
+def test_residual_strata_match_the_projectors_and_split_the_residual_sum_of_squares():
+    """Each stratum's SS and dof against dense projectors: P the nested group means, H the
+    weighted hat matrix, d_s = tr(P_s (I - H)); the SS add up to the RSS and the dof to
+    N - p (a run named alike in two levels is two runs)."""
+    from cylfric.identify.scatter import residual_strata
+
+    table, r, jac, sigma = _strata_design(5)
+    record = residual_strata(table, r, jac, sigma)
+    n = len(r)
+    w = np.diag(1.0 / sigma**2)
+    hat = jac @ np.linalg.solve(jac.T @ w @ jac, jac.T @ w)
+
+    def means(keys):
+        _, index = np.unique(keys, return_inverse=True)
+        z = np.eye(index.max() + 1)[index]
+        return z @ np.diag(1.0 / z.sum(0)) @ z.T
+
+    session = table["session"].to_numpy(str)
+    block = np.char.add(session, table["level"].to_numpy(str))
+    run = np.char.add(np.char.add(block, "/"), table["run"].to_numpy(str))
+    nested = [means(session), means(block), means(run), np.eye(n)]
+    parts = [nested[0]] + [b - a for a, b in zip(nested, nested[1:], strict=False)]
+    names = [s["name"] for s in record["strata"]]
+    assert names == ["session", "pressure block", "run", "point"]
+    for stratum, projector in zip(record["strata"], parts, strict=True):
+        assert stratum["sum_of_squares_N2"] == pytest.approx(r @ projector @ r, rel=1e-9)
+        assert stratum["dof"] == pytest.approx(np.trace(projector @ (np.eye(n) - hat)), abs=1e-9)
+    assert sum(s["sum_of_squares_N2"] for s in record["strata"]) == pytest.approx(r @ r)
+    assert sum(s["dof"] for s in record["strata"]) == pytest.approx(n - 2)
+    # Satterthwaite's dof of the strata that have dof
+    used = [(s["sum_of_squares_N2"], s["dof"]) for s in record["strata"] if s["dof"] > 0.5]
+    expected = sum(a for a, _ in used) ** 2 / sum(a**2 / d for a, d in used)
+    assert record["dof"] == pytest.approx(expected, rel=1e-12)
+
+
+def test_residual_dof_is_the_dominant_stratum_s_when_one_carries_the_scatter():
+    """Residuals that are pressure-block offsets alone (every run of a level off by the same
+    amount) have the block stratum's dof, not N - p: 2 sessions x 4 levels - 2 = 6."""
+    from cylfric.identify.scatter import residual_strata
+
+    table, _, jac, _ = _strata_design(6)
+    offsets = np.random.default_rng(1).normal(0, 5.0, 8)
+    block = table["session"].astype(int).to_numpy() * 4 + table["level"].to_numpy()
+    y = offsets[block]
+    coef, *_ = np.linalg.lstsq(jac, y, rcond=None)
+    record = residual_strata(table, y - jac @ coef, jac)
+    d = {s["name"]: s["dof"] for s in record["strata"]}
+    assert d["session"] + d["pressure block"] == pytest.approx(8 - 2)
+    ss = {s["name"]: s["sum_of_squares_N2"] for s in record["strata"]}
+    assert ss["run"] == pytest.approx(0.0, abs=1e-9) and ss["point"] == pytest.approx(0, abs=1e-9)
+    assert 1.0 < record["dof"] <= 6.0 + 1e-9
+    assert record["dof"] < len(y) - 2

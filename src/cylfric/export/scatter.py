@@ -193,8 +193,9 @@ def band_text(model: FrictionModel) -> str:
         "gives it exactly); for a new run on the same mount s = sqrt(s_r^2 + s_run^2), se the "
         "model-based (not cluster-robust) standard error "
         "(FrictionModel.standard_error(robust=False)) and k the internally studentised "
-        "residual's quantile (about 1.96); never narrower than k sqrt(se^2 + s_res^2) "
-        "(docs/uncertainty.md)."
+        "residual's quantile on the residual variance's degrees of freedom nu "
+        "(fit.scatter.residual_variance.dof in the datasheet: about 1.96 for many, 1.65 for "
+        "nu = 3); never narrower than k sqrt(se^2 + s_res^2) (docs/uncertainty.md)."
     )
 
 

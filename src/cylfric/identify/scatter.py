@@ -288,3 +288,109 @@ def scatter_note(record: dict[str, Any]) -> str:
             f"{c['session']['prior_basis']}); measure the seal in more sessions to replace it"
         )
     return text
+
+
+STRATA = ("session", "pressure block", "run", "point")
+"""The nested strata of a campaign's residuals, outermost first: the sessions, the runs of one
+pressure level in one session, the runs, the points of a run."""
+
+STRATA_METHOD = (
+    "nested strata of the residuals (session > pressure block > run > point): each stratum's "
+    "sum of squares [N^2] and residual degrees of freedom tr(P_s (I - H)) (H the weighted fit's "
+    "hat matrix); the residual variance's degrees of freedom by Satterthwaite (1946), "
+    "nu = (sum SS_s)^2 / sum(SS_s^2 / d_s)"
+)
+
+
+def _group_sums(index: np.ndarray, values: np.ndarray, groups: int) -> np.ndarray:
+    """Sums of ``values`` (n, ...) over the groups of ``index`` (n,) -> (groups, ...)."""
+    out = np.zeros((groups, *values.shape[1:]))
+    np.add.at(out, index, values)
+    return out
+
+
+def residual_strata(
+    points: pd.DataFrame,
+    residuals: np.ndarray,
+    jacobian: np.ndarray,
+    sigma: np.ndarray | None = None,
+) -> dict[str, Any] | None:
+    """The degrees of freedom of the residual variance on the campaign's nested design.
+
+    The residuals of a campaign are not independent: the runs of one pressure level in one
+    session share that block's offset, the points of a run its run's. A residual variance
+    ``s_res^2 = RSS / (N - p)`` then carries fewer degrees of freedom than ``N - p``: with
+    four pressure blocks and a law linear in pressure, two block contrasts may carry most of
+    the residual sum of squares. Each stratum ``s`` (projector ``P_s``: session means, block
+    means within sessions, run means within blocks, points within runs) holds the sum of
+    squares ``SS_s = r^T P_s r`` [N^2] on ``d_s = tr(P_s (I - H))`` degrees of freedom, ``H``
+    the hat matrix of the weighted least squares fit, ``J (J^T W J)^-1 J^T W`` (Nelder 1965,
+    the analysis of variance of a design with several error strata); the residual variance's
+    effective degrees of freedom are Satterthwaite's (1946)::
+
+        nu = (sum_s SS_s)^2 / sum_s (SS_s^2 / d_s)    (strata with d_s > 0.5 and SS_s > 0)
+
+    which is ``N - p`` when every stratum scatters alike and the dof of the dominant stratum
+    when one does. The bands of new data of the same mount use it
+    (:meth:`cylfric.model.FrictionModel.prediction_band`).
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        The fitted points: ``run``, and ``level`` (the pressure level's index) and
+        ``session`` where the campaign has them.
+    residuals : array
+        Measured minus fitted friction at each point [N].
+    jacobian : array (points x coefficients)
+        d friction / d fitted coefficient at each point [N per unit].
+    sigma : array, optional
+        The weighted fit's standard error of each point [N] (weights ``1 / sigma^2``).
+
+    Returns
+    -------
+    dict or None
+        ``method``, ``strata`` (``name``, ``sum_of_squares_N2`` [N^2], ``dof`` [-]) and
+        ``dof`` [-] (None when no stratum has degrees of freedom).
+    """
+    r = np.asarray(residuals, dtype=float)
+    jac = np.asarray(jacobian, dtype=float)
+    n = r.size
+    if jac.shape[0] != n or n < 2:
+        return None
+    weight = np.ones(n) if sigma is None else 1.0 / np.asarray(sigma, dtype=float) ** 2
+
+    def labels(column, default):
+        values = points[column] if column in points else pd.Series([default] * n)
+        return pd.Series(values.astype(str).to_numpy(), dtype=object)
+
+    session = labels("session", "1")
+    block = session + "|" + labels("level", "0")
+    run = block + "|" + labels("run", "0")  # a run inside its block
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0] = 1.0
+    jac = jac / scale
+    information = np.linalg.pinv(jac.T @ (jac * weight[:, None]))
+    traces, sums = [], []
+    for key in (session, block, run):
+        index, uniques = pd.factorize(key)
+        counts = np.bincount(index)
+        groups = counts.size
+        mean_r = _group_sums(index, r, groups) / counts
+        sums.append(float(np.sum(counts * mean_r**2)))  # r^T P r, P the group means
+        weighted = _group_sums(index, jac * weight[:, None], groups)
+        plain = _group_sums(index, jac, groups) / counts[:, None]
+        # tr(P (I - H)) = groups - tr((J^T W J)^-1 (W J)^T P J)
+        traces.append(groups - float(np.trace(information @ (weighted.T @ plain))))
+    sums.append(float(r @ r))
+    traces.append(n - float(np.trace(information @ (jac.T @ (jac * weight[:, None])))))
+    squares = np.diff(np.r_[0.0, sums])  # nested: each stratum is the next minus this one
+    dof = np.diff(np.r_[0.0, traces])
+    strata = [
+        {"name": name, "sum_of_squares_N2": float(max(ss, 0.0)), "dof": float(max(d, 0.0))}
+        for name, ss, d in zip(STRATA, squares, dof, strict=True)
+    ]
+    used = [(s["sum_of_squares_N2"], s["dof"]) for s in strata if s["dof"] > 0.5]
+    total = sum(ss for ss, _ in used)
+    spread = sum(ss**2 / d for ss, d in used if ss > 0)
+    nu = total**2 / spread if spread > 0 else None
+    return {"method": STRATA_METHOD, "strata": strata, "dof": nu}

@@ -693,6 +693,9 @@ def with_uncertainty(ident: Identification) -> Identification:
     except (ValueError, np.linalg.LinAlgError) as exc:
         notes.append(f"scatter components not computed ({exc}); bands: scope 'point' only")
     else:
+        strata = _residual_strata(model, points, residuals)
+        if strata is not None:
+            scatter["residual_variance"] = strata
         record["fit"] = {**record.get("fit", {}), "scatter": scatter}
         notes.append(scatter_note(scatter))
     test = lack_of_fit(points, residuals, n_parameters)
@@ -704,6 +707,24 @@ def with_uncertainty(ident: Identification) -> Identification:
                 + test["action"]
             )
     return replace(ident, model=model.replace(record=record), notes=notes)
+
+
+def _residual_strata(model: FrictionModel, points: pd.DataFrame, residuals: np.ndarray):
+    """The residual variance's strata and degrees of freedom
+    (:func:`cylfric.identify.scatter.residual_strata`), or None for a model without a
+    covariance (nothing fitted) or a design the strata cannot be formed on."""
+    from .scatter import residual_strata
+
+    if model.covariance is None or not len(model.covariance[0]):
+        return None
+    speed = points["velocity [m/s]"].abs().to_numpy(dtype=float)
+    pressure = points["pressure [Pa]"].to_numpy(dtype=float)
+    try:
+        jacobian = model._jacobian(speed, pressure)  # d friction / d fitted coefficient
+        sigma, _ = point_errors(points)
+        return residual_strata(points, residuals, jacobian, sigma)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
 
 
 def _mark_confounded(result: Identification, tie: Confounding) -> Identification:

@@ -882,8 +882,8 @@ class FrictionModel:
             )
         self.check(velocity, pressure, strict=strict)
         f = self._friction(velocity, pressure, self.coefficients())
-        n_dof = max(self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0), 1)
         same_mount = scope != "session" and self.covariance_nonrobust is not None
+        n_dof = self._residual_dof(nested=same_mount)
         se = self.standard_error(velocity, pressure, robust=not same_mount)
         if scope == "point":
             scatter_sd = residual_std
@@ -933,6 +933,24 @@ class FrictionModel:
             low, high = self.prediction_band(velocity, pressure, level, scope=narrower)
         half = np.maximum(half, 0.5 * (high - low))
         return f - half, f + half
+
+    def _residual_dof(self, *, nested: bool = True) -> float:
+        """Degrees of freedom [-] of the residual variance ``statistics["residual_std"]^2``.
+
+        ``nested`` (the bands of new data of the same mount, whose deviations repeat the
+        fitted residuals): the Satterthwaite degrees of freedom of the campaign's nested
+        strata where the fit recorded them (``fit.scatter.residual_variance.dof``:
+        :func:`cylfric.identify.scatter.residual_strata`; runs that share a pressure block
+        share its offset, so their residuals are fewer independent values than points), the
+        shape of the internally studentised residual's distribution. Else, and without the
+        record, ``n_points - n_variables``; at least 1.
+        """
+        plain = self.statistics.get("n_points", 0) - self.statistics.get("n_variables", 0)
+        strata = (self.scatter or {}).get("residual_variance") or {}
+        nu = strata.get("dof") if nested else None
+        if nu is not None and math.isfinite(nu) and nu > 0:
+            return float(max(min(nu, plain), 1.0))
+        return float(max(plain, 1))
 
     def correlations(self) -> tuple[tuple[str, ...], np.ndarray] | None:
         """(names, matrix) of the correlation coefficients of the fitted coefficients."""
