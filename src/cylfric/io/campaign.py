@@ -228,27 +228,30 @@ EDGE_BYTES = 4096
 whole (:func:`find_duplicates`)."""
 
 
-def _edges_digest(path: Path, size: int) -> bytes:
-    """SHA-256 of a file's first and last :data:`EDGE_BYTES` bytes (all of a short one):
-    one open, unbuffered, and two reads."""
-    import hashlib
+def _edges_digest(path: Path, size: int) -> int:
+    """CRC-32 of a file's first and last :data:`EDGE_BYTES` bytes (all of a short one): one
+    open, unbuffered, and two reads.
+
+    Only a filter: files whose edges agree are then compared by their SHA-256, so a CRC
+    collision costs a whole-file hash, never a wrong duplicate.
+    """
+    import zlib
 
     with open(path, "rb", buffering=0) as handle:
-        data = handle.read(EDGE_BYTES)
+        checksum = zlib.crc32(handle.read(EDGE_BYTES))
         if size > 2 * EDGE_BYTES:
             handle.seek(size - EDGE_BYTES)
-        data += handle.read(EDGE_BYTES)
-    return hashlib.sha256(data).digest()
+        return zlib.crc32(handle.read(EDGE_BYTES), checksum)
 
 
 def find_duplicates(paths) -> dict[Path, Path]:
     """Files whose bytes equal an earlier file's of ``paths``, each -> that first file.
 
-    Files are grouped by size, then by their first and last :data:`EDGE_BYTES` bytes; only
-    files that share both are hashed whole (SHA-256). A campaign whose files all differ in
-    size is not read here, and thousands of runs of one length (a bench's fixed sample
-    count) cost two short reads each, not a pass over every byte. Files that cannot be read
-    are left to the reader (which names them).
+    Files are grouped by size, then by their first and last :data:`EDGE_BYTES` bytes (a
+    CRC-32 of them); only files that share both are hashed whole (SHA-256). A campaign
+    whose files all differ in size is not read here, and thousands of runs of one length (a
+    bench's fixed sample count) cost one open and two short reads each, not a pass over
+    every byte. Files that cannot be read are left to the reader (which names them).
     """
     by_size: dict[int, list[Path]] = {}
     for path in paths:
@@ -1220,7 +1223,8 @@ class Campaign:
             for info in runs
             if info.path in copies
         )
-        runs = [info for info in runs if info.path not in copies]
+        if copies:
+            runs = [info for info in runs if info.path not in copies]
         unlisted = tuple(_unlisted(path, config, manifest))
         return cls(path, config, manifest, tuple(runs), unlisted, duplicates)
 
