@@ -31,3 +31,17 @@ def test_different_ends_are_not_hashed_whole(tmp_path, monkeypatch):
         (tmp_path / f"{i}.txt").write_bytes(bytes([i]) * (3 * EDGE_BYTES))
     assert find_duplicates(sorted(tmp_path.iterdir())) == {}
     assert hashed == []
+
+
+def test_edges_that_agree_by_chance_are_still_told_apart_by_sha256(tmp_path, monkeypatch):
+    """The edge check is only a filter (a CRC-32): files it cannot tell apart, as if every
+    checksum collided, are compared whole, and only true copies are reported."""
+    import cylfric.io.campaign as campaign
+
+    monkeypatch.setattr(campaign, "_edges_digest", lambda path, size: 0)
+    files = []
+    for name, fill in (("a.txt", b"a"), ("b.txt", b"b"), ("c.txt", b"a"), ("d.txt", b"b")):
+        files.append(tmp_path / name)
+        files[-1].write_bytes(fill * (3 * EDGE_BYTES))
+    a, b, c, d = files
+    assert find_duplicates(files) == {c: a, d: b}

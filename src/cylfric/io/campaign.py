@@ -228,33 +228,38 @@ EDGE_BYTES = 4096
 whole (:func:`find_duplicates`)."""
 
 
-def _edges_digest(path: Path, size: int) -> bytes:
-    """SHA-256 of a file's first and last :data:`EDGE_BYTES` bytes (all of a short one)."""
-    import hashlib
+def _edges_digest(path: Path, size: int) -> int:
+    """CRC-32 of a file's first and last :data:`EDGE_BYTES` bytes (all of a short one): one
+    open, unbuffered, and two reads.
 
-    with open(path, "rb") as handle:
-        data = handle.read(EDGE_BYTES)
+    Only a filter: files whose edges agree are then compared by their SHA-256, so a CRC
+    collision costs a whole-file hash, never a wrong duplicate.
+    """
+    import zlib
+
+    with open(path, "rb", buffering=0) as handle:
+        checksum = zlib.crc32(handle.read(EDGE_BYTES))
         if size > 2 * EDGE_BYTES:
             handle.seek(size - EDGE_BYTES)
-        data += handle.read(EDGE_BYTES)
-    return hashlib.sha256(data).digest()
+        return zlib.crc32(handle.read(EDGE_BYTES), checksum)
 
 
 def find_duplicates(paths) -> dict[Path, Path]:
     """Files whose bytes equal an earlier file's of ``paths``, each -> that first file.
 
-    Files are grouped by size, then by their first and last :data:`EDGE_BYTES` bytes; only
-    files that share both are hashed whole (SHA-256). A campaign whose files all differ in
-    size is not read here, and thousands of runs of one length (a bench's fixed sample
-    count) cost two short reads each, not a pass over every byte. Files that cannot be read
-    are left to the reader (which names them).
+    Files are grouped by size, then by their first and last :data:`EDGE_BYTES` bytes (a
+    CRC-32 of them); only files that share both are hashed whole (SHA-256). A campaign
+    whose files all differ in size is not read here, and thousands of runs of one length (a
+    bench's fixed sample count) cost one open and two short reads each, not a pass over
+    every byte. Files that cannot be read are left to the reader (which names them).
     """
     by_size: dict[int, list[Path]] = {}
     for path in paths:
         try:
-            by_size.setdefault(os.stat(path).st_size, []).append(Path(path))
+            size = os.stat(path).st_size
         except OSError:
             continue
+        by_size.setdefault(size, []).append(path if isinstance(path, Path) else Path(path))
     by_edges: dict[tuple, list[Path]] = {}
     for size, group in by_size.items():
         if len(group) > 1:
@@ -885,15 +890,12 @@ def _read_manifest(folder: Path) -> _Manifest:
             "velocity_mm_s (other columns, such as seal or test, are kept as labels)",
             line=1,
         )
+    known = {*_MANIFEST_COLUMNS, *TEMPERATURE_COLUMNS}  # the columns that are not labels
     for number, row in enumerate(reader, start=2):
         row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
         if not any(v for k, v in row.items() if k):  # a blank line
             continue
-        extra = {
-            k: v
-            for k, v in row.items()
-            if k not in (*_MANIFEST_COLUMNS, *TEMPERATURE_COLUMNS) and k
-        }
+        extra = {k: v for k, v in row.items() if k and k not in known}
         temperature = _manifest_temperature(row, path, number, delimiter)
         if temperature is not None:
             extra["temperature [K]"] = temperature
@@ -1005,17 +1007,19 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
         else None
     )
     runs = []
+    manifest_path = folder / MANIFEST_NAME
     for path in _candidates(folder, config, manifest):
         _check_encodable(path)
-        pressure, velocity, extra, source, nominal = _manifest_nominal(path, manifest)
+        name = path.name
+        pressure, velocity, extra, source, nominal = _manifest_nominal(name, manifest)
         if pattern is not None:
-            match = pattern.search(path.name)
+            match = pattern.search(name)
             if match:
                 pressure, velocity, extra = _name_pattern_nominal(
                     path, match, pressure, velocity, extra, source, nominal
                 )
-        line = manifest.lines.get(path.name)
-        listed = folder / MANIFEST_NAME if line is not None else None
+        line = manifest.lines.get(name)
+        listed = manifest_path if line is not None else None
         session = session_of(path, folder, config.glob, extra)
         if session is not None:
             extra = {**extra, "session": session}
@@ -1031,7 +1035,7 @@ def _candidates(folder: Path, config: CampaignConfig, manifest: _Manifest) -> li
     """The manifest's files matching the glob, in its order; without a manifest, the
     folder's files matching the glob, sorted (hidden files and cylfric's own left out)."""
     if manifest:  # a row for a missing file stops its run in read_run (skippable)
-        return [folder / name for name in manifest if fnmatch.fnmatch(name, config.glob)]
+        return [folder / name for name in fnmatch.filter(manifest, config.glob)]
     return sorted(
         p
         for p in folder.glob(config.glob)
@@ -1039,9 +1043,9 @@ def _candidates(folder: Path, config: CampaignConfig, manifest: _Manifest) -> li
     )
 
 
-def _manifest_nominal(path: Path, manifest: _Manifest):
-    """(pressure [Pa], velocity [m/s], extra labels, source, nominal) of ``path`` from
-    manifest.csv; NaN, empty labels and no source when the manifest does not list it.
+def _manifest_nominal(name: str, manifest: _Manifest):
+    """(pressure [Pa], velocity [m/s], extra labels, source, nominal) of the file ``name``
+    from manifest.csv; NaN, empty labels and no source when the manifest does not list it.
 
     ``source`` maps a quantity to where its value comes from; ``nominal`` maps each
     quantity to {origin: (value [SI], where)}.
@@ -1050,10 +1054,10 @@ def _manifest_nominal(path: Path, manifest: _Manifest):
     extra: dict = {}
     source: dict[str, str] = {}
     nominal: dict[str, dict[str, tuple[float, str]]] = {"pressure": {}, "velocity": {}}
-    if path.name in manifest:
-        pressure, velocity, extra = manifest[path.name]
+    if name in manifest:
+        pressure, velocity, extra = manifest[name]
         source = {"pressure": "manifest", "velocity": "manifest"}
-        where = f"{MANIFEST_NAME} line {manifest.lines[path.name]}"
+        where = f"{MANIFEST_NAME} line {manifest.lines[name]}"
         for quantity, value in (("pressure", pressure), ("velocity", velocity)):
             if math.isnan(value):
                 del source[quantity]
@@ -1106,10 +1110,10 @@ def session_of(path: Path, folder: Path, glob: str, labels: Mapping[str, Any]) -
     if value is not None and str(value).strip():
         return str(value).strip()
     first = glob.replace("\\", "/").split("/", 1)
+    if len(first) < 2 or not any(c in first[0] for c in "*?["):
+        return None  # a glob within the folder, or below a literal folder: no sessions
     parts = path.relative_to(folder).parts if path.is_relative_to(folder) else (path.name,)
-    if len(first) == 2 and any(c in first[0] for c in "*?[") and len(parts) > 1:
-        return parts[0]
-    return None
+    return parts[0] if len(parts) > 1 else None
 
 
 def unlisted_files(folder, config: CampaignConfig | None = None) -> list[str]:
@@ -1130,11 +1134,11 @@ def _unlisted(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     return sorted(
         p.relative_to(folder).as_posix()
         for p in folder.glob(config.glob)
-        if p.is_file()
-        and p.relative_to(folder).as_posix() not in manifest
-        and p.name not in manifest
+        if p.name not in manifest  # the names first: no stat and no path arithmetic for them
         and p.name not in _SKIP_NAMES
         and not p.name.startswith(".")
+        and p.relative_to(folder).as_posix() not in manifest
+        and p.is_file()
     )
 
 
@@ -1219,7 +1223,8 @@ class Campaign:
             for info in runs
             if info.path in copies
         )
-        runs = [info for info in runs if info.path not in copies]
+        if copies:
+            runs = [info for info in runs if info.path not in copies]
         unlisted = tuple(_unlisted(path, config, manifest))
         return cls(path, config, manifest, tuple(runs), unlisted, duplicates)
 
