@@ -380,11 +380,22 @@ def _covariance(residuals, x, groups, dof):
             for h, e in zip(steps, np.eye(x.size), strict=True)
         ]
     )
+    return _cluster_robust(jac, r, groups, dof)
+
+
+def _cluster_robust(jac, r, groups, dof):
+    """:func:`_covariance` from the Jacobian ``jac`` (points x coefficients) of the weighted
+    residuals ``r`` (points): the same four values.
+
+    The runs' CR2 adjustments are computed for all runs of one size at once (stacked
+    ``(runs, m, m)`` arrays through :func:`numpy.linalg.eigh`), so the cost grows with the
+    number of points, not with points x runs.
+    """
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
     scaled = jac / scale
     bread = np.linalg.pinv(scaled.T @ scaled) / np.outer(scale, scale)
-    n, k = jac.shape
+    k = jac.shape[1]
     nonrobust = bread * float(r @ r) / dof
     if groups is None:
         return nonrobust, dof, None, nonrobust
@@ -399,12 +410,20 @@ def _covariance(residuals, x, groups, dof):
     information = scaled.T @ scaled
     inverse = np.linalg.pinv(information)
     influence = np.empty((g, k))
-    for label in range(g):
-        rows = index == label
-        js = scaled[rows]
-        leverage, vectors = np.linalg.eigh(js @ inverse @ js.T)
-        adjust = (vectors / np.sqrt(np.clip(1.0 - leverage, 1e-12, None))) @ vectors.T
-        influence[label] = (inverse @ (js.T @ (adjust @ r[rows]))) / scale
+    index = index.reshape(-1)
+    sizes = np.bincount(index, minlength=g)
+    order = np.argsort(index, kind="stable")  # each run's points together, in their order
+    starts = np.cumsum(sizes) - sizes
+    for m in np.unique(sizes):  # the runs with m points each, as stacked arrays
+        runs = np.flatnonzero(sizes == m)
+        rows = order[starts[runs, None] + np.arange(m)]  # (runs, m)
+        js = scaled[rows]  # (runs, m, k)
+        js_t = js.transpose(0, 2, 1)
+        leverage, vectors = np.linalg.eigh(js @ inverse @ js_t)  # of H_gg
+        root = np.sqrt(np.clip(1.0 - leverage, 1e-12, None))
+        adjust = (vectors / root[:, None, :]) @ vectors.transpose(0, 2, 1)
+        score = js_t @ (adjust @ r[rows][..., None])  # J_g^T A_g r_g: (runs, k, 1)
+        influence[runs] = (inverse @ score)[..., 0] / scale
     return influence.T @ influence, g - k, influence, nonrobust
 
 
