@@ -23,7 +23,13 @@ from scipy.optimize import curve_fit
 from ..friction import stribeck_unchecked
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS, PRESSURE_LAWS, exponential_by_slope
 from ..model import PARAMETER_BOUNDS, FrictionModel
-from .stribeck_fit import design_columns, robust_least_squares, solve_linear
+from .stribeck_fit import (
+    design_columns,
+    grid_rss,
+    near_minimum,
+    robust_least_squares,
+    solve_linear,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -201,14 +207,27 @@ class SurfaceFit:
 
 
 def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
+    """Coefficients, v_r and alpha of the grid node of least RSS (variable projection).
+
+    All nodes are screened at once (:func:`grid_rss`); the few near the minimum are solved
+    again one by one with :func:`solve_linear`, which decides (in grid order, the first of
+    equal values), so the start is the same as solving every node that way.
+    """
+    nodes = [(v_r, alpha) for v_r in v_r_grid for alpha in alpha_grid]
+    screened, trusted = grid_rss(
+        speed, p_bar, force, [n[0] for n in nodes], [n[1] for n in nodes]
+    )
     best: tuple[float, Any] = (np.inf, None)
-    for v_r in v_r_grid:
-        for alpha in alpha_grid:
-            a = design_columns(speed, p_bar, v_r, alpha)
-            coef = solve_linear(a, force)
-            rss = float(np.sum((a @ coef - force) ** 2))
-            if rss < best[0]:
-                best = (rss, (coef, v_r, alpha))
+    for (v_r, alpha), candidate in zip(
+        nodes, near_minimum(screened, trusted, force), strict=True
+    ):
+        if not candidate:
+            continue
+        a = design_columns(speed, p_bar, v_r, alpha)
+        coef = solve_linear(a, force)
+        rss = float(np.sum((a @ coef - force) ** 2))
+        if rss < best[0]:
+            best = (rss, (coef, v_r, alpha))
     return best[1]
 
 
