@@ -180,8 +180,7 @@ def grid_rss(
             e *= c0[:, None] + c1[:, None] * pressure
             np.subtract(y, e, out=e)
             shift = c0[:, None] * qe + c1[:, None] * qpe  # Q^T w
-            for k in range(columns.shape[0]):
-                e += shift[:, k, None] * columns[k]
+            e += shift @ columns
             rss[nodes] = np.where(ok, np.einsum("ij,ij->i", e, e), np.nan)
             trusted[nodes] = ok
     return rss, trusted
