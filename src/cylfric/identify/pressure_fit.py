@@ -214,13 +214,9 @@ def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
     equal values), so the start is the same as solving every node that way.
     """
     nodes = [(v_r, alpha) for v_r in v_r_grid for alpha in alpha_grid]
-    screened, trusted = grid_rss(
-        speed, p_bar, force, [n[0] for n in nodes], [n[1] for n in nodes]
-    )
+    screened, trusted = grid_rss(speed, p_bar, force, [n[0] for n in nodes], [n[1] for n in nodes])
     best: tuple[float, Any] = (np.inf, None)
-    for (v_r, alpha), candidate in zip(
-        nodes, near_minimum(screened, trusted, force), strict=True
-    ):
+    for (v_r, alpha), candidate in zip(nodes, near_minimum(screened, trusted, force), strict=True):
         if not candidate:
             continue
         a = design_columns(speed, p_bar, v_r, alpha)
