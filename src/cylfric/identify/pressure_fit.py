@@ -398,6 +398,10 @@ def _covariance(residuals, x, groups, dof):
     return _cluster_robust(jac, r, groups, dof)
 
 
+_STACK = 2**20
+"""Matrix elements per stacked array of :func:`_cluster_robust` (8 MB of float64)."""
+
+
 def _cluster_robust(jac, r, groups, dof):
     """:func:`_covariance` from the Jacobian ``jac`` (points x coefficients) of the weighted
     residuals ``r`` (points): the same four values.
@@ -430,15 +434,18 @@ def _cluster_robust(jac, r, groups, dof):
     order = np.argsort(index, kind="stable")  # each run's points together, in their order
     starts = np.cumsum(sizes) - sizes
     for m in np.unique(sizes):  # the runs with m points each, as stacked arrays
-        runs = np.flatnonzero(sizes == m)
-        rows = order[starts[runs, None] + np.arange(m)]  # (runs, m)
-        js = scaled[rows]  # (runs, m, k)
-        js_t = js.transpose(0, 2, 1)
-        leverage, vectors = np.linalg.eigh(js @ inverse @ js_t)  # of H_gg
-        root = np.sqrt(np.clip(1.0 - leverage, 1e-12, None))
-        adjust = (vectors / root[:, None, :]) @ vectors.transpose(0, 2, 1)
-        score = js_t @ (adjust @ r[rows][..., None])  # J_g^T A_g r_g: (runs, k, 1)
-        influence[runs] = (inverse @ score)[..., 0] / scale
+        same = np.flatnonzero(sizes == m)
+        step = max(1, _STACK // (m * max(m, k)))  # runs per stack: memory bounded
+        for first in range(0, same.size, step):
+            runs = same[first : first + step]
+            rows = order[starts[runs, None] + np.arange(m)]  # (runs, m)
+            js = scaled[rows]  # (runs, m, k)
+            js_t = js.transpose(0, 2, 1)
+            leverage, vectors = np.linalg.eigh(js @ inverse @ js_t)  # of H_gg
+            root = np.sqrt(np.clip(1.0 - leverage, 1e-12, None))
+            adjust = (vectors / root[:, None, :]) @ vectors.transpose(0, 2, 1)
+            score = js_t @ (adjust @ r[rows][..., None])  # J_g^T A_g r_g: (runs, k, 1)
+            influence[runs] = (inverse @ score)[..., 0] / scale
     return influence.T @ influence, g - k, influence, nonrobust
 
 
