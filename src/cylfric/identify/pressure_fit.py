@@ -23,7 +23,13 @@ from scipy.optimize import curve_fit
 from ..friction import stribeck_unchecked
 from ..friction.pressure import PRESSURE_LAW_COEFFICIENTS, PRESSURE_LAWS, exponential_by_slope
 from ..model import PARAMETER_BOUNDS, FrictionModel
-from .stribeck_fit import design_columns, robust_least_squares, solve_linear
+from .stribeck_fit import (
+    design_columns,
+    grid_rss,
+    near_minimum,
+    robust_least_squares,
+    solve_linear,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -201,14 +207,23 @@ class SurfaceFit:
 
 
 def _grid_start(speed, p_bar, force, v_r_grid, alpha_grid):
+    """Coefficients, v_r and alpha of the grid node of least RSS (variable projection).
+
+    All nodes are screened at once (:func:`grid_rss`); the few near the minimum are solved
+    again one by one with :func:`solve_linear`, which decides (in grid order, the first of
+    equal values), so the start is the same as solving every node that way.
+    """
+    nodes = [(v_r, alpha) for v_r in v_r_grid for alpha in alpha_grid]
+    screened, trusted = grid_rss(speed, p_bar, force, [n[0] for n in nodes], [n[1] for n in nodes])
     best: tuple[float, Any] = (np.inf, None)
-    for v_r in v_r_grid:
-        for alpha in alpha_grid:
-            a = design_columns(speed, p_bar, v_r, alpha)
-            coef = solve_linear(a, force)
-            rss = float(np.sum((a @ coef - force) ** 2))
-            if rss < best[0]:
-                best = (rss, (coef, v_r, alpha))
+    for (v_r, alpha), candidate in zip(nodes, near_minimum(screened, trusted, force), strict=True):
+        if not candidate:
+            continue
+        a = design_columns(speed, p_bar, v_r, alpha)
+        coef = solve_linear(a, force)
+        rss = float(np.sum((a @ coef - force) ** 2))
+        if rss < best[0]:
+            best = (rss, (coef, v_r, alpha))
     return best[1]
 
 
@@ -380,11 +395,26 @@ def _covariance(residuals, x, groups, dof):
             for h, e in zip(steps, np.eye(x.size), strict=True)
         ]
     )
+    return _cluster_robust(jac, r, groups, dof)
+
+
+_STACK = 2**20
+"""Matrix elements per stacked array of :func:`_cluster_robust` (8 MB of float64)."""
+
+
+def _cluster_robust(jac, r, groups, dof):
+    """:func:`_covariance` from the Jacobian ``jac`` (points x coefficients) of the weighted
+    residuals ``r`` (points): the same four values.
+
+    The runs' CR2 adjustments are computed for all runs of one size at once (stacked
+    ``(runs, m, m)`` arrays through :func:`numpy.linalg.eigh`), so the cost grows with the
+    number of points, not with points x runs.
+    """
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
     scaled = jac / scale
     bread = np.linalg.pinv(scaled.T @ scaled) / np.outer(scale, scale)
-    n, k = jac.shape
+    k = jac.shape[1]
     nonrobust = bread * float(r @ r) / dof
     if groups is None:
         return nonrobust, dof, None, nonrobust
@@ -399,12 +429,23 @@ def _covariance(residuals, x, groups, dof):
     information = scaled.T @ scaled
     inverse = np.linalg.pinv(information)
     influence = np.empty((g, k))
-    for label in range(g):
-        rows = index == label
-        js = scaled[rows]
-        leverage, vectors = np.linalg.eigh(js @ inverse @ js.T)
-        adjust = (vectors / np.sqrt(np.clip(1.0 - leverage, 1e-12, None))) @ vectors.T
-        influence[label] = (inverse @ (js.T @ (adjust @ r[rows]))) / scale
+    index = index.reshape(-1)
+    sizes = np.bincount(index, minlength=g)
+    order = np.argsort(index, kind="stable")  # each run's points together, in their order
+    starts = np.cumsum(sizes) - sizes
+    for m in np.unique(sizes):  # the runs with m points each, as stacked arrays
+        same = np.flatnonzero(sizes == m)
+        step = max(1, _STACK // (m * max(m, k)))  # runs per stack: memory bounded
+        for first in range(0, same.size, step):
+            runs = same[first : first + step]
+            rows = order[starts[runs, None] + np.arange(m)]  # (runs, m)
+            js = scaled[rows]  # (runs, m, k)
+            js_t = js.transpose(0, 2, 1)
+            leverage, vectors = np.linalg.eigh(js @ inverse @ js_t)  # of H_gg
+            root = np.sqrt(np.clip(1.0 - leverage, 1e-12, None))
+            adjust = (vectors / root[:, None, :]) @ vectors.transpose(0, 2, 1)
+            score = js_t @ (adjust @ r[rows][..., None])  # J_g^T A_g r_g: (runs, k, 1)
+            influence[runs] = (inverse @ score)[..., 0] / scale
     return influence.T @ influence, g - k, influence, nonrobust
 
 

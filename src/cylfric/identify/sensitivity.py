@@ -14,7 +14,7 @@ import pandas as pd
 from scipy.optimize import minimize
 
 from ..model import FrictionModel
-from .stribeck_fit import design_columns, solve_linear
+from .stribeck_fit import design_columns, grid_rss, near_minimum, solve_linear
 
 if TYPE_CHECKING:
     from typing import Any
@@ -123,10 +123,27 @@ def sensitivity_grid(
         if v_rs is None
         else np.asarray(v_rs, dtype=float)
     )
+    nodes = [(a, v) for a in alphas for v in v_rs]
+    force = np.asarray(friction, dtype=float)
+    # all nodes screened at once; those near the minimum solved again one by one, so the
+    # minimum and the refinement's start are those of solving every node with rmse_at
+    rss, trusted = grid_rss(
+        speed,
+        np.asarray(pressure, dtype=float) / 1e5,
+        force,
+        [v for _, v in nodes],
+        [a for a, _ in nodes],
+    )
+    exact = near_minimum(rss, trusted, force)
     rows = [
-        {"alpha [-]": a, "v_r [m/s]": v, "rmse [N]": rmse_at(velocity, pressure, friction, v, a)}
-        for a in alphas
-        for v in v_rs
+        {
+            "alpha [-]": a,
+            "v_r [m/s]": v,
+            "rmse [N]": rmse_at(velocity, pressure, friction, v, a)
+            if again
+            else float(np.sqrt(r / force.size)),
+        }
+        for (a, v), r, again in zip(nodes, rss, exact, strict=True)
     ]
     table = pd.DataFrame(rows)
     # the row of the smallest rmse (idxmin: a label of the RangeIndex); all-float columns

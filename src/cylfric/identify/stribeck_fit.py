@@ -37,6 +37,8 @@ __all__ = [
     "BOUNDS",
     "IdentificationWarning",
     "design_columns",
+    "grid_rss",
+    "near_minimum",
 ]
 
 PARAMETERS = STEADY_PARAMETERS
@@ -107,6 +109,92 @@ def solve_linear(a: np.ndarray, y: np.ndarray) -> np.ndarray:
     except np.linalg.LinAlgError:
         coef = np.linalg.lstsq(scaled, y, rcond=None)[0]
     return coef / scale
+
+
+GRID_BLOCK = 2**18
+"""Points x nodes :func:`grid_rss` evaluates at once: its work arrays (2 MB of float64
+each) stay in the processor's cache."""
+
+
+def grid_rss(
+    speed: np.ndarray, pressure: np.ndarray, force: np.ndarray, v_r: ArrayLike, alpha: ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
+    """Residual sum of squares [N^2] of the model linear in the six pressure-law coefficients
+    (:func:`design_columns`) at many fixed (``v_r`` [m/s], ``alpha`` [-]) nodes at once.
+
+    The design's columns span the same space as ``[1, p, v, p v]``, fixed at every node, and
+    ``[e, p e]``, the node's own (``e`` the Stribeck decay): the fixed part is projected out
+    once (SVD) and each node solves a 2 x 2 problem on its projected columns, the nodes of
+    one ``alpha`` in blocks of stacked rows. The values equal :func:`solve_linear`'s to
+    rounding (about 1e-13 relative), not to the bit: callers that need the bit (a start
+    value, a minimum) solve the few nodes near the minimum again (:func:`near_minimum`).
+
+    Returns
+    -------
+    rss : ndarray
+        Residual sum of squares at each node [N^2] (NaN where not trusted).
+    trusted : ndarray of bool
+        False where a node's projected columns are too close to collinear (or zero) for the
+        2 x 2 solve to agree with :func:`solve_linear` to rounding; all False when the fixed
+        columns are collinear themselves (a single pressure or speed).
+    """
+    v_r = np.atleast_1d(np.asarray(v_r, dtype=float))
+    alpha = np.broadcast_to(np.asarray(alpha, dtype=float), v_r.shape)
+    rss = np.full(v_r.shape, np.nan)
+    trusted = np.zeros(v_r.shape, dtype=bool)
+    fixed = np.column_stack([np.ones_like(speed), pressure, speed, pressure * speed])
+    fixed = fixed / np.linalg.norm(fixed, axis=0)
+    basis, singular, _ = np.linalg.svd(fixed, full_matrices=False)
+    if singular[-1] < 1e-8 * singular[0]:  # collinear fixed columns: no shortcut
+        return rss, trusted
+    y = force - basis @ (basis.T @ force)  # the force the fixed columns do not explain
+    products = np.column_stack([y, pressure * y, basis, pressure[:, None] * basis])
+    weights = np.column_stack([np.ones_like(pressure), pressure, pressure**2])
+    columns = basis.T.copy()  # (4, points)
+    block = max(1, GRID_BLOCK // max(speed.size, 1))
+    for value in np.unique(alpha):
+        powered = speed**value  # (v / v_r)^alpha = v^alpha * v_r^-alpha
+        members = np.flatnonzero(alpha == value)
+        for first in range(0, members.size, block):
+            nodes = members[first : first + block]
+            e = np.multiply(v_r[nodes, None] ** -value, powered)  # (nodes, points)
+            np.exp(-e, out=e)
+            dots = e @ products  # e.y, (p e).y, Q^T e, Q^T (p e)
+            squares = (e * e) @ weights  # e.e, e.(p e), (p e).(p e)
+            qe, qpe = dots[:, 2:6], dots[:, 6:10]
+            # Gram of the projected columns [e, p e]; cancellation below 1e-8: not trusted
+            g00 = squares[:, 0] - np.einsum("ij,ij->i", qe, qe)
+            g01 = squares[:, 1] - np.einsum("ij,ij->i", qe, qpe)
+            g11 = squares[:, 2] - np.einsum("ij,ij->i", qpe, qpe)
+            ok = (g00 > 1e-8 * squares[:, 0]) & (g11 > 1e-8 * squares[:, 2])
+            n0 = np.sqrt(np.where(ok, g00, 1.0))
+            n1 = np.sqrt(np.where(ok, g11, 1.0))
+            cos = g01 / (n0 * n1)  # the 2 x 2 problem scaled to unit columns
+            det = 1.0 - cos**2
+            ok &= det > 1e-8
+            det = np.where(ok, det, 1.0)
+            p0, p1 = dots[:, 0] / n0, dots[:, 1] / n1
+            c0 = (p0 - cos * p1) / det / n0
+            c1 = (p1 - cos * p0) / det / n1
+            # residual y_perp - (w - Q Q^T w), w = c0 e + c1 p e, formed in place
+            e *= c0[:, None] + c1[:, None] * pressure
+            np.subtract(y, e, out=e)
+            shift = c0[:, None] * qe + c1[:, None] * qpe  # Q^T w
+            e += shift @ columns
+            rss[nodes] = np.where(ok, np.einsum("ij,ij->i", e, e), np.nan)
+            trusted[nodes] = ok
+    return rss, trusted
+
+
+def near_minimum(rss: np.ndarray, trusted: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Nodes of :func:`grid_rss` to re-evaluate exactly: untrusted ones and those within
+    rounding of the smallest trusted RSS (relative 1e-6, absolute 1e-9 ||force||^2 [N^2]),
+    so that the exact minimum over all nodes is among them."""
+    if not trusted.any():
+        return np.ones(rss.shape, dtype=bool)
+    least = float(np.min(rss[trusted]))
+    margin = 1e-6 * least + 1e-9 * float(force @ force)
+    return ~trusted | (rss <= least + margin)
 
 
 @dataclass(frozen=True)
