@@ -16,12 +16,25 @@ import numpy as np
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["convolve_nearest", "median", "median_deviation", "rolling_median", "rolling_mean"]
+__all__ = [
+    "convolve_nearest",
+    "median",
+    "median_deviation",
+    "median_and_deviation",
+    "rolling_median",
+    "rolling_mean",
+]
 
 
 def _padded(x, before, after):
+    """``x`` with its first value repeated ``before`` times and its last ``after`` times."""
     x = np.asarray(x, dtype=float)
-    return np.concatenate((np.full(before, x[0]), x, np.full(after, x[-1])))
+    n = x.size
+    out = np.empty(before + n + after)
+    out[:before] = x[0]
+    out[before : before + n] = x
+    out[before + n :] = x[-1]
+    return out
 
 
 def convolve_nearest(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
@@ -82,8 +95,9 @@ def _median(x):
 def _median_deviation(x):
     for value in x:
         if np.isnan(value):
-            return np.nan
-    return np.median(np.abs(x - np.median(x)))
+            return np.nan, np.nan
+    centre = np.median(x)
+    return centre, np.median(np.abs(x - centre))
 
 
 def median(x: np.ndarray) -> float:
@@ -97,5 +111,14 @@ def median(x: np.ndarray) -> float:
 def median_deviation(x: np.ndarray) -> float:
     """``np.median(np.abs(x - np.median(x)))`` [units of x] (the median absolute deviation,
     unscaled) of a 1-D float array; NaN if ``x`` holds a NaN or is empty."""
+    return median_and_deviation(x)[1]
+
+
+def median_and_deviation(x: np.ndarray) -> tuple[float, float]:
+    """``(median(x), median_deviation(x))`` [units of x] in one pass (the median is computed
+    once); (NaN, NaN) if ``x`` holds a NaN or is empty."""
     x = np.asarray(x, dtype=float)
-    return float(_median_deviation(x)) if x.size else np.nan
+    if not x.size:
+        return np.nan, np.nan
+    centre, deviation = _median_deviation(x)
+    return float(centre), float(deviation)

@@ -357,14 +357,15 @@ def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
     rolling = rolling_median(force, w)
     centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
     level = median(centre)
-    spread = 1.4826 * median_deviation(force) / math.sqrt(w)
+    deviation = median_deviation(force)
+    spread = 1.4826 * deviation / math.sqrt(w)
     limit = max(trim_sigma * spread, trim_floor)
     outside = np.abs(rolling - level) > limit
     # a slow drift (cushioning starting to engage) hides under the noise of a short median:
     # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
     w_long = max(w, n // 10)
     if w_long > w:
-        sigma = 1.4826 * median_deviation(force)
+        sigma = 1.4826 * deviation
         # isolated spikes (a sample or a few, far from the rolling median) are replaced by
         # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
         # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
@@ -508,7 +509,7 @@ def _point_rows(data, metadata, config, run, options):
         )
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
-    from ._filters import median, median_deviation
+    from ._filters import median_and_deviation
 
     extra = metadata.get("extra", {})
     rows = []
@@ -517,8 +518,8 @@ def _point_rows(data, metadata, config, run, options):
         v = velocity[w.start : w.stop]
         keep = np.zeros(0, bool)
         if f.size:
-            med = median(f)
-            sigma = 1.4826 * median_deviation(f) or float(np.std(f))
+            med, deviation = median_and_deviation(f)
+            sigma = 1.4826 * deviation or float(np.std(f))
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
         n = int(keep.sum())
         if pressure is not None and n:

@@ -18,6 +18,7 @@ import codecs
 import hashlib
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -116,8 +117,11 @@ _KEY_VALUE = re.compile(r"^\s*([A-Za-zÀ-ÿ][^:=|]{0,60}?)\s*[:=]\s*(.*?)\s*$")
 _MAX_TEXT_LINES = 5000
 
 
+@lru_cache(maxsize=1024)
 def canonical_name(name: str) -> str | None:
-    """Map a column name such as ``Axial Force`` or ``Zeit`` to a canonical quantity."""
+    """Map a column name such as ``Axial Force`` or ``Zeit`` to a canonical quantity.
+
+    Memoised per name (every run file of a campaign repeats the same few columns)."""
     low = " ".join(name.lower().replace("_", " ").replace("-", " ").split())
     if any(word in low.split() for word in ("raw", "volt", "voltage", "signal")):
         return None  # raw sensor channels are kept as read, never taken for a quantity
