@@ -1,13 +1,24 @@
-"""The extraction's own filters equal scipy.ndimage's with mode="nearest"."""
+"""The extraction's own filters equal scipy.ndimage's with mode="nearest"; its compiled window
+tests equal their numpy form."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 from scipy.ndimage import convolve1d, median_filter, uniform_filter1d
 
-from cylfric._filters import convolve_nearest, rolling_mean, rolling_median
+from cylfric._filters import (
+    convolve_nearest,
+    median,
+    median_deviation,
+    rolling_mean,
+    rolling_median,
+    settling_start,
+    trim_by_force,
+)
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 17, 1000, 10001])
@@ -25,3 +36,67 @@ def test_filters_equal_scipy_ndimage_nearest(n, size):
     else:
         with pytest.raises(ValueError, match="odd size"):
             rolling_median(x, size)
+
+
+def _settling_reference(force, median_window, sigma, tolerance, min_samples, spike_sigma):
+    """The settling test as numpy expressions (its form before it was compiled)."""
+    n = len(force)
+    if n < 4 * max(min_samples, 1) or sigma <= 0:
+        return 0
+    w = max(median_window, n // 20) | 1
+    rolling = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
+    residual = force - rolling
+    noise = 1.4826 * median_deviation(residual)
+    clean = np.where(np.abs(residual) > spike_sigma * noise, rolling, force) if noise > 0 else force
+    mean = rolling_mean(clean, w)
+    half = n // 2
+    final = median(clean[half:])
+    spread = max(1.4826 * median_deviation(mean[half:]), noise / math.sqrt(w))
+    band = max(sigma * spread, tolerance * abs(final))
+    outside = np.flatnonzero(np.abs(mean[:half] - final) > band)
+    return min(int(outside[-1]) + 1 + w // 2, half) if outside.size else 0
+
+
+def _trim_reference(force, trim_sigma, trim_floor, w, spike_sigma):
+    """The cushion trimming as numpy expressions (its form before it was compiled)."""
+    n = len(force)
+    rolling = rolling_median(force, w)
+    level = median(rolling[n // 4 : n - n // 4] if n >= 8 else rolling)
+    sigma = 1.4826 * median_deviation(force)
+    outside = np.abs(rolling - level) > max(trim_sigma * (sigma / math.sqrt(w)), trim_floor)
+    w_long = max(w, n // 10)
+    if w_long > w:
+        residual = force - rolling
+        noise = 1.4826 * median_deviation(residual)
+        spikes = np.abs(residual) > spike_sigma * noise if noise > 0 else residual != 0
+        mean = rolling_mean(np.where(spikes, rolling, force), w_long)
+        outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
+    outside = np.flatnonzero(outside)
+    before, after = outside[outside < n // 2], outside[outside >= n // 2]
+    return (int(before[-1]) + 1 if before.size else 0, int(after[0]) if after.size else n)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_window_tests_equal_their_numpy_form(seed):
+    """settling_start and trim_by_force give the samples of the numpy expressions exactly, on
+    windows [N] with noise, drift, cushioning ramps, spikes, quantised and constant readings."""
+    rng = np.random.default_rng(seed)
+    for _ in range(150):
+        n = int(rng.integers(1, 2500))
+        force = 150.0 + rng.normal(size=n) * rng.choice([0.0, 0.1, 1.0, 10.0])
+        if rng.random() < 0.5:  # a settling transient or a cushion: a ramp at one end
+            force += (
+                rng.normal() * 20 * np.linspace(rng.choice([-1, 0]), rng.choice([0, 1]), n) ** 3
+            )
+        if rng.random() < 0.3:
+            force[rng.integers(0, n, 3)] += 150.0
+        if rng.random() < 0.3:
+            force = np.round(force, 1)
+        size, floor = int(rng.choice([1, 3, 9, 21])), float(rng.choice([0.0, 1.0]))
+        assert settling_start(force, size, 3.0, 0.005, 10, 5.0) == _settling_reference(
+            force, size, 3.0, 0.005, 10, 5.0
+        )
+        w = min(size, max(1, n // 3) | 1)
+        assert trim_by_force(force, 4.0, floor, w, 5.0) == _trim_reference(
+            force, 4.0, floor, w, 5.0
+        )

@@ -1,13 +1,22 @@
-"""Three 1-D filters of the steady-state extraction, with edge values repeated ("nearest").
+"""Three 1-D filters of the steady-state extraction, with edge values repeated ("nearest"),
+and the compiled window tests built on them.
 
-They equal :func:`scipy.ndimage.convolve1d`, :func:`~scipy.ndimage.median_filter` (odd
+The filters equal :func:`scipy.ndimage.convolve1d`, :func:`~scipy.ndimage.median_filter` (odd
 sizes) and :func:`~scipy.ndimage.uniform_filter1d` with ``mode="nearest"`` to rounding
 (``tests/test_filters.py``), without importing scipy.ndimage (about 0.2 s) before the
 extraction can start: scipy is imported while the second extraction worker reads files.
+
+:func:`settling_start` and :func:`trim_by_force` are the force tests of each stroke window
+(:func:`cylfric.steady_state.find_windows`, whose helpers document them) in one compiled
+call each: the same operations as the numpy expressions they replaced (no sum is
+reordered: the rolling mean is a sequential cumulative sum, as ``np.cumsum``), without
+twenty small numpy calls per window.
 """
 
 from __future__ import annotations
 
+import math
+import operator
 from typing import TYPE_CHECKING
 
 import numba
@@ -23,6 +32,8 @@ __all__ = [
     "median_and_deviation",
     "rolling_median",
     "rolling_mean",
+    "settling_start",
+    "trim_by_force",
 ]
 
 
@@ -122,3 +133,150 @@ def median_and_deviation(x: np.ndarray) -> tuple[float, float]:
         return np.nan, np.nan
     centre, deviation = _median_deviation(x)
     return float(centre), float(deviation)
+
+
+@numba.njit(cache=True, nogil=True)
+def _padded_nb(x, before, after):
+    n = x.size
+    out = np.empty(before + n + after)
+    out[:before] = x[0]
+    out[before : before + n] = x
+    out[before + n :] = x[-1]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _rolling_median_nb(x, size):
+    """:func:`rolling_median` (``size`` odd) of a non-empty ``x``."""
+    return _rolling_median(_padded_nb(x, size // 2, size // 2), size, np.empty(x.size))
+
+
+@numba.njit(cache=True, nogil=True)
+def _rolling_mean_nb(x, size):
+    """:func:`rolling_mean` of a non-empty ``x``: the same sequential sums as ``np.cumsum``."""
+    padded = _padded_nb(x, size // 2, size - 1 - size // 2)
+    base = padded[0]
+    sums = np.empty(padded.size + 1)
+    sums[0] = 0.0
+    total = 0.0
+    for i in range(padded.size):
+        total += padded[i] - base
+        sums[i + 1] = total
+    return (sums[size:] - sums[:-size]) / size + base
+
+
+@numba.njit(cache=True, nogil=True)
+def _median_nb(x):
+    return _median(x) if x.size else np.nan
+
+
+@numba.njit(cache=True, nogil=True)
+def _deviation_nb(x):
+    return _median_deviation(x)[1] if x.size else np.nan
+
+
+@numba.njit(cache=True, nogil=True)
+def _max(a, b):
+    return b if b > a else a  # Python's max(a, b), NaN included
+
+
+@numba.njit(cache=True, nogil=True)
+def _settling_start(force, median_window, sigma, tolerance, min_samples, spike_sigma):
+    n = force.size
+    if n < 4 * max(min_samples, 1) or sigma <= 0:
+        return 0
+    w = max(median_window, n // 20) | 1
+    rolling = _rolling_median_nb(force, min(median_window, max(1, n // 3)) | 1)
+    residual = force - rolling
+    noise = 1.4826 * _deviation_nb(residual)
+    clean = force
+    if noise > 0:
+        clean = np.where(np.abs(residual) > spike_sigma * noise, rolling, force)
+    mean = _rolling_mean_nb(clean, w)
+    half = n // 2
+    final = _median_nb(clean[half:])
+    spread = _max(1.4826 * _deviation_nb(mean[half:]), noise / math.sqrt(w))
+    band = _max(sigma * spread, tolerance * abs(final))
+    for i in range(half - 1, -1, -1):  # the last sample of the first half outside the band
+        if abs(mean[i] - final) > band:
+            return min(i + 1 + w // 2, half)
+    return 0
+
+
+@numba.njit(cache=True, nogil=True)
+def _trim_by_force(force, trim_sigma, trim_floor, w, spike_sigma):
+    n = force.size
+    rolling = _rolling_median_nb(force, w)
+    level = _median_nb(rolling[n // 4 : n - n // 4] if n >= 8 else rolling)
+    deviation = _deviation_nb(force)
+    spread = 1.4826 * deviation / math.sqrt(w)
+    limit = _max(trim_sigma * spread, trim_floor)
+    outside = np.abs(rolling - level) > limit
+    # a slow drift (cushioning starting to engage) hides under the noise of a short median:
+    # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
+    w_long = max(w, n // 10)
+    if w_long > w:
+        sigma = 1.4826 * deviation
+        # isolated spikes (a sample or a few, far from the rolling median) are replaced by
+        # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
+        # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
+        residual = force - rolling
+        noise = 1.4826 * _deviation_nb(residual)
+        if noise > 0:
+            spikes = np.abs(residual) > spike_sigma * noise
+        else:
+            spikes = residual != 0
+        mean = _rolling_mean_nb(np.where(spikes, rolling, force), w_long)
+        outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
+    mid = n // 2
+    lo = 0
+    for i in range(min(mid, n) - 1, -1, -1):  # the last outside sample before the middle
+        if outside[i]:
+            lo = i + 1
+            break
+    hi = n
+    for i in range(mid, n):  # the first from the middle on
+        if outside[i]:
+            hi = i
+            break
+    return lo, hi
+
+
+def settling_start(
+    force: np.ndarray,
+    median_window: int,
+    sigma: float,
+    tolerance: float,
+    min_samples: int,
+    spike_sigma: float,
+) -> int:
+    """Samples [-] at the start of a window (``force`` [N]) before the force has settled:
+    :func:`cylfric.steady_state._settling_start`, compiled."""
+    force = np.ascontiguousarray(force, dtype=float)
+    return int(
+        _settling_start(
+            force,
+            operator.index(median_window),
+            float(sigma),
+            float(tolerance),
+            operator.index(min_samples),
+            float(spike_sigma),
+        )
+    )
+
+
+def trim_by_force(
+    force: np.ndarray, trim_sigma: float, trim_floor: float, size: int, spike_sigma: float
+) -> tuple[int, int]:
+    """(first, stop) samples [-] of a window (``force`` [N]) kept by the cushion trimming:
+    :func:`cylfric.steady_state._trim_by_force`, compiled; ``size`` (odd) is the rolling
+    median's."""
+    if size % 2 == 0:
+        raise ValueError(f"rolling_median needs an odd size; got {size}")
+    force = np.ascontiguousarray(force, dtype=float)
+    if not force.size:
+        return 0, 0
+    lo, hi = _trim_by_force(
+        force, float(trim_sigma), float(trim_floor), operator.index(size), float(spike_sigma)
+    )
+    return int(lo), int(hi)

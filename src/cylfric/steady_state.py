@@ -321,26 +321,9 @@ def _settling_start(force, median_window, sigma, tolerance, min_samples):
     |final level|). Only the first half is ever cut: a stroke whose force changes along its
     travel keeps at least half its window.
     """
-    n = len(force)
-    if n < 4 * max(min_samples, 1) or sigma <= 0:
-        return 0
-    from ._filters import median, median_deviation, rolling_mean, rolling_median
+    from ._filters import settling_start
 
-    w = max(median_window, n // 20) | 1
-    rolling = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
-    residual = force - rolling
-    noise = 1.4826 * median_deviation(residual)
-    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, rolling, force) if noise > 0 else force
-    mean = rolling_mean(clean, w)
-    half = n // 2
-    final = median(clean[half:])
-    tail = mean[half:]
-    spread = max(1.4826 * median_deviation(tail), noise / math.sqrt(w))
-    band = max(sigma * spread, tolerance * abs(final))
-    outside = np.flatnonzero(np.abs(mean[:half] - final) > band)
-    if not outside.size:
-        return 0
-    return min(int(outside[-1]) + 1 + w // 2, half)
+    return settling_start(force, median_window, sigma, tolerance, min_samples, SPIKE_SIGMA)
 
 
 SPIKE_SIGMA = 5.0
@@ -349,37 +332,22 @@ spikes: left out of the cushion trimming's rolling mean (:func:`find_windows`) [
 
 
 def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
-    """Trim ends where the rolling median of the force leaves the centre level."""
-    n = len(force)
-    w = min(median_window, max(1, n // 3) | 1)
-    from ._filters import median, median_deviation, rolling_mean, rolling_median
+    """Trim ends where the rolling median of the force leaves the centre level.
 
-    rolling = rolling_median(force, w)
-    centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
-    level = median(centre)
-    deviation = median_deviation(force)
-    spread = 1.4826 * deviation / math.sqrt(w)
-    limit = max(trim_sigma * spread, trim_floor)
-    outside = np.abs(rolling - level) > limit
-    # a slow drift (cushioning starting to engage) hides under the noise of a short median:
-    # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
-    w_long = max(w, n // 10)
-    if w_long > w:
-        sigma = 1.4826 * deviation
-        # isolated spikes (a sample or a few, far from the rolling median) are replaced by
-        # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
-        # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
-        residual = force - rolling
-        noise = 1.4826 * median_deviation(residual)
-        spikes = np.abs(residual) > SPIKE_SIGMA * noise if noise > 0 else residual != 0
-        mean = rolling_mean(np.where(spikes, rolling, force), w_long)
-        outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
-    outside = np.flatnonzero(outside)
-    mid = n // 2
-    before = outside[outside < mid]
-    after = outside[outside >= mid]
-    lo = int(before[-1]) + 1 if before.size else 0
-    hi = int(after[0]) if after.size else n
+    The level is the median of the rolling median over the window's middle half; a sample is
+    outside when its rolling median departs from it by more than max(trim_sigma * the
+    force's robust sigma / sqrt(median size), trim_floor), or (windows over ten median
+    sizes) when a rolling mean over a tenth of the window, spikes replaced by the rolling
+    median, departs by more than trim_sigma robust sigmas of that mean. The window keeps
+    the samples between the last outside sample of its first half and the first of its
+    second half; returns (start, stop) + ``offset`` [-].
+    """
+    from ._filters import trim_by_force
+
+    n = len(force)
+    lo, hi = trim_by_force(
+        force, trim_sigma, trim_floor, min(median_window, max(1, n // 3) | 1), SPIKE_SIGMA
+    )
     return offset + lo, offset + hi
 
 
