@@ -157,7 +157,9 @@ def operating_pressure_signal(data, config: CampaignConfig, file="") -> np.ndarr
 
 def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     """Velocity [m/s] by a Savitzky-Golay derivative over ``window`` [s] (quadratic)."""
-    dt = float(np.median(np.diff(time)))
+    from ._filters import convolve_nearest, median  # with numba, on first use (see io.text)
+
+    dt = median(np.diff(time))
     if not dt > 0:
         raise ValueError("time must increase; found a non-increasing time column")
     n = max(5, int(round(window / dt)) | 1)
@@ -169,8 +171,6 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     # scipy.signal.savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest") computes
     # (scipy.signal is not imported: it loads scipy.stats)
     k = np.arange(n // 2, -(n // 2) - 1, -1, dtype=float)  # reversed: convolution
-    from ._filters import convolve_nearest  # with numba, on first use (see io.text)
-
     return sign * convolve_nearest(position, k / (dt * float(k @ k)))
 
 
@@ -427,8 +427,10 @@ def _point_rows(data, metadata, config, run, options):
             "no time column; expected one named Time/Zeit/Tid (with a unit, e.g. 'Time [s]'), "
             'or [columns] time = "..." in campaign.toml',
         )
+    from ._filters import median, median_and_deviation
+
     time = np.asarray(data["time [s]"])
-    if time.size < 2 or not float(np.median(np.diff(time))) > 0:
+    if time.size < 2 or not median(np.diff(time)) > 0:
         raise BenchFileError(file, "the time column does not increase; expected time in s rising")
     for name, values in data.items():
         values = np.asarray(values)
@@ -477,10 +479,10 @@ def _point_rows(data, metadata, config, run, options):
         )
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
-    from ._filters import median_and_deviation
-
+    nominal_pressure: float | None = None
     extra = metadata.get("extra", {})
     rows = []
+    nan = math.nan
     for w in windows:
         f = force[w.start : w.stop]
         v = velocity[w.start : w.stop]
@@ -490,14 +492,18 @@ def _point_rows(data, metadata, config, run, options):
             sigma = 1.4826 * deviation or float(np.std(f))
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
         n = int(keep.sum())
+        if n < f.size:  # spikes left out (with none, the window as it is: the same values)
+            f, v = f[keep], v[keep]
         if pressure is not None and n:
-            p = pressure[w.start : w.stop][keep]
+            p = pressure[w.start : w.stop]
+            p = p[keep] if n < p.size else p
             p_mean, p_std = float(p.mean()), float(p.std())
         else:  # the nominal pressure is the chambers' (both, or the working one)
-            nominal = np.asarray(float(metadata.get("pressure", math.nan)))
-            p_mean = float(PRESSURE_REFERENCES[config.pressure_reference](nominal, nominal))
-            p_std = 0.0
-        nan = math.nan
+            if nominal_pressure is None:
+                nominal = np.asarray(float(metadata.get("pressure", math.nan)))
+                reference = PRESSURE_REFERENCES[config.pressure_reference]
+                nominal_pressure = float(reference(nominal, nominal))
+            p_mean, p_std = nominal_pressure, 0.0
         rows.append(
             {
                 "run": run,
@@ -507,10 +513,10 @@ def _point_rows(data, metadata, config, run, options):
                 "pressure [Pa]": p_mean,
                 "pressure_std [Pa]": p_std,
                 "velocity [m/s]": _window_speed(time, position, velocity, w, keep) if n else nan,
-                "velocity_std [m/s]": float(v[keep].std()) if n else nan,
-                "force [N]": float(f[keep].mean()) if n else nan,
+                "velocity_std [m/s]": float(v.std()) if n else nan,
+                "force [N]": float(f.mean()) if n else nan,
                 "friction [N]": nan,
-                "friction_std [N]": float(f[keep].std()) if n else nan,
+                "friction_std [N]": float(f.std()) if n else nan,
                 "n [-]": n,
                 "window_start [s]": float(time[w.start]) if n else nan,
                 "window_end [s]": float(time[w.stop - 1]) if n else nan,

@@ -291,7 +291,7 @@ def read_bench_arrays(
         raw = path.read_bytes()
     except OSError as exc:
         raise BenchFileError(path, f"cannot read the file ({exc.strerror})") from None
-    if not raw.strip():
+    if not raw or raw.isspace():
         raise BenchFileError(path, "the file is empty; expected a bench record")
     nul = raw.find(b"\x00")
     if nul >= 0:
@@ -370,7 +370,10 @@ def read_bench_arrays(
         starts = starts.copy()
         starts[data_idx] += 1
     if decimal == "auto":
-        probe = b"".join(raw[starts[i] : ends[i]] for i in data_idx[:50])
+        first = data_idx[:50]
+        probe = b"".join(
+            raw[a:b] for a, b in zip(starts[first].tolist(), ends[first].tolist(), strict=True)
+        )
         decimal = "," if delim != "," and b"," in probe else "."
     if decimal not in (".", ","):
         raise ValueError(f"unknown decimal separator {decimal!r}; valid: '.', ','")
@@ -394,7 +397,7 @@ def read_bench_arrays(
     blocks = []
     header = explicit
     for seg, run in enumerate(runs):
-        previous = [i for i in text_idx if i < run[0]][-3:]
+        previous = text_idx[: np.searchsorted(text_idx, run[0])][-3:].tolist()
         if explicit is None:
             ncols = len(_split(line_text(run[0]), delim))
             found = _header_before(previous, text_lines, delim, ncols)
