@@ -155,11 +155,15 @@ def operating_pressure_signal(data, config: CampaignConfig, file="") -> np.ndarr
     return np.asarray(operating_pressure(pa, pb, reference=rule), dtype=float)
 
 
-def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
-    """Velocity [m/s] by a Savitzky-Golay derivative over ``window`` [s] (quadratic)."""
+def smoothed_velocity(time, position, *, window=0.2, sign=1.0, dt=None):
+    """Velocity [m/s] by a Savitzky-Golay derivative over ``window`` [s] (quadratic).
+
+    ``dt`` is the median time step [s] when the caller has it (else computed from ``time``).
+    """
     from ._filters import convolve_nearest, median  # with numba, on first use (see io.text)
 
-    dt = median(np.diff(time))
+    if dt is None:
+        dt = median(np.diff(time))
     if not dt > 0:
         raise ValueError("time must increase; found a non-increasing time column")
     n = max(5, int(round(window / dt)) | 1)
@@ -305,8 +309,9 @@ def find_windows(
 def _longest_true(mask):
     if not mask.any():
         return 0, 0
-    padded = np.concatenate(([False], mask, [False]))
-    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
+    padded = np.zeros(mask.size + 2, np.int8)
+    padded[1:-1] = mask
+    edges = np.flatnonzero(np.diff(padded))
     starts, stops = edges[::2], edges[1::2]
     i = int(np.argmax(stops - starts))
     return int(starts[i]), int(stops[i])
@@ -430,7 +435,8 @@ def _point_rows(data, metadata, config, run, options):
     from ._filters import median, median_and_deviation
 
     time = np.asarray(data["time [s]"])
-    if time.size < 2 or not median(np.diff(time)) > 0:
+    dt = median(np.diff(time)) if time.size >= 2 else math.nan  # the time step [s]
+    if not dt > 0:
         raise BenchFileError(file, "the time column does not increase; expected time in s rising")
     for name, values in data.items():
         values = np.asarray(values)
@@ -449,6 +455,7 @@ def _point_rows(data, metadata, config, run, options):
             np.asarray(data["position [m]"]),
             window=velocity_window,
             sign=config.position_sign,
+            dt=dt,
         )
     else:
         raise BenchFileError(

@@ -340,8 +340,9 @@ def read_bench_arrays(
 
     # Data runs: consecutive data lines, blank lines allowed inside, broken by text lines.
     breaks = np.searchsorted(data_idx, text_idx)
-    cut = np.unique(breaks[(breaks > 0) & (breaks < data_idx.size)])
-    runs = np.split(data_idx, cut)
+    cut = sorted(set(breaks[(breaks > 0) & (breaks < data_idx.size)].tolist()))
+    bounds = [0, *cut, data_idx.size]
+    runs = [data_idx[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
     sample = line_text(data_idx[0])
     delim = {
