@@ -16,8 +16,7 @@ from cylfric._filters import (
     median_deviation,
     rolling_mean,
     rolling_median,
-    settling_start,
-    trim_by_force,
+    window_by_force,
 )
 
 
@@ -78,25 +77,50 @@ def _trim_reference(force, trim_sigma, trim_floor, w, spike_sigma):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_window_tests_equal_their_numpy_form(seed):
-    """settling_start and trim_by_force give the samples of the numpy expressions exactly, on
-    windows [N] with noise, drift, cushioning ramps, spikes, quantised and constant readings."""
+    """window_by_force keeps the samples the numpy expressions keep (settling, then trimming),
+    exactly, on windows [N] with noise, drift, settling transients, cushioning ramps, spikes,
+    quantised and constant readings, for several median sizes and settling minima."""
     rng = np.random.default_rng(seed)
     for _ in range(150):
         n = int(rng.integers(1, 2500))
         force = 150.0 + rng.normal(size=n) * rng.choice([0.0, 0.1, 1.0, 10.0])
         if rng.random() < 0.5:  # a settling transient or a cushion: a ramp at one end
-            force += (
-                rng.normal() * 20 * np.linspace(rng.choice([-1, 0]), rng.choice([0, 1]), n) ** 3
-            )
+            ramp = np.linspace(rng.choice([-1, 0]), rng.choice([0, 1]), n) ** 3
+            force += rng.normal() * 20 * ramp
         if rng.random() < 0.3:
             force[rng.integers(0, n, 3)] += 150.0
         if rng.random() < 0.3:
             force = np.round(force, 1)
         size, floor = int(rng.choice([1, 3, 9, 21])), float(rng.choice([0.0, 1.0]))
-        assert settling_start(force, size, 3.0, 0.005, 10, 5.0) == _settling_reference(
-            force, size, 3.0, 0.005, 10, 5.0
+        least = int(rng.choice([0, 10, 50]))
+        settled = _settling_reference(force, size, 3.0, 0.005, least, 5.0)
+        kept = force[settled:]
+        w = min(size, max(1, len(kept) // 3) | 1)
+        expected = (settled, *_trim_reference(kept, 4.0, floor, w, 5.0))
+        found = window_by_force(
+            force,
+            median_window=size,
+            settle_sigma=3.0,
+            settle_tolerance=0.005,
+            min_samples=least,
+            trim_sigma=4.0,
+            trim_floor=floor,
+            spike_sigma=5.0,
         )
-        w = min(size, max(1, n // 3) | 1)
-        assert trim_by_force(force, 4.0, floor, w, 5.0) == _trim_reference(
-            force, 4.0, floor, w, 5.0
+        assert found == expected
+
+
+def test_window_by_force_refuses_an_even_median_size():
+    """An even median size reaches the trimming's rolling median: refused as that filter
+    refuses it."""
+    with pytest.raises(ValueError, match="odd size"):
+        window_by_force(
+            np.full(200, 150.0),
+            median_window=10,
+            settle_sigma=3.0,
+            settle_tolerance=0.005,
+            min_samples=10,
+            trim_sigma=4.0,
+            trim_floor=1.0,
+            spike_sigma=5.0,
         )

@@ -6,11 +6,11 @@ sizes) and :func:`~scipy.ndimage.uniform_filter1d` with ``mode="nearest"`` to ro
 (``tests/test_filters.py``), without importing scipy.ndimage (about 0.2 s) before the
 extraction can start: scipy is imported while the second extraction worker reads files.
 
-:func:`settling_start` and :func:`trim_by_force` are the force tests of each stroke window
-(:func:`cylfric.steady_state.find_windows`, whose helpers document them) in one compiled
-call each: the same operations as the numpy expressions they replaced (no sum is
-reordered: the rolling mean is a sequential cumulative sum, as ``np.cumsum``), without
-twenty small numpy calls per window.
+:func:`window_by_force` is the force tests of each stroke window (settling, then cushion
+trimming; :func:`cylfric.steady_state.find_windows`) in one compiled call: the same
+operations as the numpy expressions they replaced (no sum is reordered: the rolling mean is a
+sequential cumulative sum, as ``np.cumsum``), without some forty small numpy calls per
+window, and the trimming reuses the settling test's rolling median.
 """
 
 from __future__ import annotations
@@ -32,8 +32,7 @@ __all__ = [
     "median_and_deviation",
     "rolling_median",
     "rolling_mean",
-    "settling_start",
-    "trim_by_force",
+    "window_by_force",
 ]
 
 
@@ -181,17 +180,14 @@ def _max(a, b):
 
 
 @numba.njit(cache=True, nogil=True)
-def _settling_start(force, median_window, sigma, tolerance, min_samples, spike_sigma):
+def _settled_from(force, rolling, noise, w_median, sigma, tolerance, spike_sigma):
+    """Samples at the start of ``force`` before it has settled (see :func:`window_by_force`),
+    given its rolling median (size ``w_median``) and the robust sigma of its residual."""
     n = force.size
-    if n < 4 * max(min_samples, 1) or sigma <= 0:
-        return 0
-    w = max(median_window, n // 20) | 1
-    rolling = _rolling_median_nb(force, min(median_window, max(1, n // 3)) | 1)
-    residual = force - rolling
-    noise = 1.4826 * _deviation_nb(residual)
+    w = max(w_median, n // 20) | 1
     clean = force
     if noise > 0:
-        clean = np.where(np.abs(residual) > spike_sigma * noise, rolling, force)
+        clean = np.where(np.abs(force - rolling) > spike_sigma * noise, rolling, force)
     mean = _rolling_mean_nb(clean, w)
     half = n // 2
     final = _median_nb(clean[half:])
@@ -204,9 +200,11 @@ def _settling_start(force, median_window, sigma, tolerance, min_samples, spike_s
 
 
 @numba.njit(cache=True, nogil=True)
-def _trim_by_force(force, trim_sigma, trim_floor, w, spike_sigma):
+def _trimmed(force, rolling, noise, w, trim_sigma, trim_floor, spike_sigma):
+    """(start, stop) of ``force`` kept by the cushion trimming (see :func:`window_by_force`),
+    given its rolling median (size ``w``) and the robust sigma of its residual (NaN: not
+    known yet)."""
     n = force.size
-    rolling = _rolling_median_nb(force, w)
     level = _median_nb(rolling[n // 4 : n - n // 4] if n >= 8 else rolling)
     deviation = _deviation_nb(force)
     spread = 1.4826 * deviation / math.sqrt(w)
@@ -221,7 +219,8 @@ def _trim_by_force(force, trim_sigma, trim_floor, w, spike_sigma):
         # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
         # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
         residual = force - rolling
-        noise = 1.4826 * _deviation_nb(residual)
+        if np.isnan(noise):
+            noise = 1.4826 * _deviation_nb(residual)
         if noise > 0:
             spikes = np.abs(residual) > spike_sigma * noise
         else:
@@ -230,7 +229,7 @@ def _trim_by_force(force, trim_sigma, trim_floor, w, spike_sigma):
         outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
     mid = n // 2
     lo = 0
-    for i in range(min(mid, n) - 1, -1, -1):  # the last outside sample before the middle
+    for i in range(mid - 1, -1, -1):  # the last outside sample before the middle
         if outside[i]:
             lo = i + 1
             break
@@ -242,41 +241,97 @@ def _trim_by_force(force, trim_sigma, trim_floor, w, spike_sigma):
     return lo, hi
 
 
-def settling_start(
+@numba.njit(cache=True, nogil=True)
+def _window_by_force(
+    force,
+    median_window,
+    settle_sigma,
+    settle_tolerance,
+    min_samples,
+    trim_sigma,
+    trim_floor,
+    spike_sigma,
+):
+    n = force.size
+    first = 0
+    w = min(median_window, max(1, n // 3)) | 1
+    rolling = np.empty(0)
+    noise = np.nan
+    settled = not (n < 4 * max(min_samples, 1) or settle_sigma <= 0)
+    if settled:
+        rolling = _rolling_median_nb(force, w)
+        noise = 1.4826 * _deviation_nb(force - rolling)
+        first = _settled_from(force, rolling, noise, w, settle_sigma, settle_tolerance, spike_sigma)
+    kept = force[first:]
+    m = kept.size
+    w_trim = min(median_window, max(1, m // 3) | 1)
+    if m == 0 or w_trim % 2 == 0:  # nothing to trim, or no median of that size (refused)
+        return first, 0, m, w_trim
+    if settled and w_trim == w:
+        # the settling test's rolling median, but for its first w // 2 values (their window
+        # reached before the kept samples): the same medians, not computed again
+        if first == 0:
+            trim_rolling = rolling
+        else:
+            trim_rolling = rolling[first:].copy()
+            noise = np.nan  # another residual
+            h = w // 2
+            if m >= w:
+                trim_rolling[:h] = _rolling_median_nb(kept[:w], w)[:h]
+            else:
+                trim_rolling = _rolling_median_nb(kept, w)
+    else:
+        trim_rolling = _rolling_median_nb(kept, w_trim)
+        noise = np.nan
+    lo, hi = _trimmed(kept, trim_rolling, noise, w_trim, trim_sigma, trim_floor, spike_sigma)
+    return first, lo, hi, w_trim
+
+
+def window_by_force(
     force: np.ndarray,
+    *,
     median_window: int,
-    sigma: float,
-    tolerance: float,
+    settle_sigma: float,
+    settle_tolerance: float,
     min_samples: int,
+    trim_sigma: float,
+    trim_floor: float,
     spike_sigma: float,
-) -> int:
-    """Samples [-] at the start of a window (``force`` [N]) before the force has settled:
-    :func:`cylfric.steady_state._settling_start`, compiled."""
-    force = np.ascontiguousarray(force, dtype=float)
-    return int(
-        _settling_start(
-            force,
-            operator.index(median_window),
-            float(sigma),
-            float(tolerance),
-            operator.index(min_samples),
-            float(spike_sigma),
-        )
+) -> tuple[int, int, int]:
+    """The force tests of a window where the velocity has settled (``force`` [N]), compiled:
+    (settled, start, stop) [-], the samples kept being ``force[settled:][start:stop]``.
+
+    Settling (a start-up transient: the pressures of a valve-driven axis build up after the
+    speed has settled): the final level is the median of the window's second half; the force
+    has settled from the first sample after which a rolling mean (a twentieth of the window)
+    of the force, spikes (beyond ``spike_sigma`` robust sigmas of the rolling median's
+    residual) replaced by the rolling median, stays within the band max(``settle_sigma`` *
+    the rolling mean's robust spread over the second half, ``settle_tolerance`` * |final
+    level|). Only the first half is ever cut; windows shorter than 4 * ``min_samples`` are
+    not cut.
+
+    Cushion trimming of the settled samples: the level is the median of the rolling median
+    (``median_window`` samples) over the middle half; a sample is outside when its rolling
+    median departs from the level by more than max(``trim_sigma`` * the force's robust
+    sigma / sqrt(median size), ``trim_floor`` [N]), or (beyond ten median sizes) when a
+    rolling mean over a tenth of the samples, spikes replaced by the rolling median, departs
+    by more than ``trim_sigma`` robust sigmas of that mean. The samples between the last
+    outside sample of the first half and the first of the second half are kept.
+
+    The same operations as these rules written with numpy arrays (``tests/test_filters.py``
+    compares them) in one call. Raises ValueError when the trimming's median size would be
+    even (an even ``median_window``).
+    """
+    first, lo, hi, size = _window_by_force(
+        np.ascontiguousarray(force, dtype=float),
+        operator.index(median_window),
+        float(settle_sigma),
+        float(settle_tolerance),
+        operator.index(min_samples),
+        float(trim_sigma),
+        float(trim_floor),
+        float(spike_sigma),
     )
-
-
-def trim_by_force(
-    force: np.ndarray, trim_sigma: float, trim_floor: float, size: int, spike_sigma: float
-) -> tuple[int, int]:
-    """(first, stop) samples [-] of a window (``force`` [N]) kept by the cushion trimming:
-    :func:`cylfric.steady_state._trim_by_force`, compiled; ``size`` (odd) is the rolling
-    median's."""
     if size % 2 == 0:
         raise ValueError(f"rolling_median needs an odd size; got {size}")
-    force = np.ascontiguousarray(force, dtype=float)
-    if not force.size:
-        return 0, 0
-    lo, hi = _trim_by_force(
-        force, float(trim_sigma), float(trim_floor), operator.index(size), float(spike_sigma)
-    )
-    return int(lo), int(hi)
+    return int(first), int(lo), int(hi)

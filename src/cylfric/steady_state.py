@@ -259,7 +259,7 @@ def find_windows(
     if not speed_ref > 0:
         windows: list[_Window] = []
         return (windows, {}) if return_components else windows
-    from ._filters import median
+    from ._filters import median, window_by_force
 
     moving = np.abs(velocity) > moving_fraction * speed_ref
     direction = np.sign(velocity) * moving
@@ -289,16 +289,17 @@ def find_windows(
                 _Window(k, d, a + start, a + stop, "unsettled" if stop == start else "short_window")
             )
             continue
-        start += _settling_start(
+        cut, lo, hi = window_by_force(
             force[a + start : a + stop],
-            median_window,
-            settle_sigma,
-            settle_force_tolerance,
-            min_samples,
+            median_window=median_window,
+            settle_sigma=settle_sigma,
+            settle_tolerance=settle_force_tolerance,
+            min_samples=min_samples,
+            trim_sigma=trim_sigma,
+            trim_floor=trim_floor,
+            spike_sigma=SPIKE_SIGMA,
         )
-        start, stop = _trim_by_force(
-            force[a + start : a + stop], trim_sigma, trim_floor, median_window, a + start
-        )
+        start, stop = a + start + cut + lo, a + start + cut + hi
         flag = "ok" if stop - start >= min_samples else "short_window"
         windows.append(_Window(k, d, start, stop, flag))
     if return_components:
@@ -317,43 +318,9 @@ def _longest_true(mask):
     return int(starts[i]), int(stops[i])
 
 
-def _settling_start(force, median_window, sigma, tolerance, min_samples):
-    """Samples at the start of a window before the force has settled [-].
-
-    The final level is the median of the window's second half; the force has settled from
-    the first sample after which a rolling mean (a twentieth of the window) stays within the
-    band max(sigma * the rolling mean's robust spread over the second half, tolerance *
-    |final level|). Only the first half is ever cut: a stroke whose force changes along its
-    travel keeps at least half its window.
-    """
-    from ._filters import settling_start
-
-    return settling_start(force, median_window, sigma, tolerance, min_samples, SPIKE_SIGMA)
-
-
 SPIKE_SIGMA = 5.0
 """Samples further than this many robust sigmas from the rolling median of the force are
 spikes: left out of the cushion trimming's rolling mean (:func:`find_windows`) [-]."""
-
-
-def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
-    """Trim ends where the rolling median of the force leaves the centre level.
-
-    The level is the median of the rolling median over the window's middle half; a sample is
-    outside when its rolling median departs from it by more than max(trim_sigma * the
-    force's robust sigma / sqrt(median size), trim_floor), or (windows over ten median
-    sizes) when a rolling mean over a tenth of the window, spikes replaced by the rolling
-    median, departs by more than trim_sigma robust sigmas of that mean. The window keeps
-    the samples between the last outside sample of its first half and the first of its
-    second half; returns (start, stop) + ``offset`` [-].
-    """
-    from ._filters import trim_by_force
-
-    n = len(force)
-    lo, hi = trim_by_force(
-        force, trim_sigma, trim_floor, min(median_window, max(1, n // 3) | 1), SPIKE_SIGMA
-    )
-    return offset + lo, offset + hi
 
 
 def extract_points(
