@@ -16,7 +16,7 @@ from cylfric._filters import (
     median_deviation,
     rolling_mean,
     rolling_median,
-    window_by_force,
+    stroke_window,
 )
 
 
@@ -75,14 +75,26 @@ def _trim_reference(force, trim_sigma, trim_floor, w, spike_sigma):
     return (int(before[-1]) + 1 if before.size else 0, int(after[0]) if after.size else n)
 
 
+def _longest_run(mask):
+    """(start, stop) of the longest run of True (the first of equal ones), (0, 0) for none."""
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    if not edges.size:
+        return 0, 0
+    i = int(np.argmax(edges[1::2] - edges[::2]))
+    return int(edges[::2][i]), int(edges[1::2][i])
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_window_tests_equal_their_numpy_form(seed):
-    """window_by_force keeps the samples the numpy expressions keep (settling, then trimming),
-    exactly, on windows [N] with noise, drift, settling transients, cushioning ramps, spikes,
-    quantised and constant readings, for several median sizes and settling minima."""
+    """stroke_window finds the samples the numpy expressions find (velocity settled, force
+    settled, cushions trimmed), exactly, on strokes with noise, drift, settling transients,
+    cushioning ramps, spikes, quantised and constant force readings [N], for several median
+    sizes and sample minima."""
     rng = np.random.default_rng(seed)
     for _ in range(150):
-        n = int(rng.integers(1, 2500))
+        n = int(rng.integers(3, 2500))
+        speed = 0.01 * (1.0 - np.exp(-np.arange(n) / rng.uniform(1.0, 200.0)))  # [m/s]
+        velocity = speed * (1.0 + rng.normal(size=n) * rng.choice([0.001, 0.01, 0.05]))
         force = 150.0 + rng.normal(size=n) * rng.choice([0.0, 0.1, 1.0, 10.0])
         if rng.random() < 0.5:  # a settling transient or a cushion: a ramp at one end
             ramp = np.linspace(rng.choice([-1, 0]), rng.choice([0, 1]), n) ** 3
@@ -93,33 +105,43 @@ def test_compiled_window_tests_equal_their_numpy_form(seed):
             force = np.round(force, 1)
         size, floor = int(rng.choice([1, 3, 9, 21])), float(rng.choice([0.0, 1.0]))
         least = int(rng.choice([0, 10, 50]))
-        settled = _settling_reference(force, size, 3.0, 0.005, least, 5.0)
-        kept = force[settled:]
-        w = min(size, max(1, len(kept) // 3) | 1)
-        expected = (settled, *_trim_reference(kept, 4.0, floor, w, 5.0))
-        found = window_by_force(
+        settled = np.abs(velocity - median(velocity)) <= 0.02 * abs(median(velocity))
+        start, stop = _longest_run(settled)
+        cut = None
+        if stop - start >= least:
+            window = force[start:stop]
+            first = _settling_reference(window, size, 3.0, 0.005, least, 5.0)
+            kept = window[first:]
+            w = min(size, max(1, len(kept) // 3) | 1)
+            cut = (first, *_trim_reference(kept, 4.0, floor, w, 5.0))
+        found = stroke_window(
+            velocity,
             force,
+            velocity_tolerance=0.02,
+            min_samples=least,
             median_window=size,
             settle_sigma=3.0,
             settle_tolerance=0.005,
-            min_samples=least,
             trim_sigma=4.0,
             trim_floor=floor,
             spike_sigma=5.0,
         )
-        assert found == expected
+        assert np.array_equal(found[0], settled)
+        assert found[1:] == (start, stop, cut)
 
 
-def test_window_by_force_refuses_an_even_median_size():
+def test_stroke_window_refuses_an_even_median_size():
     """An even median size reaches the trimming's rolling median: refused as that filter
     refuses it."""
     with pytest.raises(ValueError, match="odd size"):
-        window_by_force(
+        stroke_window(
+            np.full(200, 0.01),
             np.full(200, 150.0),
+            velocity_tolerance=0.02,
+            min_samples=10,
             median_window=10,
             settle_sigma=3.0,
             settle_tolerance=0.005,
-            min_samples=10,
             trim_sigma=4.0,
             trim_floor=1.0,
             spike_sigma=5.0,

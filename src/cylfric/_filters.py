@@ -6,11 +6,11 @@ sizes) and :func:`~scipy.ndimage.uniform_filter1d` with ``mode="nearest"`` to ro
 (``tests/test_filters.py``), without importing scipy.ndimage (about 0.2 s) before the
 extraction can start: scipy is imported while the second extraction worker reads files.
 
-:func:`window_by_force` is the force tests of each stroke window (settling, then cushion
-trimming; :func:`cylfric.steady_state.find_windows`) in one compiled call: the same
-operations as the numpy expressions they replaced (no sum is reordered: the rolling mean is a
-sequential cumulative sum, as ``np.cumsum``), without some forty small numpy calls per
-window, and the trimming reuses the settling test's rolling median.
+:func:`stroke_window` is the window tests of each stroke (velocity settled, then the force
+settled and the cushions trimmed; :func:`cylfric.steady_state.find_windows`) in one compiled
+call: the same operations as the numpy expressions they replaced (no sum is reordered: the
+rolling mean is a sequential cumulative sum, as ``np.cumsum``), without some fifty small numpy
+calls per stroke, and the trimming reuses the settling test's rolling median.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ __all__ = [
     "median_and_deviation",
     "rolling_median",
     "rolling_mean",
-    "window_by_force",
+    "stroke_window",
 ]
 
 
@@ -180,11 +180,11 @@ def _max(a, b):
 
 
 @numba.njit(cache=True, nogil=True)
-def _settled_from(force, rolling, noise, w_median, sigma, tolerance, spike_sigma):
-    """Samples at the start of ``force`` before it has settled (see :func:`window_by_force`),
-    given its rolling median (size ``w_median``) and the robust sigma of its residual."""
+def _settled_from(force, rolling, noise, median_window, sigma, tolerance, spike_sigma):
+    """Samples at the start of ``force`` before it has settled (see :func:`stroke_window`),
+    given its rolling median and the robust sigma of its residual."""
     n = force.size
-    w = max(w_median, n // 20) | 1
+    w = max(median_window, n // 20) | 1
     clean = force
     if noise > 0:
         clean = np.where(np.abs(force - rolling) > spike_sigma * noise, rolling, force)
@@ -201,7 +201,7 @@ def _settled_from(force, rolling, noise, w_median, sigma, tolerance, spike_sigma
 
 @numba.njit(cache=True, nogil=True)
 def _trimmed(force, rolling, noise, w, trim_sigma, trim_floor, spike_sigma):
-    """(start, stop) of ``force`` kept by the cushion trimming (see :func:`window_by_force`),
+    """(start, stop) of ``force`` kept by the cushion trimming (see :func:`stroke_window`),
     given its rolling median (size ``w``) and the robust sigma of its residual (NaN: not
     known yet)."""
     n = force.size
@@ -261,7 +261,9 @@ def _window_by_force(
     if settled:
         rolling = _rolling_median_nb(force, w)
         noise = 1.4826 * _deviation_nb(force - rolling)
-        first = _settled_from(force, rolling, noise, w, settle_sigma, settle_tolerance, spike_sigma)
+        first = _settled_from(
+            force, rolling, noise, median_window, settle_sigma, settle_tolerance, spike_sigma
+        )
     kept = force[first:]
     m = kept.size
     w_trim = min(median_window, max(1, m // 3) | 1)
@@ -287,27 +289,74 @@ def _window_by_force(
     return first, lo, hi, w_trim
 
 
-def window_by_force(
+@numba.njit(cache=True, nogil=True)
+def _stroke_window(
+    velocity,
+    force,
+    velocity_tolerance,
+    min_samples,
+    median_window,
+    settle_sigma,
+    settle_tolerance,
+    trim_sigma,
+    trim_floor,
+    spike_sigma,
+):
+    v_stroke = _median(velocity)
+    settled = np.abs(velocity - v_stroke) <= velocity_tolerance * abs(v_stroke)
+    start = stop = 0  # the longest run of settled samples (the first of equal ones)
+    run = -1
+    for i in range(settled.size + 1):
+        if i < settled.size and settled[i]:
+            if run < 0:
+                run = i
+        elif run >= 0:
+            if i - run > stop - start:
+                start, stop = run, i
+            run = -1
+    if stop - start < min_samples:
+        return settled, start, stop, 0, 0, 0, 1
+    first, lo, hi, w_trim = _window_by_force(
+        force[start:stop],
+        median_window,
+        settle_sigma,
+        settle_tolerance,
+        min_samples,
+        trim_sigma,
+        trim_floor,
+        spike_sigma,
+    )
+    return settled, start, stop, first, lo, hi, w_trim
+
+
+def stroke_window(
+    velocity: np.ndarray,
     force: np.ndarray,
     *,
+    velocity_tolerance: float,
+    min_samples: int,
     median_window: int,
     settle_sigma: float,
     settle_tolerance: float,
-    min_samples: int,
     trim_sigma: float,
     trim_floor: float,
     spike_sigma: float,
-) -> tuple[int, int, int]:
-    """The force tests of a window where the velocity has settled (``force`` [N]), compiled:
-    (settled, start, stop) [-], the samples kept being ``force[settled:][start:stop]``.
+) -> tuple[np.ndarray, int, int, tuple[int, int, int] | None]:
+    """The constant-velocity window of one stroke (``velocity`` [m/s] and ``force`` [N] of
+    its samples), compiled: ``(settled, start, stop, cut)``.
 
-    Settling (a start-up transient: the pressures of a valve-driven axis build up after the
-    speed has settled): the final level is the median of the window's second half; the force
-    has settled from the first sample after which a rolling mean (a twentieth of the window)
+    ``settled`` (bool per sample): |v - median v| <= ``velocity_tolerance`` * |median v|;
+    ``start:stop`` its longest run (the first of equal ones). ``cut`` is None when that run
+    is shorter than ``min_samples``, else ``(settled, lo, hi)``: the samples the force tests
+    keep are ``force[start:stop][settled:][lo:hi]``.
+
+    Force settling (a start-up transient: the pressures of a valve-driven axis build up after
+    the speed has settled): the final level is the median of the run's second half; the force
+    has settled from the first sample after which a rolling mean (a twentieth of the run)
     of the force, spikes (beyond ``spike_sigma`` robust sigmas of the rolling median's
     residual) replaced by the rolling median, stays within the band max(``settle_sigma`` *
     the rolling mean's robust spread over the second half, ``settle_tolerance`` * |final
-    level|). Only the first half is ever cut; windows shorter than 4 * ``min_samples`` are
+    level|). Only the first half is ever cut; runs shorter than 4 * ``min_samples`` are
     not cut.
 
     Cushion trimming of the settled samples: the level is the median of the rolling median
@@ -322,16 +371,19 @@ def window_by_force(
     compares them) in one call. Raises ValueError when the trimming's median size would be
     even (an even ``median_window``).
     """
-    first, lo, hi, size = _window_by_force(
+    settled, start, stop, first, lo, hi, size = _stroke_window(
+        np.ascontiguousarray(velocity, dtype=float),
         np.ascontiguousarray(force, dtype=float),
+        float(velocity_tolerance),
+        operator.index(min_samples),
         operator.index(median_window),
         float(settle_sigma),
         float(settle_tolerance),
-        operator.index(min_samples),
         float(trim_sigma),
         float(trim_floor),
         float(spike_sigma),
     )
     if size % 2 == 0:
         raise ValueError(f"rolling_median needs an odd size; got {size}")
-    return int(first), int(lo), int(hi)
+    cut = None if stop - start < min_samples else (int(first), int(lo), int(hi))
+    return settled, int(start), int(stop), cut

@@ -259,7 +259,7 @@ def find_windows(
     if not speed_ref > 0:
         windows: list[_Window] = []
         return (windows, {}) if return_components else windows
-    from ._filters import median, window_by_force
+    from ._filters import stroke_window
 
     moving = np.abs(velocity) > moving_fraction * speed_ref
     direction = np.sign(velocity) * moving
@@ -279,43 +279,31 @@ def find_windows(
             flag = "ok" if stop - start >= min_samples else "short_window"
             windows.append(_Window(k, d, start, max(start, stop), flag))
             continue
-        v = velocity[a:b]
-        v_stroke = median(v)
-        settled = np.abs(v - v_stroke) <= settle_tolerance * abs(v_stroke)
-        settled_all[a:b] = settled
-        start, stop = _longest_true(settled)
-        if stop - start < min_samples:
-            windows.append(
-                _Window(k, d, a + start, a + stop, "unsettled" if stop == start else "short_window")
-            )
-            continue
-        cut, lo, hi = window_by_force(
-            force[a + start : a + stop],
+        settled, start, stop, cut = stroke_window(
+            velocity[a:b],
+            force[a:b],
+            velocity_tolerance=settle_tolerance,
+            min_samples=min_samples,
             median_window=median_window,
             settle_sigma=settle_sigma,
             settle_tolerance=settle_force_tolerance,
-            min_samples=min_samples,
             trim_sigma=trim_sigma,
             trim_floor=trim_floor,
             spike_sigma=SPIKE_SIGMA,
         )
-        start, stop = a + start + cut + lo, a + start + cut + hi
+        settled_all[a:b] = settled
+        if cut is None:
+            windows.append(
+                _Window(k, d, a + start, a + stop, "unsettled" if stop == start else "short_window")
+            )
+            continue
+        first, lo, hi = cut
+        start, stop = a + start + first + lo, a + start + first + hi
         flag = "ok" if stop - start >= min_samples else "short_window"
         windows.append(_Window(k, d, start, stop, flag))
     if return_components:
         return windows, {"moving": moving, "settled": settled_all, "stroke": stroke_id}
     return windows
-
-
-def _longest_true(mask):
-    if not mask.any():
-        return 0, 0
-    padded = np.zeros(mask.size + 2, np.int8)
-    padded[1:-1] = mask
-    edges = np.flatnonzero(np.diff(padded))
-    starts, stops = edges[::2], edges[1::2]
-    i = int(np.argmax(stops - starts))
-    return int(starts[i]), int(stops[i])
 
 
 SPIKE_SIGMA = 5.0
