@@ -278,7 +278,7 @@ def read_bench_arrays(
         Empty, binary, truncated or corrupt files, unknown units, missing columns; the
         message names the file, the line when known, and what was expected.
     """
-    path = Path(path)
+    path = path if isinstance(path, Path) else Path(path)
     if encoding is not None:
         try:
             codecs.lookup(encoding)
@@ -415,6 +415,17 @@ def read_bench_arrays(
     header_rows = {row for _, _, hdr in blocks for row in hdr.rows}
     events = [(number, text) for number, text in events if number not in header_rows]
 
+    segments = len(blocks)
+    first_header = blocks[0][2]
+    if segments > 1 and all(
+        hdr.names == first_header.names and hdr.units == first_header.units for _, _, hdr in blocks
+    ):
+        # one layout in every block (a header repeated per segment): all the data rows
+        # parsed at once, with their segment numbers (the same values, nothing joined)
+        counts = [len(run) for _, run, _ in blocks]
+        segment = np.repeat(np.arange(segments, dtype=np.int32), counts)
+        blocks = [(segment, data_idx, first_header)]
+
     frames = []
     sep = 0 if delim is None else ord(delim)
     for seg, run, hdr in blocks:
@@ -438,7 +449,7 @@ def read_bench_arrays(
             raise BenchFileError(path, message, line=int(bad) + 1)
         frames.append((seg, hdr, values, int(run[0]) + 1))
 
-    names = blocks[0][2].names
+    names = first_header.names
     # the bytes and the line index are done with: let them go before the columns are
     # assembled (peak memory about the file plus its numbers, not twice that)
     # (None only to release them: none is read again, so no Optional in their types)
@@ -453,7 +464,7 @@ def read_bench_arrays(
         "decimal": decimal,
         "events": events,
         "rows": int(len(data["segment [-]"])),
-        "segments": len(frames),
+        "segments": segments,
         "sha256": sha256,
     }
     return data, metadata
@@ -601,8 +612,9 @@ def si_columns(
 def _assemble(frames, path, roles, own: bool = False):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column.
 
-    ``own``: the blocks are the reader's own arrays, converted in place (no copy); else the
-    caller's values are left alone.
+    ``frames`` are (segment number, or one per row as an int32 array; header; values; first
+    line) per block. ``own``: the blocks are the reader's own arrays, converted in place (no
+    copy); else the caller's values are left alone.
     """
     parts = []
     col_units = {}
@@ -646,7 +658,9 @@ def _assemble(frames, path, roles, own: bool = False):
                 col_units[quantity] = unit
             else:
                 cols[f"{name} [{unit or '-'}]"] = values[:, j]
-        cols["segment [-]"] = np.full(values.shape[0], seg, dtype=np.int32)
+        cols["segment [-]"] = (
+            seg if isinstance(seg, np.ndarray) else np.full(values.shape[0], seg, dtype=np.int32)
+        )
         parts.append(cols)
     keys = list(parts[0])
     for cols, line in zip(parts[1:], lines[1:], strict=True):
