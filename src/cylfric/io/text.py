@@ -395,7 +395,7 @@ def read_bench_arrays(
             raise ValueError("give one unit per column in `units` (same length as `columns`)")
         explicit = _Header(list(columns), list(units), 0)
 
-    blocks = []
+    blocks: list[tuple[int | np.ndarray, np.ndarray, _Header]] = []
     header = explicit
     for seg, run in enumerate(runs):
         previous = text_idx[: np.searchsorted(text_idx, run[0])][-3:].tolist()
@@ -428,7 +428,7 @@ def read_bench_arrays(
 
     frames = []
     sep = 0 if delim is None else ord(delim)
-    for seg, run, hdr in blocks:
+    for number, run, hdr in blocks:
         values, bad, code, field = parse_block(
             buf, starts, ends, run, len(hdr.names), sep, ord(decimal)
         )
@@ -447,7 +447,7 @@ def read_bench_arrays(
                     f"(decimal separator {decimal!r})"
                 )
             raise BenchFileError(path, message, line=int(bad) + 1)
-        frames.append((seg, hdr, values, int(run[0]) + 1))
+        frames.append((number, hdr, values, int(run[0]) + 1))
 
     names = first_header.names
     # the bytes and the line index are done with: let them go before the columns are
