@@ -108,6 +108,27 @@ def test_segments_status_lines_crlf_latin1(tmp_path):
     assert_allclose(data["force [N]"].iloc[-3:], [100.0, 112.5, -50.0])
 
 
+def test_segments_of_one_layout_read_as_separate_blocks(tmp_path):
+    """Blocks that repeat one header are parsed together: the same columns [SI] and segment
+    numbers as each block read on its own, and a bad number named on its own line."""
+    block = "Time\tDisplacement\tForce\ns\tmm\tkN\n"
+    segments = ["Segment 1 started\n" + block + _rows("\t"), "Segment 2\n" + block + _rows("\t")]
+    data, meta = read_bench_text(_write(tmp_path, "".join(segments)))
+    parts = [
+        read_bench_text(_write(tmp_path, text, f"s{i}.txt"))[0] for i, text in enumerate(segments)
+    ]
+    assert meta["segments"] == 2
+    assert data["segment [-]"].tolist() == [0] * len(ROWS) + [1] * len(ROWS)
+    for column in ("time [s]", "position [m]", "force [N]"):
+        expected = np.concatenate([part[column].to_numpy() for part in parts])
+        assert np.array_equal(data[column].to_numpy(), expected)
+    bad = "".join(segments[:1]) + segments[1].replace("0.1", "0.x", 1)
+    line = bad.splitlines().index(next(r for r in bad.splitlines() if "0.x" in r)) + 1
+    with pytest.raises(BenchFileError, match="expected a number in column") as error:
+        read_bench_text(_write(tmp_path, bad, "bad.txt"))
+    assert error.value.line == line
+
+
 def test_headerless_with_column_map(tmp_path):
     path = _write(tmp_path, "  0.000   10.0  0.1\n 10.000  9.9  0.1125\n20.000 9.8 -0.05\n")
     data, meta = read_delimited(

@@ -1,13 +1,22 @@
-"""Three 1-D filters of the steady-state extraction, with edge values repeated ("nearest").
+"""Three 1-D filters of the steady-state extraction, with edge values repeated ("nearest"),
+and the compiled window tests built on them.
 
-They equal :func:`scipy.ndimage.convolve1d`, :func:`~scipy.ndimage.median_filter` (odd
+The filters equal :func:`scipy.ndimage.convolve1d`, :func:`~scipy.ndimage.median_filter` (odd
 sizes) and :func:`~scipy.ndimage.uniform_filter1d` with ``mode="nearest"`` to rounding
 (``tests/test_filters.py``), without importing scipy.ndimage (about 0.2 s) before the
 extraction can start: scipy is imported while the second extraction worker reads files.
+
+:func:`stroke_window` is the window tests of each stroke (velocity settled, then the force
+settled and the cushions trimmed; :func:`cylfric.steady_state.find_windows`) in one compiled
+call: the same operations as the numpy expressions they replaced (no sum is reordered: the
+rolling mean is a sequential cumulative sum, as ``np.cumsum``), without some fifty small numpy
+calls per stroke, and the trimming reuses the settling test's rolling median.
 """
 
 from __future__ import annotations
 
+import math
+import operator
 from typing import TYPE_CHECKING
 
 import numba
@@ -16,12 +25,26 @@ import numpy as np
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["convolve_nearest", "median", "median_deviation", "rolling_median", "rolling_mean"]
+__all__ = [
+    "convolve_nearest",
+    "median",
+    "median_deviation",
+    "median_and_deviation",
+    "rolling_median",
+    "rolling_mean",
+    "stroke_window",
+]
 
 
 def _padded(x, before, after):
+    """``x`` with its first value repeated ``before`` times and its last ``after`` times."""
     x = np.asarray(x, dtype=float)
-    return np.concatenate((np.full(before, x[0]), x, np.full(after, x[-1])))
+    n = x.size
+    out = np.empty(before + n + after)
+    out[:before] = x[0]
+    out[before : before + n] = x
+    out[before + n :] = x[-1]
+    return out
 
 
 def convolve_nearest(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
@@ -82,8 +105,9 @@ def _median(x):
 def _median_deviation(x):
     for value in x:
         if np.isnan(value):
-            return np.nan
-    return np.median(np.abs(x - np.median(x)))
+            return np.nan, np.nan
+    centre = np.median(x)
+    return centre, np.median(np.abs(x - centre))
 
 
 def median(x: np.ndarray) -> float:
@@ -97,5 +121,269 @@ def median(x: np.ndarray) -> float:
 def median_deviation(x: np.ndarray) -> float:
     """``np.median(np.abs(x - np.median(x)))`` [units of x] (the median absolute deviation,
     unscaled) of a 1-D float array; NaN if ``x`` holds a NaN or is empty."""
+    return median_and_deviation(x)[1]
+
+
+def median_and_deviation(x: np.ndarray) -> tuple[float, float]:
+    """``(median(x), median_deviation(x))`` [units of x] in one pass (the median is computed
+    once); (NaN, NaN) if ``x`` holds a NaN or is empty."""
     x = np.asarray(x, dtype=float)
-    return float(_median_deviation(x)) if x.size else np.nan
+    if not x.size:
+        return np.nan, np.nan
+    centre, deviation = _median_deviation(x)
+    return float(centre), float(deviation)
+
+
+@numba.njit(cache=True, nogil=True)
+def _padded_nb(x, before, after):
+    n = x.size
+    out = np.empty(before + n + after)
+    out[:before] = x[0]
+    out[before : before + n] = x
+    out[before + n :] = x[-1]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _rolling_median_nb(x, size):
+    """:func:`rolling_median` (``size`` odd) of a non-empty ``x``."""
+    return _rolling_median(_padded_nb(x, size // 2, size // 2), size, np.empty(x.size))
+
+
+@numba.njit(cache=True, nogil=True)
+def _rolling_mean_nb(x, size):
+    """:func:`rolling_mean` of a non-empty ``x``: the same sequential sums as ``np.cumsum``."""
+    padded = _padded_nb(x, size // 2, size - 1 - size // 2)
+    base = padded[0]
+    sums = np.empty(padded.size + 1)
+    sums[0] = 0.0
+    total = 0.0
+    for i in range(padded.size):
+        total += padded[i] - base
+        sums[i + 1] = total
+    return (sums[size:] - sums[:-size]) / size + base
+
+
+@numba.njit(cache=True, nogil=True)
+def _median_nb(x):
+    return _median(x) if x.size else np.nan
+
+
+@numba.njit(cache=True, nogil=True)
+def _deviation_nb(x):
+    return _median_deviation(x)[1] if x.size else np.nan
+
+
+@numba.njit(cache=True, nogil=True)
+def _max(a, b):
+    return b if b > a else a  # Python's max(a, b), NaN included
+
+
+@numba.njit(cache=True, nogil=True)
+def _settled_from(force, rolling, noise, median_window, sigma, tolerance, spike_sigma):
+    """Samples at the start of ``force`` before it has settled (see :func:`stroke_window`),
+    given its rolling median and the robust sigma of its residual."""
+    n = force.size
+    w = max(median_window, n // 20) | 1
+    clean = force
+    if noise > 0:
+        clean = np.where(np.abs(force - rolling) > spike_sigma * noise, rolling, force)
+    mean = _rolling_mean_nb(clean, w)
+    half = n // 2
+    final = _median_nb(clean[half:])
+    spread = _max(1.4826 * _deviation_nb(mean[half:]), noise / math.sqrt(w))
+    band = _max(sigma * spread, tolerance * abs(final))
+    for i in range(half - 1, -1, -1):  # the last sample of the first half outside the band
+        if abs(mean[i] - final) > band:
+            return min(i + 1 + w // 2, half)
+    return 0
+
+
+@numba.njit(cache=True, nogil=True)
+def _trimmed(force, rolling, noise, w, trim_sigma, trim_floor, spike_sigma):
+    """(start, stop) of ``force`` kept by the cushion trimming (see :func:`stroke_window`),
+    given its rolling median (size ``w``) and the robust sigma of its residual (NaN: not
+    known yet)."""
+    n = force.size
+    level = _median_nb(rolling[n // 4 : n - n // 4] if n >= 8 else rolling)
+    deviation = _deviation_nb(force)
+    spread = 1.4826 * deviation / math.sqrt(w)
+    limit = _max(trim_sigma * spread, trim_floor)
+    outside = np.abs(rolling - level) > limit
+    # a slow drift (cushioning starting to engage) hides under the noise of a short median:
+    # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
+    w_long = max(w, n // 10)
+    if w_long > w:
+        sigma = 1.4826 * deviation
+        # isolated spikes (a sample or a few, far from the rolling median) are replaced by
+        # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
+        # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
+        residual = force - rolling
+        if np.isnan(noise):
+            noise = 1.4826 * _deviation_nb(residual)
+        if noise > 0:
+            spikes = np.abs(residual) > spike_sigma * noise
+        else:
+            spikes = residual != 0
+        mean = _rolling_mean_nb(np.where(spikes, rolling, force), w_long)
+        outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
+    mid = n // 2
+    lo = 0
+    for i in range(mid - 1, -1, -1):  # the last outside sample before the middle
+        if outside[i]:
+            lo = i + 1
+            break
+    hi = n
+    for i in range(mid, n):  # the first from the middle on
+        if outside[i]:
+            hi = i
+            break
+    return lo, hi
+
+
+@numba.njit(cache=True, nogil=True)
+def _window_by_force(
+    force,
+    median_window,
+    settle_sigma,
+    settle_tolerance,
+    min_samples,
+    trim_sigma,
+    trim_floor,
+    spike_sigma,
+):
+    n = force.size
+    first = 0
+    w = min(median_window, max(1, n // 3)) | 1
+    rolling = np.empty(0)
+    noise = np.nan
+    settled = not (n < 4 * max(min_samples, 1) or settle_sigma <= 0)
+    if settled:
+        rolling = _rolling_median_nb(force, w)
+        noise = 1.4826 * _deviation_nb(force - rolling)
+        first = _settled_from(
+            force, rolling, noise, median_window, settle_sigma, settle_tolerance, spike_sigma
+        )
+    kept = force[first:]
+    m = kept.size
+    w_trim = min(median_window, max(1, m // 3) | 1)
+    if m == 0 or w_trim % 2 == 0:  # nothing to trim, or no median of that size (refused)
+        return first, 0, m, w_trim
+    if settled and w_trim == w:
+        # the settling test's rolling median, but for its first w // 2 values (their window
+        # reached before the kept samples): the same medians, not computed again
+        if first == 0:
+            trim_rolling = rolling
+        else:
+            trim_rolling = rolling[first:].copy()
+            noise = np.nan  # another residual
+            h = w // 2
+            if m >= w:
+                trim_rolling[:h] = _rolling_median_nb(kept[:w], w)[:h]
+            else:
+                trim_rolling = _rolling_median_nb(kept, w)
+    else:
+        trim_rolling = _rolling_median_nb(kept, w_trim)
+        noise = np.nan
+    lo, hi = _trimmed(kept, trim_rolling, noise, w_trim, trim_sigma, trim_floor, spike_sigma)
+    return first, lo, hi, w_trim
+
+
+@numba.njit(cache=True, nogil=True)
+def _stroke_window(
+    velocity,
+    force,
+    velocity_tolerance,
+    min_samples,
+    median_window,
+    settle_sigma,
+    settle_tolerance,
+    trim_sigma,
+    trim_floor,
+    spike_sigma,
+):
+    v_stroke = _median(velocity)
+    settled = np.abs(velocity - v_stroke) <= velocity_tolerance * abs(v_stroke)
+    start = stop = 0  # the longest run of settled samples (the first of equal ones)
+    run = -1
+    for i in range(settled.size + 1):
+        if i < settled.size and settled[i]:
+            if run < 0:
+                run = i
+        elif run >= 0:
+            if i - run > stop - start:
+                start, stop = run, i
+            run = -1
+    if stop - start < min_samples:
+        return settled, start, stop, 0, 0, 0, 1
+    first, lo, hi, w_trim = _window_by_force(
+        force[start:stop],
+        median_window,
+        settle_sigma,
+        settle_tolerance,
+        min_samples,
+        trim_sigma,
+        trim_floor,
+        spike_sigma,
+    )
+    return settled, start, stop, first, lo, hi, w_trim
+
+
+def stroke_window(
+    velocity: np.ndarray,
+    force: np.ndarray,
+    *,
+    velocity_tolerance: float,
+    min_samples: int,
+    median_window: int,
+    settle_sigma: float,
+    settle_tolerance: float,
+    trim_sigma: float,
+    trim_floor: float,
+    spike_sigma: float,
+) -> tuple[np.ndarray, int, int, tuple[int, int, int] | None]:
+    """The constant-velocity window of one stroke (``velocity`` [m/s] and ``force`` [N] of
+    its samples), compiled: ``(settled, start, stop, cut)``.
+
+    ``settled`` (bool per sample): |v - median v| <= ``velocity_tolerance`` * |median v|;
+    ``start:stop`` its longest run (the first of equal ones). ``cut`` is None when that run
+    is shorter than ``min_samples``, else ``(settled, lo, hi)``: the samples the force tests
+    keep are ``force[start:stop][settled:][lo:hi]``.
+
+    Force settling (a start-up transient: the pressures of a valve-driven axis build up after
+    the speed has settled): the final level is the median of the run's second half; the force
+    has settled from the first sample after which a rolling mean (a twentieth of the run)
+    of the force, spikes (beyond ``spike_sigma`` robust sigmas of the rolling median's
+    residual) replaced by the rolling median, stays within the band max(``settle_sigma`` *
+    the rolling mean's robust spread over the second half, ``settle_tolerance`` * |final
+    level|). Only the first half is ever cut; runs shorter than 4 * ``min_samples`` are
+    not cut.
+
+    Cushion trimming of the settled samples: the level is the median of the rolling median
+    (``median_window`` samples) over the middle half; a sample is outside when its rolling
+    median departs from the level by more than max(``trim_sigma`` * the force's robust
+    sigma / sqrt(median size), ``trim_floor`` [N]), or (beyond ten median sizes) when a
+    rolling mean over a tenth of the samples, spikes replaced by the rolling median, departs
+    by more than ``trim_sigma`` robust sigmas of that mean. The samples between the last
+    outside sample of the first half and the first of the second half are kept.
+
+    The same operations as these rules written with numpy arrays (``tests/test_filters.py``
+    compares them) in one call. Raises ValueError when the trimming's median size would be
+    even (an even ``median_window``).
+    """
+    settled, start, stop, first, lo, hi, size = _stroke_window(
+        np.ascontiguousarray(velocity, dtype=float),
+        np.ascontiguousarray(force, dtype=float),
+        float(velocity_tolerance),
+        operator.index(min_samples),
+        operator.index(median_window),
+        float(settle_sigma),
+        float(settle_tolerance),
+        float(trim_sigma),
+        float(trim_floor),
+        float(spike_sigma),
+    )
+    if size % 2 == 0:
+        raise ValueError(f"rolling_median needs an odd size; got {size}")
+    cut = None if stop - start < min_samples else (int(first), int(lo), int(hi))
+    return settled, int(start), int(stop), cut

@@ -155,9 +155,15 @@ def operating_pressure_signal(data, config: CampaignConfig, file="") -> np.ndarr
     return np.asarray(operating_pressure(pa, pb, reference=rule), dtype=float)
 
 
-def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
-    """Velocity [m/s] by a Savitzky-Golay derivative over ``window`` [s] (quadratic)."""
-    dt = float(np.median(np.diff(time)))
+def smoothed_velocity(time, position, *, window=0.2, sign=1.0, dt=None):
+    """Velocity [m/s] by a Savitzky-Golay derivative over ``window`` [s] (quadratic).
+
+    ``dt`` is the median time step [s] when the caller has it (else computed from ``time``).
+    """
+    from ._filters import convolve_nearest, median  # with numba, on first use (see io.text)
+
+    if dt is None:
+        dt = median(np.diff(time))
     if not dt > 0:
         raise ValueError("time must increase; found a non-increasing time column")
     n = max(5, int(round(window / dt)) | 1)
@@ -169,8 +175,6 @@ def smoothed_velocity(time, position, *, window=0.2, sign=1.0):
     # scipy.signal.savgol_filter(position, n, 2, deriv=1, delta=dt, mode="nearest") computes
     # (scipy.signal is not imported: it loads scipy.stats)
     k = np.arange(n // 2, -(n // 2) - 1, -1, dtype=float)  # reversed: convolution
-    from ._filters import convolve_nearest  # with numba, on first use (see io.text)
-
     return sign * convolve_nearest(position, k / (dt * float(k @ k)))
 
 
@@ -255,7 +259,7 @@ def find_windows(
     if not speed_ref > 0:
         windows: list[_Window] = []
         return (windows, {}) if return_components else windows
-    from ._filters import median
+    from ._filters import stroke_window
 
     moving = np.abs(velocity) > moving_fraction * speed_ref
     direction = np.sign(velocity) * moving
@@ -275,26 +279,26 @@ def find_windows(
             flag = "ok" if stop - start >= min_samples else "short_window"
             windows.append(_Window(k, d, start, max(start, stop), flag))
             continue
-        v = velocity[a:b]
-        v_stroke = median(v)
-        settled = np.abs(v - v_stroke) <= settle_tolerance * abs(v_stroke)
+        settled, start, stop, cut = stroke_window(
+            velocity[a:b],
+            force[a:b],
+            velocity_tolerance=settle_tolerance,
+            min_samples=min_samples,
+            median_window=median_window,
+            settle_sigma=settle_sigma,
+            settle_tolerance=settle_force_tolerance,
+            trim_sigma=trim_sigma,
+            trim_floor=trim_floor,
+            spike_sigma=SPIKE_SIGMA,
+        )
         settled_all[a:b] = settled
-        start, stop = _longest_true(settled)
-        if stop - start < min_samples:
+        if cut is None:
             windows.append(
                 _Window(k, d, a + start, a + stop, "unsettled" if stop == start else "short_window")
             )
             continue
-        start += _settling_start(
-            force[a + start : a + stop],
-            median_window,
-            settle_sigma,
-            settle_force_tolerance,
-            min_samples,
-        )
-        start, stop = _trim_by_force(
-            force[a + start : a + stop], trim_sigma, trim_floor, median_window, a + start
-        )
+        first, lo, hi = cut
+        start, stop = a + start + first + lo, a + start + first + hi
         flag = "ok" if stop - start >= min_samples else "short_window"
         windows.append(_Window(k, d, start, stop, flag))
     if return_components:
@@ -302,84 +306,9 @@ def find_windows(
     return windows
 
 
-def _longest_true(mask):
-    if not mask.any():
-        return 0, 0
-    padded = np.concatenate(([False], mask, [False]))
-    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
-    starts, stops = edges[::2], edges[1::2]
-    i = int(np.argmax(stops - starts))
-    return int(starts[i]), int(stops[i])
-
-
-def _settling_start(force, median_window, sigma, tolerance, min_samples):
-    """Samples at the start of a window before the force has settled [-].
-
-    The final level is the median of the window's second half; the force has settled from
-    the first sample after which a rolling mean (a twentieth of the window) stays within the
-    band max(sigma * the rolling mean's robust spread over the second half, tolerance *
-    |final level|). Only the first half is ever cut: a stroke whose force changes along its
-    travel keeps at least half its window.
-    """
-    n = len(force)
-    if n < 4 * max(min_samples, 1) or sigma <= 0:
-        return 0
-    from ._filters import median, median_deviation, rolling_mean, rolling_median
-
-    w = max(median_window, n // 20) | 1
-    rolling = rolling_median(force, min(median_window, max(1, n // 3)) | 1)
-    residual = force - rolling
-    noise = 1.4826 * median_deviation(residual)
-    clean = np.where(np.abs(residual) > SPIKE_SIGMA * noise, rolling, force) if noise > 0 else force
-    mean = rolling_mean(clean, w)
-    half = n // 2
-    final = median(clean[half:])
-    tail = mean[half:]
-    spread = max(1.4826 * median_deviation(tail), noise / math.sqrt(w))
-    band = max(sigma * spread, tolerance * abs(final))
-    outside = np.flatnonzero(np.abs(mean[:half] - final) > band)
-    if not outside.size:
-        return 0
-    return min(int(outside[-1]) + 1 + w // 2, half)
-
-
 SPIKE_SIGMA = 5.0
 """Samples further than this many robust sigmas from the rolling median of the force are
 spikes: left out of the cushion trimming's rolling mean (:func:`find_windows`) [-]."""
-
-
-def _trim_by_force(force, trim_sigma, trim_floor, median_window, offset):
-    """Trim ends where the rolling median of the force leaves the centre level."""
-    n = len(force)
-    w = min(median_window, max(1, n // 3) | 1)
-    from ._filters import median, median_deviation, rolling_mean, rolling_median
-
-    rolling = rolling_median(force, w)
-    centre = rolling[n // 4 : n - n // 4] if n >= 8 else rolling
-    level = median(centre)
-    spread = 1.4826 * median_deviation(force) / math.sqrt(w)
-    limit = max(trim_sigma * spread, trim_floor)
-    outside = np.abs(rolling - level) > limit
-    # a slow drift (cushioning starting to engage) hides under the noise of a short median:
-    # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
-    w_long = max(w, n // 10)
-    if w_long > w:
-        sigma = 1.4826 * median_deviation(force)
-        # isolated spikes (a sample or a few, far from the rolling median) are replaced by
-        # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
-        # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
-        residual = force - rolling
-        noise = 1.4826 * median_deviation(residual)
-        spikes = np.abs(residual) > SPIKE_SIGMA * noise if noise > 0 else residual != 0
-        mean = rolling_mean(np.where(spikes, rolling, force), w_long)
-        outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
-    outside = np.flatnonzero(outside)
-    mid = n // 2
-    before = outside[outside < mid]
-    after = outside[outside >= mid]
-    lo = int(before[-1]) + 1 if before.size else 0
-    hi = int(after[0]) if after.size else n
-    return offset + lo, offset + hi
 
 
 def extract_points(
@@ -458,8 +387,11 @@ def _point_rows(data, metadata, config, run, options):
             "no time column; expected one named Time/Zeit/Tid (with a unit, e.g. 'Time [s]'), "
             'or [columns] time = "..." in campaign.toml',
         )
+    from ._filters import median, median_and_deviation
+
     time = np.asarray(data["time [s]"])
-    if time.size < 2 or not float(np.median(np.diff(time))) > 0:
+    dt = median(np.diff(time)) if time.size >= 2 else math.nan  # the time step [s]
+    if not dt > 0:
         raise BenchFileError(file, "the time column does not increase; expected time in s rising")
     for name, values in data.items():
         values = np.asarray(values)
@@ -478,6 +410,7 @@ def _point_rows(data, metadata, config, run, options):
             np.asarray(data["position [m]"]),
             window=velocity_window,
             sign=config.position_sign,
+            dt=dt,
         )
     else:
         raise BenchFileError(
@@ -508,27 +441,31 @@ def _point_rows(data, metadata, config, run, options):
         )
     nominal_speed = abs(metadata.get("velocity", math.nan))
     windows = find_windows(time, velocity, force, nominal_speed=nominal_speed, **options)
-    from ._filters import median, median_deviation
-
+    nominal_pressure: float | None = None
     extra = metadata.get("extra", {})
     rows = []
+    nan = math.nan
     for w in windows:
         f = force[w.start : w.stop]
         v = velocity[w.start : w.stop]
         keep = np.zeros(0, bool)
         if f.size:
-            med = median(f)
-            sigma = 1.4826 * median_deviation(f) or float(np.std(f))
+            med, deviation = median_and_deviation(f)
+            sigma = 1.4826 * deviation or float(np.std(f))
             keep = np.abs(f - med) <= spike_sigma * sigma if sigma > 0 else np.ones(f.size, bool)
         n = int(keep.sum())
+        if n < f.size:  # spikes left out (with none, the window as it is: the same values)
+            f, v = f[keep], v[keep]
         if pressure is not None and n:
-            p = pressure[w.start : w.stop][keep]
+            p = pressure[w.start : w.stop]
+            p = p[keep] if n < p.size else p
             p_mean, p_std = float(p.mean()), float(p.std())
         else:  # the nominal pressure is the chambers' (both, or the working one)
-            nominal = np.asarray(float(metadata.get("pressure", math.nan)))
-            p_mean = float(PRESSURE_REFERENCES[config.pressure_reference](nominal, nominal))
-            p_std = 0.0
-        nan = math.nan
+            if nominal_pressure is None:
+                nominal = np.asarray(float(metadata.get("pressure", math.nan)))
+                reference = PRESSURE_REFERENCES[config.pressure_reference]
+                nominal_pressure = float(reference(nominal, nominal))
+            p_mean, p_std = nominal_pressure, 0.0
         rows.append(
             {
                 "run": run,
@@ -538,10 +475,10 @@ def _point_rows(data, metadata, config, run, options):
                 "pressure [Pa]": p_mean,
                 "pressure_std [Pa]": p_std,
                 "velocity [m/s]": _window_speed(time, position, velocity, w, keep) if n else nan,
-                "velocity_std [m/s]": float(v[keep].std()) if n else nan,
-                "force [N]": float(f[keep].mean()) if n else nan,
+                "velocity_std [m/s]": float(v.std()) if n else nan,
+                "force [N]": float(f.mean()) if n else nan,
                 "friction [N]": nan,
-                "friction_std [N]": float(f[keep].std()) if n else nan,
+                "friction_std [N]": float(f.std()) if n else nan,
                 "n [-]": n,
                 "window_start [s]": float(time[w.start]) if n else nan,
                 "window_end [s]": float(time[w.stop - 1]) if n else nan,

@@ -17,6 +17,7 @@ Examples
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 from typing import TYPE_CHECKING, TypeVar
 
 if TYPE_CHECKING:
@@ -173,8 +174,12 @@ def _written(key: str) -> str:
     return "N" + key[1:] if key.startswith("n") else key
 
 
+@lru_cache(maxsize=256)
 def _lookup(unit: str) -> tuple[str, float]:
-    """(dimension, factor to SI) of a unit symbol; prefixes m and M by their case."""
+    """(dimension, factor to SI) of a unit symbol; prefixes m and M by their case.
+
+    Memoised per spelling (a bench file's few units are looked up for every run file;
+    errors are not cached: they raise again)."""
     exact = unit.strip().replace(" ", "")
     if exact in CASED_UNITS:
         return CASED_UNITS[exact]

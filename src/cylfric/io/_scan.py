@@ -66,7 +66,7 @@ def _is_space(c):
     return c == 32 or c == 9
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _parse_number(buf, i, end, decimal):
     """Parse a number at buf[i:]; return (value, next index, ok)."""
     negative = False

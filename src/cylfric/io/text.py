@@ -18,6 +18,7 @@ import codecs
 import hashlib
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -116,8 +117,11 @@ _KEY_VALUE = re.compile(r"^\s*([A-Za-zÀ-ÿ][^:=|]{0,60}?)\s*[:=]\s*(.*?)\s*$")
 _MAX_TEXT_LINES = 5000
 
 
+@lru_cache(maxsize=1024)
 def canonical_name(name: str) -> str | None:
-    """Map a column name such as ``Axial Force`` or ``Zeit`` to a canonical quantity."""
+    """Map a column name such as ``Axial Force`` or ``Zeit`` to a canonical quantity.
+
+    Memoised per name (every run file of a campaign repeats the same few columns)."""
     low = " ".join(name.lower().replace("_", " ").replace("-", " ").split())
     if any(word in low.split() for word in ("raw", "volt", "voltage", "signal")):
         return None  # raw sensor channels are kept as read, never taken for a quantity
@@ -274,7 +278,7 @@ def read_bench_arrays(
         Empty, binary, truncated or corrupt files, unknown units, missing columns; the
         message names the file, the line when known, and what was expected.
     """
-    path = Path(path)
+    path = path if isinstance(path, Path) else Path(path)
     if encoding is not None:
         try:
             codecs.lookup(encoding)
@@ -287,7 +291,7 @@ def read_bench_arrays(
         raw = path.read_bytes()
     except OSError as exc:
         raise BenchFileError(path, f"cannot read the file ({exc.strerror})") from None
-    if not raw.strip():
+    if not raw or raw.isspace():
         raise BenchFileError(path, "the file is empty; expected a bench record")
     nul = raw.find(b"\x00")
     if nul >= 0:
@@ -336,8 +340,9 @@ def read_bench_arrays(
 
     # Data runs: consecutive data lines, blank lines allowed inside, broken by text lines.
     breaks = np.searchsorted(data_idx, text_idx)
-    cut = np.unique(breaks[(breaks > 0) & (breaks < data_idx.size)])
-    runs = np.split(data_idx, cut)
+    cut = sorted(set(breaks[(breaks > 0) & (breaks < data_idx.size)].tolist()))
+    bounds = [0, *cut, data_idx.size]
+    runs = [data_idx[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
     sample = line_text(data_idx[0])
     delim = {
@@ -366,7 +371,10 @@ def read_bench_arrays(
         starts = starts.copy()
         starts[data_idx] += 1
     if decimal == "auto":
-        probe = b"".join(raw[starts[i] : ends[i]] for i in data_idx[:50])
+        first = data_idx[:50]
+        probe = b"".join(
+            raw[a:b] for a, b in zip(starts[first].tolist(), ends[first].tolist(), strict=True)
+        )
         decimal = "," if delim != "," and b"," in probe else "."
     if decimal not in (".", ","):
         raise ValueError(f"unknown decimal separator {decimal!r}; valid: '.', ','")
@@ -387,10 +395,10 @@ def read_bench_arrays(
             raise ValueError("give one unit per column in `units` (same length as `columns`)")
         explicit = _Header(list(columns), list(units), 0)
 
-    blocks = []
+    blocks: list[tuple[int | np.ndarray, np.ndarray, _Header]] = []
     header = explicit
     for seg, run in enumerate(runs):
-        previous = [i for i in text_idx if i < run[0]][-3:]
+        previous = text_idx[: np.searchsorted(text_idx, run[0])][-3:].tolist()
         if explicit is None:
             ncols = len(_split(line_text(run[0]), delim))
             found = _header_before(previous, text_lines, delim, ncols)
@@ -407,9 +415,20 @@ def read_bench_arrays(
     header_rows = {row for _, _, hdr in blocks for row in hdr.rows}
     events = [(number, text) for number, text in events if number not in header_rows]
 
+    segments = len(blocks)
+    first_header = blocks[0][2]
+    if segments > 1 and all(
+        hdr.names == first_header.names and hdr.units == first_header.units for _, _, hdr in blocks
+    ):
+        # one layout in every block (a header repeated per segment): all the data rows
+        # parsed at once, with their segment numbers (the same values, nothing joined)
+        counts = [len(run) for _, run, _ in blocks]
+        segment = np.repeat(np.arange(segments, dtype=np.int32), counts)
+        blocks = [(segment, data_idx, first_header)]
+
     frames = []
     sep = 0 if delim is None else ord(delim)
-    for seg, run, hdr in blocks:
+    for number, run, hdr in blocks:
         values, bad, code, field = parse_block(
             buf, starts, ends, run, len(hdr.names), sep, ord(decimal)
         )
@@ -428,9 +447,9 @@ def read_bench_arrays(
                     f"(decimal separator {decimal!r})"
                 )
             raise BenchFileError(path, message, line=int(bad) + 1)
-        frames.append((seg, hdr, values, int(run[0]) + 1))
+        frames.append((number, hdr, values, int(run[0]) + 1))
 
-    names = blocks[0][2].names
+    names = first_header.names
     # the bytes and the line index are done with: let them go before the columns are
     # assembled (peak memory about the file plus its numbers, not twice that)
     # (None only to release them: none is read again, so no Optional in their types)
@@ -445,7 +464,7 @@ def read_bench_arrays(
         "decimal": decimal,
         "events": events,
         "rows": int(len(data["segment [-]"])),
-        "segments": len(frames),
+        "segments": segments,
         "sha256": sha256,
     }
     return data, metadata
@@ -593,8 +612,9 @@ def si_columns(
 def _assemble(frames, path, roles, own: bool = False):
     """Convert blocks to SI, name columns canonically, concatenate with a segment column.
 
-    ``own``: the blocks are the reader's own arrays, converted in place (no copy); else the
-    caller's values are left alone.
+    ``frames`` are (segment number, or one per row as an int32 array; header; values; first
+    line) per block. ``own``: the blocks are the reader's own arrays, converted in place (no
+    copy); else the caller's values are left alone.
     """
     parts = []
     col_units = {}
@@ -638,7 +658,9 @@ def _assemble(frames, path, roles, own: bool = False):
                 col_units[quantity] = unit
             else:
                 cols[f"{name} [{unit or '-'}]"] = values[:, j]
-        cols["segment [-]"] = np.full(values.shape[0], seg, dtype=np.int32)
+        cols["segment [-]"] = (
+            seg if isinstance(seg, np.ndarray) else np.full(values.shape[0], seg, dtype=np.int32)
+        )
         parts.append(cols)
     keys = list(parts[0])
     for cols, line in zip(parts[1:], lines[1:], strict=True):
