@@ -537,11 +537,38 @@ def identify(
     -------
     Identification
 
+    The fits run with BLAS limited to one thread (threadpoolctl): their matrices are tall
+    and narrow (points x about 8 coefficients), where a second BLAS thread costs more than
+    it gives (the scale benchmark's 20,000 runs: 1.3 s against 2.1-2.3 s with two threads,
+    5,000 runs 0.6 s against 0.7-3.3 s, on a shared 2-core machine); the caller's limits are
+    restored after.
+
     Raises
     ------
     ValueError
         Missing columns, NaN values, too few points, unknown law or fixed names.
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _identify(
+            points,
+            fixed=fixed,
+            pressure_law=pressure_law,
+            per_direction=per_direction,
+            sensitivity=sensitivity,
+        )
+
+
+def _identify(
+    points: pd.DataFrame,
+    *,
+    fixed: Mapping[str, Any] | None,
+    pressure_law: str,
+    per_direction: bool,
+    sensitivity: bool,
+) -> Identification:
+    """The body of :func:`identify` (run under its one-thread BLAS limit)."""
     fixed = dict(fixed or {})
     unknown = set(fixed) - set(PARAMETERS)
     if unknown:
@@ -599,7 +626,7 @@ def identify(
                 f"that {', '.join(shape_fixed)} belong(s) to is not identified; fix only "
                 "F_c or sigma_2 here, or measure at least 4 speeds per pressure"
             )
-        warnings.warn(message, IdentificationWarning, stacklevel=2)
+        warnings.warn(message, IdentificationWarning, stacklevel=3)
         result = _level_only(used, levels, fixed, notes + [message], validity)
     else:
         with warnings.catch_warnings(record=True) as caught:
@@ -615,7 +642,7 @@ def identify(
         notes += [str(w.message) for w in caught]
         notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
         for w in caught:  # recorded for the report, and still shown to the caller
-            warnings.warn(w.message, w.category, stacklevel=2)
+            warnings.warn(w.message, w.category, stacklevel=3)
         per_pressure, fits, regressions, models, fits_by_law, comparison = core
         model = models[pressure_law]
         shape = model.friction_law == "stribeck"
