@@ -385,11 +385,12 @@ def residual_strata(
     traces.append(n - float(np.trace(information @ (jac.T @ (jac * weight[:, None])))))
     squares = np.diff(np.r_[0.0, sums])  # nested: each stratum is the next minus this one
     dof = np.diff(np.r_[0.0, traces])
-    strata = [
-        {"name": name, "sum_of_squares_N2": float(max(ss, 0.0)), "dof": float(max(d, 0.0))}
+    parts = [
+        (name, float(max(ss, 0.0)), float(max(d, 0.0)))
         for name, ss, d in zip(STRATA, squares, dof, strict=True)
     ]
-    used = [(s["sum_of_squares_N2"], s["dof"]) for s in strata if s["dof"] > 0.5]
+    strata = [{"name": name, "sum_of_squares_N2": ss, "dof": d} for name, ss, d in parts]
+    used = [(ss, d) for _, ss, d in parts if d > 0.5]
     total = sum(ss for ss, _ in used)
     spread = sum(ss**2 / d for ss, d in used if ss > 0)
     nu = total**2 / spread if spread > 0 else None
