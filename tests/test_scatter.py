@@ -225,15 +225,11 @@ def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
     old = FrictionModel.from_datasheet(validate(sheet))
     assert old.covariance_nonrobust is None
     np.testing.assert_allclose(old.standard_error(v, p, robust=False), robust)
-    # the run band's quantile: the run component's dof, from the runs' strata (at most the
-    # plain runs - parameters count); without the strata record, the component's own
+    # the run band's quantile: the run component's dof
     from cylfric.model.core import _band_parts
 
     part = _band_parts(model.scatter, "run")
-    assert part["between_dof"] == model.scatter["residual_variance"]["run_dof"]
-    assert 4 < part["between_dof"] <= model.scatter["components"]["run"]["dof"] + 1e-9
-    plain = {k: v for k, v in model.scatter.items() if k != "residual_variance"}
-    assert _band_parts(plain, "run")["between_dof"] == model.scatter["components"]["run"]["dof"]
+    assert part["between_dof"] == model.scatter["components"]["run"]["dof"]
     session = _band_parts(model.scatter, "session")
     assert session["between_dof"] == model.scatter["components"]["session"]["dof"]
     # one session: s_L^2 + (s_L^2 - s_run^2) / 1 (the fitted curve carries the session's
