@@ -331,9 +331,7 @@ def residual_strata(
         nu = (sum_s SS_s)^2 / sum_s (SS_s^2 / d_s)    (strata with d_s > 0.5 and SS_s > 0)
 
     which is ``N - p`` when every stratum scatters alike and the dof of the dominant stratum
-    when one does. ``run_dof`` is the same over the strata down to the runs (session, block,
-    run): the dof of the runs' scatter about the law, from which the run component is
-    estimated. The bands of new data of the same mount use them
+    when one does. The bands of new data of the same mount use it
     (:meth:`cylfric.model.FrictionModel.prediction_band`).
 
     Parameters
@@ -351,8 +349,8 @@ def residual_strata(
     Returns
     -------
     dict or None
-        ``method``, ``strata`` (``name``, ``sum_of_squares_N2`` [N^2], ``dof`` [-]), ``dof``
-        [-] and ``run_dof`` [-] (None when no stratum has degrees of freedom).
+        ``method``, ``strata`` (``name``, ``sum_of_squares_N2`` [N^2], ``dof`` [-]) and
+        ``dof`` [-] (None when no stratum has degrees of freedom).
     """
     r = np.asarray(residuals, dtype=float)
     jac = np.asarray(jacobian, dtype=float)
@@ -392,17 +390,8 @@ def residual_strata(
         for name, ss, d in zip(STRATA, squares, dof, strict=True)
     ]
     strata = [{"name": name, "sum_of_squares_N2": ss, "dof": d} for name, ss, d in parts]
-    return {
-        "method": STRATA_METHOD,
-        "strata": strata,
-        "dof": _satterthwaite(parts),
-        "run_dof": _satterthwaite(parts[:-1]),
-    }
-
-
-def _satterthwaite(parts: list[tuple[str, float, float]]) -> float | None:
-    """Satterthwaite's dof [-] of the total of strata (name, SS, dof) that have dof > 0.5."""
     used = [(ss, d) for _, ss, d in parts if d > 0.5]
     total = sum(ss for ss, _ in used)
     spread = sum(ss**2 / d for ss, d in used if ss > 0)
-    return total**2 / spread if spread > 0 else None
+    nu = total**2 / spread if spread > 0 else None
+    return {"method": STRATA_METHOD, "strata": strata, "dof": nu}

@@ -1046,11 +1046,8 @@ def _band_parts(scatter: Mapping, scope: str) -> dict[str, float]:
     repeat = c["repeatability"]["std_percent"] / 100.0
     run = c["run"]["std_percent"] / 100.0
     session = c["session"]
-    if scope == "run":  # the run component's own degrees of freedom: those of the runs'
-        # strata where the fit recorded them (runs of one pressure block share its offset)
-        strata = scatter.get("residual_variance") or {}
-        run_dof = strata.get("run_dof") or c["run"].get("dof")
-        between, between_dof = run, float(run_dof or np.inf)
+    if scope == "run":  # the run component's own degrees of freedom
+        between, between_dof = run, float(c["run"].get("dof") or np.inf)
     else:
         between_dof = float(session.get("dof") or np.inf)
         between = session.get("between_percent")
