@@ -331,3 +331,17 @@ def test_residual_dof_is_the_dominant_stratum_s_when_one_carries_the_scatter():
     assert ss["run"] == pytest.approx(0.0, abs=1e-9) and ss["point"] == pytest.approx(0, abs=1e-9)
     assert 1.0 < record["dof"] <= 6.0 + 1e-9
     assert record["dof"] < len(y) - 2
+
+
+def test_residual_strata_of_a_campaign_without_sessions_are_one_session():
+    """No session said (None in every row, or no column): one session, as a label would."""
+    from cylfric.identify.scatter import residual_strata
+
+    table, r, jac, sigma = _strata_design(7, sessions=1)
+    said = residual_strata(table, r, jac, sigma)
+    for unsaid in (table.assign(session=None), table.drop(columns="session")):
+        record = residual_strata(unsaid, r, jac, sigma)
+        assert record["dof"] == pytest.approx(said["dof"], rel=1e-12)
+        assert [s["dof"] for s in record["strata"]] == pytest.approx(
+            [s["dof"] for s in said["strata"]]
+        )

@@ -360,8 +360,8 @@ def residual_strata(
     weight = np.ones(n) if sigma is None else 1.0 / np.asarray(sigma, dtype=float) ** 2
 
     def labels(column, default):
-        values = points[column] if column in points else pd.Series([default] * n)
-        return pd.Series(values.astype(str).to_numpy(), dtype=object)
+        values = points[column].to_numpy(dtype=object) if column in points else [default] * n
+        return pd.Series([str(v) for v in values], dtype=object)  # None: "None", one label
 
     session = labels("session", "1")
     block = session + "|" + labels("level", "0")
