@@ -164,7 +164,7 @@ class CampaignConfig:
         return str(self.pressure_basis["rule"])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RunInfo:
     """A run file with its nominal metadata (SI; NaN when unknown).
 
