@@ -456,6 +456,7 @@ def _fit(
         reading.close()
         if after_extraction is not None:
             after_extraction()
+    del reading  # the workers' packed results (their points as arrays), now in extraction
 
     # the data as measured: the gate looks for data errors (and lists the duplicate files)
     quality = assess(extraction, duplicates=campaign.duplicates)
