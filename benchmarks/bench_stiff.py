@@ -479,6 +479,56 @@ def _parallel_control():
     return times[1] / times[max(times)]
 
 
+def batch_sets(rng, n_sets):
+    """(sigma_0 [N/m], k [N/m], speed [m/s], models, drives) of ``n_sets`` Canudas-like sets
+    drawn from ``rng``: sigma_0 1e5..1e10 (sigma_1 = sqrt(sigma_0)), spring 1..4 N/m, speed
+    0.05..0.2 m/s."""
+    from cylfric.model import FrictionModel
+    from cylfric.simulate import SpringPull
+
+    sigma_0 = 10 ** rng.uniform(5, 10, n_sets)
+    k = rng.uniform(1, 4, n_sets)
+    speed = rng.uniform(0.05, 0.2, n_sets)
+    base = canudas(1e5, 10.0)["params"]
+    models = [
+        FrictionModel({**base, "sigma_0": s, "sigma_1": math.sqrt(s)}, pressure_law="constant")
+        for s in sigma_0
+    ]
+    drives = [SpringPull(float(ki), float(si)) for ki, si in zip(k, speed, strict=True)]
+    return sigma_0, k, speed, models, drives
+
+
+def thread_times(work, rounds=3):
+    """Best time [s] of ``work()`` on one numba thread and on all, alternating ``rounds``
+    times (a single timing on a shared machine moved the second core's speed-up between
+    1.43x and 1.76x), each run starting with no model evaluated before, as a user's would;
+    ({threads: best seconds}, {threads: [seconds of each round]}, the last result)."""
+    import numba
+
+    from cylfric.simulate import plant
+
+    found = {1: [], numba.config.NUMBA_NUM_THREADS: []}
+    result = None
+    for _ in range(rounds):
+        for threads in found:
+            numba.set_num_threads(threads)
+            plant._PARAMS.clear()
+            t0 = time.perf_counter()
+            result = work()
+            found[threads].append(time.perf_counter() - t0)
+    return {threads: min(seconds) for threads, seconds in found.items()}, found, result
+
+
+def _medians(contenders, rounds):
+    """({name: median seconds}, {name: [seconds of each round]}) of contenders
+    (``name: callable -> seconds``) called in turn ``rounds`` times."""
+    times = {name: [] for name in contenders}
+    for _ in range(rounds):
+        for name, timed in contenders.items():
+            times[name].append(timed())
+    return {name: float(np.median(v)) for name, v in times.items()}, times
+
+
 def bench_stiff_batch(n_sets=10_000, sample=20, record_every=10):
     """10,000 Canudas-like sets: sigma_0 1e5..1e10, spring 1..4 N/m, speed 0.05..0.2 m/s.
 
@@ -489,19 +539,10 @@ def bench_stiff_batch(n_sets=10_000, sample=20, record_every=10):
     """
     import numba
 
-    from cylfric.model import FrictionModel
-    from cylfric.simulate import Cylinder, SpringPull, plant, simulate_batch
+    from cylfric.simulate import Cylinder, simulate_batch
 
     rng = np.random.default_rng(12)
-    sigma_0 = 10 ** rng.uniform(5, 10, n_sets)
-    k = rng.uniform(1, 4, n_sets)
-    speed = rng.uniform(0.05, 0.2, n_sets)
-    base = canudas(1e5, 10.0)["params"]
-    models = [
-        FrictionModel({**base, "sigma_0": s, "sigma_1": math.sqrt(s)}, pressure_law="constant")
-        for s in sigma_0
-    ]
-    drives = [SpringPull(float(ki), float(si)) for ki, si in zip(k, speed, strict=True)]
+    sigma_0, k, speed, models, drives = batch_sets(rng, n_sets)
 
     def run(sl):
         return simulate_batch(
@@ -511,30 +552,14 @@ def bench_stiff_batch(n_sets=10_000, sample=20, record_every=10):
     run(slice(0, 2))  # compile or load from the cache
     # one and all threads alternating, best of 3 each: a single 2 s timing on a shared
     # machine moved the second core's speed-up between 1.43x and 1.76x
-    all_times = {1: [], numba.config.NUMBA_NUM_THREADS: []}
-    for _ in range(3):
-        for threads in all_times:
-            numba.set_num_threads(threads)
-            plant._PARAMS.clear()  # no model evaluated before: each run starts as a user's would
-            t0 = time.perf_counter()
-            batch = run(slice(0, n_sets))
-            all_times[threads].append(time.perf_counter() - t0)
-    times = {threads: min(seconds) for threads, seconds in all_times.items()}
+    times, all_times, batch = thread_times(lambda: run(slice(0, n_sets)))
     # the same with the other core busy (a process spinning beside the batch)
     spinner = subprocess.Popen([sys.executable, "-c", "while True: pass"])
-    busy_times = {1: [], numba.config.NUMBA_NUM_THREADS: []}
     try:
-        for _ in range(3):
-            for threads in busy_times:
-                numba.set_num_threads(threads)
-                plant._PARAMS.clear()
-                t0 = time.perf_counter()
-                run(slice(0, n_sets))
-                busy_times[threads].append(time.perf_counter() - t0)
+        busy, _, _ = thread_times(lambda: run(slice(0, n_sets)))
     finally:
         spinner.kill()
         spinner.wait()
-    busy = {threads: min(seconds) for threads, seconds in busy_times.items()}
     # every set against the same sets at rtol 1e-9 (checked a decade tighter; its own error
     # about 1e-6, the sampled Radau references below confirm the scale)
     tight = simulate_batch(
@@ -877,11 +902,7 @@ def _versus_c(case, rounds=7):
         "c_textbook_equal": lambda: _c_rodas3(case, c_equal, True, 3)[0] if c_equal else math.nan,
         "c_same_scheme_default": lambda: _c_rodas3(case, None, False, 3)[0],
     }
-    times = {name: [] for name in contenders}
-    for _ in range(rounds):
-        for name, timed in contenders.items():
-            times[name].append(timed())
-    med = {name: float(np.median(v)) for name, v in times.items()}
+    med, times = _medians(contenders, rounds)
 
     def c_info(rtol):
         if rtol is None:
@@ -1016,11 +1037,7 @@ def _versus_numbalsoda(case, rounds=7):
             contenders[f"{name}_with_force"] = lambda r=r, a=a: _best(
                 lambda: run.with_force(r, a), 3
             )[0]
-    times = {name: [] for name in contenders}
-    for _ in range(rounds):
-        for name, timed in contenders.items():
-            times[name].append(timed())
-    med = {name: float(np.median(v)) for name, v in times.items()}
+    med, times = _medians(contenders, rounds)
 
     def info(setting):
         if setting is None:

@@ -372,7 +372,7 @@ def residual_strata(
     information = np.linalg.pinv(jac.T @ (jac * weight[:, None]))
     traces, sums = [], []
     for key in (session, block, run):
-        index, uniques = pd.factorize(key)
+        index, _ = pd.factorize(key)
         counts = np.bincount(index)
         groups = counts.size
         mean_r = _group_sums(index, r, groups) / counts
