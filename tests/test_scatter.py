@@ -11,7 +11,7 @@ import pytest
 
 from cylfric.identify import identify
 from cylfric.identify.lack_of_fit import lack_of_fit
-from cylfric.identify.scatter import scatter_components
+from cylfric.identify.scatter import residual_function, scatter_components
 from cylfric.model import FrictionModel, validate
 
 
@@ -206,11 +206,15 @@ def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
 
     n_dof = model.scatter["residual_variance"]["dof"]
     assert 4 < n_dof < model.statistics["n_points"] - model.statistics["n_variables"]
-    s_res = model.statistics["residual_std"]
+    # s(F): the residual variance function at each level (its mean over the points: s_res^2)
+    shape = model.scatter["residual_function"]
+    f = model.friction(v, p)
+    s_f = np.sqrt(shape["absolute_std_N"] ** 2 + (shape["relative_std_percent"] / 100 * f) ** 2)
+    np.testing.assert_allclose(model.residual_scale(v, p), s_f, rtol=1e-12)
     low, high = model.prediction_band(v, p, scope="point")
     quantile = np.sqrt(n_dof * stats.beta.ppf(0.95, 0.5, (n_dof - 1) / 2))
     assert 1.9 < quantile < stats.norm.ppf(0.975) < stats.t.ppf(0.975, n_dof)
-    expected = quantile * np.sqrt(nonrobust**2 + s_res**2)
+    expected = quantile * np.sqrt(nonrobust**2 + s_f**2)
     np.testing.assert_allclose(0.5 * (high - low), expected, rtol=1e-9)
     # the session band: Student-t with the cluster-robust se (a new mount shares nothing)
     assert np.all(np.subtract(*model.prediction_band(v, p, scope="session")[::-1]) > (high - low))
@@ -345,3 +349,65 @@ def test_residual_strata_of_a_campaign_without_sessions_are_one_session():
         assert [s["dof"] for s in record["strata"]] == pytest.approx(
             [s["dof"] for s in said["strata"]]
         )
+
+
+@pytest.mark.parametrize(("absolute", "relative"), [(2.0, 0.05), (0.0, 0.08), (3.0, 0.0)])
+def test_residual_function_recovers_two_components_and_keeps_the_mean_square(absolute, relative):
+    """s(F)^2 = s_a^2 + (s_b F)^2 by moments: both components recovered from residuals drawn
+    with them (and one drawn at 0 found near 0); the function's mean over the points is the
+    residual variance RSS / (N - p) whatever the case."""
+    rng = np.random.default_rng(7)
+    force = rng.uniform(10.0, 200.0, 40_000)  # fitted friction [N]
+    e = rng.normal(0.0, np.sqrt(absolute**2 + (relative * force) ** 2))
+    shape = residual_function(force, e, n_parameters=6)
+    a, b = shape["absolute_std_N"], shape["relative_std_percent"] / 100
+    assert a == pytest.approx(absolute, abs=0.06 * max(absolute, 1.0))
+    assert b == pytest.approx(relative, abs=0.005)
+    np.testing.assert_allclose(np.mean(a**2 + (b * force) ** 2), e @ e / (e.size - 6), rtol=1e-9)
+
+
+def test_residual_function_clips_a_negative_component_and_keeps_the_mean_square():
+    """Scatter growing faster than the level (e ~ F^1.5) gives a negative absolute part:
+    relative only; scatter shrinking with it (e ~ F^-0.5) a negative relative part: absolute
+    only; the mean over the points stays RSS / (N - p)."""
+    force = np.linspace(10.0, 200.0, 400)
+    sign = np.where(np.arange(400) % 2, 1.0, -1.0)
+    for power, components in ((1.5, "relative only"), (-0.5, "absolute only")):
+        e = sign * 0.01 * force**power
+        shape = residual_function(force, e, n_parameters=3)
+        a, b = shape["absolute_std_N"], shape["relative_std_percent"] / 100
+        assert shape["components"] == components and (a == 0.0) == (power > 0) and (b == 0.0) == (
+            power < 0
+        )
+        np.testing.assert_allclose(np.mean(a**2 + (b * force) ** 2), e @ e / 397, rtol=1e-12)
+
+
+def test_residual_function_of_one_level_is_the_residual_std():
+    e = np.random.default_rng(3).normal(0, 1.5, 50)
+    shape = residual_function(np.full(50, 80.0), e, n_parameters=2)
+    assert shape["components"] == "absolute only" and shape["relative_std_percent"] == 0.0
+    assert shape["absolute_std_N"] == pytest.approx(np.sqrt(e @ e / 48), rel=1e-12)
+    assert residual_function(np.ones(2), np.ones(2), n_parameters=2) is None
+
+
+def test_point_band_follows_the_level_of_relative_scatter():
+    """Relative scatter: the point band at the lowest pressure is narrower than at the
+    highest, by about the levels' ratio; an older datasheet without the record keeps one
+    s_res for every level."""
+    model = _identify(_points(4, sessions=1, runs_per_level=3)).model
+    assert model.scatter["residual_function"]["relative_std_percent"] > 0
+    v, p = np.full(2, 0.01), np.array([10e5, 90e5])
+    scale = model.residual_scale(v, p)
+    level = model.friction(v, p)
+    assert scale[0] < scale[1] and scale[1] / scale[0] <= level[1] / level[0] + 1e-9
+    sheet = model.to_datasheet()
+    validate(sheet)
+    assert FrictionModel.from_datasheet(sheet).scatter["residual_function"] == (
+        model.scatter["residual_function"]
+    )
+    del sheet["fit"]["scatter"]["residual_function"]  # an earlier cylfric's datasheet
+    old = FrictionModel.from_datasheet(validate(sheet))
+    np.testing.assert_allclose(old.residual_scale(v, p), model.statistics["residual_std"])
+    half = np.subtract(*model.prediction_band(v, p)[::-1])
+    half_old = np.subtract(*old.prediction_band(v, p)[::-1])
+    assert half[0] < half_old[0] and half[1] > half_old[1]

@@ -44,6 +44,8 @@ __all__ = [
     "scatter_components",
     "relative_residuals",
     "scatter_note",
+    "residual_strata",
+    "residual_function",
 ]
 
 SESSION_PRIOR: dict[str, Any] = {
@@ -395,3 +397,79 @@ def residual_strata(
     spread = sum(ss**2 / d for ss, d in used if ss > 0)
     nu = total**2 / spread if spread > 0 else None
     return {"method": STRATA_METHOD, "strata": strata, "dof": nu}
+
+
+FUNCTION_METHOD = (
+    "two-component variance function of the residuals s(F)^2 = s_a^2 + (s_b F)^2 (Rocke & "
+    "Lorenzato 1995), F the fitted friction: s_a [N] and s_b [-] by the method of moments from "
+    "the mean squares of the absolute and the relative residuals on N - p degrees of freedom; "
+    "a component estimated negative is set to 0 and the other takes the absolute mean square"
+)
+
+
+def residual_function(
+    fitted: np.ndarray, residuals: np.ndarray, n_parameters: int = 1
+) -> dict[str, Any] | None:
+    """How the residual scatter grows with the friction level: ``s(F)^2 = s_a^2 + (s_b F)^2``.
+
+    One residual standard deviation ``s_res`` [N] for every level over-states the scatter of
+    the low levels and under-states the high ones when the scatter is relative (a pressure
+    block's offset, a run's, in % of its level), and a purely relative scale would miss the
+    absolute part (a load cell's noise and resolution). The two-component model of
+    measurement error (Rocke & Lorenzato 1995, *Technometrics* 37, 176-184) holds both. Its
+    two variances follow from two moments of the fit's residuals ``e_i`` [N] at the fitted
+    friction ``F_i`` [N] (N points, p coefficients)::
+
+        sum e_i^2 / (N - p)         = s_a^2 + s_b^2 mean(F^2)      (= s_res^2)
+        sum (e_i / F_i)^2 / (N - p) = s_a^2 mean(F^-2) + s_b^2
+
+    a 2 x 2 linear system (singular only when every level is the same; then ``s_b = 0``). A
+    component that comes out negative is 0 and the other takes the absolute mean square
+    (``s_a = s_res``, or ``s_b^2 = s_res^2 / mean(F^2)``), so that the function's mean over
+    the fitted points is always ``s_res^2``: the bands keep their overall width and take the
+    data's shape. Points with ``|F| < 1e-6 N`` are left out of the relative moment.
+
+    Parameters
+    ----------
+    fitted : array
+        The fitted law's friction at each point [N].
+    residuals : array
+        Measured minus fitted friction at each point [N].
+    n_parameters : int
+        Coefficients of the fitted law [-].
+
+    Returns
+    -------
+    dict or None
+        ``method``, ``absolute_std_N`` (s_a [N]), ``relative_std_percent`` (100 s_b [%]),
+        ``components`` ("absolute and relative", "relative only", "absolute only"); None for
+        fewer points than coefficients + 1.
+    """
+    force = np.abs(np.asarray(fitted, dtype=float))
+    e = np.asarray(residuals, dtype=float)
+    keep = np.isfinite(force) & np.isfinite(e) & (force > MIN_FORCE)
+    force, e = force[keep], e[keep]
+    dof = force.size - int(n_parameters)
+    if dof < 1:
+        return None
+    absolute = float(e @ e) / dof
+    relative = float(np.sum((e / force) ** 2)) / dof
+    u = float(np.mean(force**2))  # mean(F^2) [N^2]
+    w = float(np.mean(force**-2.0))  # mean(F^-2) [N^-2]
+    det = 1.0 - u * w  # <= 0 (Cauchy-Schwarz), 0 when every level is the same
+    a2 = b2 = -1.0
+    if abs(det) > 1e-9:
+        a2 = (absolute - u * relative) / det
+        b2 = (relative - w * absolute) / det
+    if a2 >= 0.0 and b2 >= 0.0:
+        components = "absolute and relative"
+    elif a2 < 0.0 and abs(det) > 1e-9:
+        a2, b2, components = 0.0, absolute / u, "relative only"
+    else:
+        a2, b2, components = absolute, 0.0, "absolute only"
+    return {
+        "method": FUNCTION_METHOD,
+        "absolute_std_N": math.sqrt(a2),
+        "relative_std_percent": 100.0 * math.sqrt(b2),
+        "components": components,
+    }

@@ -705,7 +705,7 @@ def with_uncertainty(ident: Identification) -> Identification:
     take leave a note instead (no bands beyond scope "point" then).
     """
     from .lack_of_fit import lack_of_fit
-    from .scatter import scatter_components, scatter_note
+    from .scatter import residual_function, scatter_components, scatter_note
 
     model, points = ident.model, ident.points
     residuals = np.asarray(ident.residuals, dtype=float)
@@ -723,6 +723,9 @@ def with_uncertainty(ident: Identification) -> Identification:
         strata = _residual_strata(model, points, residuals)
         if strata is not None:
             scatter["residual_variance"] = strata
+        shape = residual_function(fitted, residuals, n_parameters)
+        if shape is not None:
+            scatter["residual_function"] = shape
         record["fit"] = {**record.get("fit", {}), "scatter": scatter}
         notes.append(scatter_note(scatter))
     test = lack_of_fit(points, residuals, n_parameters)

@@ -846,12 +846,15 @@ class FrictionModel:
         between-session scatter of a level ``s_L`` (run and session components, the stated
         prior pooled with the estimate) instead of the run part. With F the model friction::
 
-            u_point^2   = se^2 + s_res^2
-            u_run^2     = se^2 + max(s_res^2, F^2 (s_r^2 + s_run^2))
-            u_session^2 = se^2 + max(s_res^2, F^2 (s_r^2 + s_L^2 + (s_L^2 - s_run^2) / n))
+            u_point^2   = se^2 + s(F)^2
+            u_run^2     = se^2 + max(s(F)^2, F^2 (s_r^2 + s_run^2))
+            u_session^2 = se^2 + max(s(F)^2, F^2 (s_r^2 + s_L^2 + (s_L^2 - s_run^2) / n))
 
         with ``s_L >= s_run`` and ``n`` the sessions fitted (the fitted curve carries what
-        every run of its sessions shared, ``s_L^2 - s_run^2``, over n). Half-width = a
+        every run of its sessions shared, ``s_L^2 - s_run^2``, over n). ``s(F)`` [N] is the
+        residual scatter at the level F (:meth:`residual_scale`: ``s_a^2 + (s_b F)^2`` from
+        ``fit.scatter.residual_function``, whose mean over the fitted points is ``s_res^2``;
+        ``s_res`` for a datasheet without it). Half-width = a
         quantile (Welch-Satterthwaite degrees of freedom) x u; the run band is never
         narrower than the point band, nor the session band than the run band. ``se`` is the
         standard error of the mean curve. For "point" and "run", new data of the same
@@ -885,8 +888,8 @@ class FrictionModel:
         same_mount = scope != "session" and self.covariance_nonrobust is not None
         n_dof = self._residual_dof(nested=same_mount)
         se = self.standard_error(velocity, pressure, robust=not same_mount)
+        scatter_sd = self._residual_scale(f, residual_std)
         if scope == "point":
-            scatter_sd = residual_std
             dof = None
             if same_mount:  # s^2 (1 + h): one variance estimate, the residuals' dof
                 dof = np.full(np.shape(se), float(n_dof))
@@ -909,10 +912,10 @@ class FrictionModel:
         assert scatter is not None  # refused above for these scopes
         part = _band_parts(scatter, scope)
         force2 = np.asarray(f, dtype=float) ** 2
-        use = force2 * (part["repeat"] ** 2 + part["between"] ** 2) >= residual_std**2
+        use = force2 * (part["repeat"] ** 2 + part["between"] ** 2) >= scatter_sd**2
         terms = [
             (
-                np.where(use, force2 * part["repeat"] ** 2, residual_std**2),
+                np.where(use, force2 * part["repeat"] ** 2, scatter_sd**2),
                 np.where(use, part["repeat_dof"], n_dof),
             ),
             (
@@ -933,6 +936,31 @@ class FrictionModel:
             low, high = self.prediction_band(velocity, pressure, level, scope=narrower)
         half = np.maximum(half, 0.5 * (high - low))
         return f - half, f + half
+
+    def residual_scale(self, velocity: ArrayLike, pressure: ArrayLike) -> np.ndarray:
+        """Residual scatter ``s(F)`` [N] of the fit at speed ``velocity`` [m/s] and chamber
+        pressure ``pressure`` [Pa]: ``sqrt(s_a^2 + (s_b F)^2)``, F the model friction [N].
+
+        ``s_a`` [N] and ``s_b`` [-] are ``fit.scatter.residual_function`` (the two-component
+        variance function of the residuals, :func:`cylfric.identify.scatter.residual_function`;
+        its mean over the fitted points is ``statistics["residual_std"]^2``): the scatter a
+        new point of the fitted runs has at that level, which the point band uses. A model
+        without the record (an older datasheet) gives ``statistics["residual_std"]`` at every
+        level. Raises ValueError for a model without a residual scatter.
+        """
+        residual_std = self.statistics.get("residual_std")
+        if residual_std is None:
+            raise ValueError("this model carries no residual scatter (statistics.residual_std)")
+        f = self._friction(velocity, pressure, self.coefficients())
+        return self._residual_scale(f, residual_std)
+
+    def _residual_scale(self, force: np.ndarray, residual_std: float) -> np.ndarray:
+        """:meth:`residual_scale` [N] at the model friction ``force`` [N]."""
+        shape = (self.scatter or {}).get("residual_function") or {}
+        a, b = shape.get("absolute_std_N"), shape.get("relative_std_percent")
+        if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
+            return np.full(np.shape(force), float(residual_std))
+        return np.sqrt(a**2 + (b / 100.0 * np.asarray(force, dtype=float)) ** 2)
 
     def _residual_dof(self, *, nested: bool = True) -> float:
         """Degrees of freedom [-] of the residual variance ``statistics["residual_std"]^2``.
