@@ -59,6 +59,14 @@ SCATTER_NUMBERS: dict[str, tuple[str, str]] = {
     ),
     "reproducibility_N": ("N", "reproducibility s_R at reference_force_N"),
     "residual_std_N": ("N", "residual standard deviation of the fit s_res"),
+    "residual_absolute_N": (
+        "N",
+        "absolute part s_a of the residual scatter s(F)^2 = s_a^2 + (s_b F)^2",
+    ),
+    "residual_relative_percent": (
+        "%",
+        "relative part s_b of the residual scatter s(F)^2 = s_a^2 + (s_b F)^2",
+    ),
 }
 """Flat name -> (unit, meaning) of the numbers of ``fit.scatter`` (the order exports use)."""
 
@@ -110,6 +118,9 @@ def scatter_numbers(model: FrictionModel) -> dict[str, float] | None:
     out["reproducibility_percent"] = _finite(total.get("std_percent"))
     out["reproducibility_N"] = _finite(total.get("std_N"))
     out["residual_std_N"] = _finite(model.statistics.get("residual_std"))
+    shape = record.get("residual_function") or {}
+    out["residual_absolute_N"] = _finite(shape.get("absolute_std_N"))
+    out["residual_relative_percent"] = _finite(shape.get("relative_std_percent"))
     return {key: value for key in SCATTER_NUMBERS if (value := out.get(key)) is not None}
 
 
@@ -195,7 +206,9 @@ def band_text(model: FrictionModel) -> str:
         "(FrictionModel.standard_error(robust=False)) and k the internally studentised "
         "residual's quantile on the residual variance's degrees of freedom nu "
         "(fit.scatter.residual_variance.dof in the datasheet: about 1.96 for many, 1.65 for "
-        "nu = 3); never narrower than k sqrt(se^2 + s_res^2) (docs/uncertainty.md)."
+        "nu = 3); never narrower than k sqrt(se^2 + s_a^2 + (s_b F)^2), the residual "
+        "scatter at the level F (residual_absolute_N, residual_relative_percent; s_res at "
+        "every level where they are missing) (docs/uncertainty.md)."
     )
 
 
