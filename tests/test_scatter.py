@@ -171,8 +171,8 @@ def test_one_session_anova_equals_reml_on_balanced_runs():
 
 def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
     """Scopes point and run: the mean's term is the model-based covariance (new data of the
-    same mount share its effects); session: the cluster-robust one. The run band's Student-t
-    quantile takes the run component's degrees of freedom, not the session prior's."""
+    same mount share its effects) and the quantile the residual variance's (both scales come
+    from the same residuals), not the session prior's; session: the cluster-robust one."""
     rng = np.random.default_rng(2)
     rows = []
     for run, (bar, mm_s) in enumerate(
@@ -229,11 +229,18 @@ def test_same_mount_bands_use_the_model_based_covariance_and_their_own_dof():
     old = FrictionModel.from_datasheet(validate(sheet))
     assert old.covariance_nonrobust is None
     np.testing.assert_allclose(old.standard_error(v, p, robust=False), robust)
-    # the run band's quantile: the run component's dof
+    # the run band: the same quantile on sqrt(se_model^2 + max(s(F)^2, F^2 (s_r^2 + s_run^2)))
     from cylfric.model.core import _band_parts
 
     part = _band_parts(model.scatter, "run")
     assert part["between_dof"] == model.scatter["components"]["run"]["dof"]
+    relative = f**2 * (part["repeat"] ** 2 + part["between"] ** 2)
+    low_run, high_run = model.prediction_band(v, p, scope="run")
+    np.testing.assert_allclose(
+        0.5 * (high_run - low_run),
+        quantile * np.sqrt(nonrobust**2 + np.maximum(s_f**2, relative)),
+        rtol=1e-9,
+    )
     session = _band_parts(model.scatter, "session")
     assert session["between_dof"] == model.scatter["components"]["session"]["dof"]
     # one session: s_L^2 + (s_L^2 - s_run^2) / 1 (the fitted curve carries the session's

@@ -851,11 +851,14 @@ class FrictionModel:
             u_session^2 = se^2 + max(s(F)^2, F^2 (s_r^2 + s_L^2 + (s_L^2 - s_run^2) / n))
 
         with ``s_L >= s_run`` and ``n`` the sessions fitted (the fitted curve carries what
-        every run of its sessions shared, ``s_L^2 - s_run^2``, over n). ``s(F)`` [N] is the
+        every run of its sessions shared, ``s_L^2 - s_run^2``, over n). The point and run
+        bands' quantile is on the residual variance's degrees of freedom (both scales come
+        from the same residuals); the session band's, Welch-Satterthwaite's over its terms.
+        ``s(F)`` [N] is the
         residual scatter at the level F (:meth:`residual_scale`: ``s_a^2 + (s_b F)^2`` from
         ``fit.scatter.residual_function``, whose mean over the fitted points is ``s_res^2``;
         ``s_res`` for a datasheet without it). Half-width = a
-        quantile (Welch-Satterthwaite degrees of freedom) x u; the run band is never
+        quantile x u; the run band is never
         narrower than the point band, nor the session band than the run band. ``se`` is the
         standard error of the mean curve. For "point" and "run", new data of the same
         mount: the model-based ``se`` (``standard_error(robust=False)``, the residuals'
@@ -924,9 +927,12 @@ class FrictionModel:
             ),
         ]
         variance = se**2 + sum(t for t, _ in terms)
-        with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
-            denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
-            dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
+        if same_mount:  # one scale, the residuals': their dof (the point band's)
+            dof = np.full(np.shape(variance), float(n_dof))
+        else:
+            with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
+                denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
+                dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
         half = self._quantile(level, np.minimum(dof, 1e9), in_sample=same_mount)
         half = half * np.sqrt(variance)
         # a new run is never predicted better than a new point, a new session than a new run
