@@ -11,6 +11,7 @@ import pytest
 
 from cylfric.steady_state import (
     CHUNK_FILES,
+    _file_bytes,
     _finish_columns,
     _finish_rows,
     _join,
@@ -93,3 +94,12 @@ def test_runs_with_labels_the_others_lack_are_joined_as_rows():
     built = _finish_rows(CAMPAIGN, rows, [], [], 0).points
     pd.testing.assert_frame_equal(built.drop(columns="session"), expected)
     assert built["seal"].isna().sum() == 2
+
+
+def test_bytes_read_counts_regular_files_only(tmp_path):
+    """The extraction's ``bytes_read``: a file's size; a folder or a file gone counts 0."""
+    run = tmp_path / "run.txt"
+    run.write_bytes(b"t,x\n0,1\n")
+    assert _file_bytes(run) == 8
+    assert _file_bytes(tmp_path) == 0
+    assert _file_bytes(tmp_path / "gone.txt") == 0

@@ -46,6 +46,19 @@ def test_version_imports_no_numerical_library():
     assert done.stdout.strip() == "[]"
 
 
+def test_the_command_line_starts_without_the_web_and_xml_libraries():
+    """xml.sax.saxutils (escape.xml_attr, for the FMU export) is imported where it is used:
+    at start-up it brought urllib.request, http.client and email into every command."""
+    script = (
+        "import sys\nfrom cylfric.cli import app\n"
+        "print([m for m in ('xml.sax', 'urllib.request', 'http.client', 'email.parser')"
+        " if m in sys.modules])"
+    )
+    done = _run(script)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
 def test_window_velocity_is_the_savitzky_golay_derivative():
     import numpy as np
     from numpy.testing import assert_allclose

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import html
 import unicodedata
-from xml.sax.saxutils import quoteattr
 
 __all__ = [
     "printable",
@@ -175,6 +174,10 @@ def plot_text(text: object, *, limit: int | None = 80) -> str:
 
 def xml_attr(text: object) -> str:
     """An XML attribute value with its quotes (only characters XML 1.0 allows, one line)."""
+    # imported here: xml.sax.saxutils brings urllib.request, http.client and email (about
+    # 60 ms) into every command's start-up otherwise
+    from xml.sax.saxutils import quoteattr
+
     return quoteattr(printable(text))
 
 

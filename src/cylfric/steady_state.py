@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import stat
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -874,7 +875,7 @@ def _finish(campaign, infos, packs, skip_bad) -> Extraction:
                 skipped.append({"file": str(info.path), "reason": str(error)})
             else:
                 runs.append(summary)
-            total += info.path.stat().st_size if info.path.is_file() else 0
+            total += _file_bytes(info.path)
     if not runs:
         reasons = "; ".join(item["reason"] for item in skipped[:3])
         raise BenchFileError(
@@ -886,6 +887,16 @@ def _finish(campaign, infos, packs, skip_bad) -> Extraction:
         rows = [r for points, *_ in packs for r in _rows_of(points)]
         return _finish_rows(campaign, rows, skipped, runs, total)
     return _finish_columns(campaign, columns, skipped, runs, total)
+
+
+def _file_bytes(path) -> int:
+    """Size of a regular file [bytes]; 0 for anything else or a file gone (one stat: this
+    runs once per file after the reading, on one core)."""
+    try:
+        status = os.stat(path)
+    except OSError:
+        return 0
+    return status.st_size if stat.S_ISREG(status.st_mode) else 0
 
 
 def _rows_of(points) -> list:
