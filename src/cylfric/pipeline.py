@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ._atomic import atomic_write_chunks
 from ._paths import failed, make_folder, refuse_link
 from .io.campaign import Campaign, read_run
 from .io.writers import atomic_write_text
@@ -57,10 +58,17 @@ class FitOutputs:
     dynamic: DynamicIdentification | None = None
 
 
-def _csv(path, frame: pd.DataFrame):
-    buffer = io.StringIO()
-    frame.to_csv(buffer, index=False)
-    return atomic_write_text(path, buffer.getvalue())
+def _csv(path, frame: pd.DataFrame, rows: int = 8192):
+    """``frame`` as CSV at ``path``, ``rows`` at a time (the same text as one to_csv: pandas
+    writes each value by itself; a large table is never held whole as text)."""
+
+    def chunks():
+        for start in range(0, max(len(frame), 1), rows):
+            buffer = io.StringIO()
+            frame.iloc[start : start + rows].to_csv(buffer, index=False, header=start == 0)
+            yield buffer.getvalue().encode()
+
+    return atomic_write_chunks(path, chunks())
 
 
 def fit_campaign(

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
+from .._runtable import run_column
 from ..escape import html_text
 from ..io.writers import atomic_write_text
 from .figures import not_identified_line, render_all, save_rendered
@@ -354,7 +355,7 @@ def _quality(extraction) -> str:
     pts = extraction.points
     flags = pts["flag"].value_counts().rename_axis("flag").reset_index(name="windows")
     spikes = int(pts["spikes [-]"].sum()) if "spikes [-]" in pts else 0
-    events = sum(r.get("events", 0) for r in extraction.runs)
+    events = sum(run_column(extraction.runs, "events", default=0))
     lines = [
         f"<p>{len(extraction.runs)} files read ({extraction.bytes_read / 1e6:.1f} MB), "
         f"{len(extraction.skipped)} skipped; {len(pts)} stroke windows; {spikes} spike "
