@@ -94,3 +94,51 @@ def test_smaller_than_the_dicts():
     table = RunTable.from_dicts(dicts)
     columns = size(table._columns, set()) + table._codes.nbytes
     assert columns < size(dicts, set()) / 3
+
+
+def test_the_gates_prefilter_keeps_every_run_with_a_metadata_conflict():
+    """quality._metadata_suspects reads columns; every run _conflicts flags is among them."""
+    from cylfric.quality import _conflicts, _metadata_suspects
+
+    rng = np.random.default_rng(7)
+    dicts = []
+    for i in range(300):
+        run = summary(i)
+        run["pressure measured"] = False
+        nominal = run["nominal"]["pressure"]
+        if i % 5 == 0:  # a header that says something else (sometimes only slightly)
+            nominal["header"] = (nominal["header"][0] * rng.choice([1.001, 1.5, 0.1]), "h")
+        if i % 11 == 0:  # a source the others lack
+            run["nominal"]["velocity"]["file name"] = (0.002, "v2mms")
+        if i % 13 == 0:
+            del nominal["header"]
+        dicts.append(run)
+    table = RunTable.from_dicts(dicts)
+    runs = [d["run"] for d in dicts]
+    suspects = set(_metadata_suspects(table, [False] * 300, runs, {3, 4}))
+    floors = {"pressure": 0.5e5, "velocity": 1e-4}
+    flagged = {i for i, d in enumerate(dicts) if _conflicts(d, 0.05, floors)}
+    assert flagged and flagged <= suspects and {3, 4} <= suspects
+    assert len(suspects) < 300  # the point: most runs are not read in full
+
+
+def test_tables_and_datasheet_streamed_are_the_same_bytes(tmp_path):
+    """pipeline._csv writes row blocks, write_datasheet the encoder's pieces: same bytes."""
+    import json
+
+    import pandas as pd
+
+    from cylfric.datasheet import _batched
+    from cylfric.pipeline import _csv
+
+    frame = pd.DataFrame(
+        {"a [m]": [0.1, 1e-17, np.nan, 3.0, 2.5e10], "b": ["x", "y,z", None, "", "q"]}
+    )
+    _csv(tmp_path / "t.csv", frame, rows=2)
+    assert (tmp_path / "t.csv").read_text() == frame.to_csv(index=False)
+    _csv(tmp_path / "e.csv", frame.iloc[:0], rows=2)
+    assert (tmp_path / "e.csv").read_text() == frame.iloc[:0].to_csv(index=False)
+    sheet = {"x": [1.5, {"y": None, "z": "ü"}], "w": list(range(50))}
+    pieces = json.JSONEncoder(indent=2, allow_nan=False).iterencode(sheet)
+    streamed = b"".join(_batched(iter(pieces), size=3)).decode()
+    assert streamed == json.dumps(sheet, indent=2, allow_nan=False)
