@@ -124,9 +124,9 @@ class RunTable(Sequence):
             )
             codes.append(remap[table._codes])
         paths = dict.fromkeys(p for t in tables for p in t._columns)
-        columns = {}
+        columns: dict = {}
         for path in paths:
-            parts = [t._columns.get(path) for t in tables]
+            parts: list = [t._columns.get(path) for t in tables]
             dtypes = {p.dtype for p in parts if p is not None}
             if len(dtypes) == 1 and all(p is not None for p in parts):
                 columns[path] = np.concatenate(parts)
@@ -166,7 +166,7 @@ class RunTable(Sequence):
         template = _template(list(shape))
         return lambda i: _build(template, [c[i].item() if n else c[i] for _, c, n in getters])
 
-    def __getitem__(self, i):  # type: ignore[override]
+    def __getitem__(self, i):
         if isinstance(i, slice):
             return [self._row(j) for j in range(*i.indices(len(self)))]
         n = len(self)

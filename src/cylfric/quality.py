@@ -507,10 +507,10 @@ def assess(
     points = extraction.points
     windows = points[points["n [-]"] > 0] if "n [-]" in points else points
     measured = windows.groupby("run")["pressure [Pa]"].median()
-    runs = extraction.runs
-    measured_flags = [bool(m) for m in run_column(runs, "pressure measured", default=False)]
-    run_numbers = run_column(runs, "run")
-    pressures = run_column(runs, "pressure [Pa]", default=math.nan)
+    summaries = extraction.runs
+    measured_flags = [bool(m) for m in run_column(summaries, "pressure measured", default=False)]
+    run_numbers = run_column(summaries, "run")
+    pressures = run_column(summaries, "pressure [Pa]", default=math.nan)
     nominal_p = np.array(pressures, dtype=float)
     finite = nominal_p[np.isfinite(nominal_p)]
     per_level = float(np.median(np.bincount(pressure_levels(finite)[0]))) if finite.size else 0.0
@@ -520,8 +520,8 @@ def assess(
         [pressures[i] for i in unmeasured],
         _zero_level_size(per_level, zero_level_runs),
     )
-    for i in _metadata_suspects(runs, measured_flags, run_numbers, nonpositive):
-        info = runs[i]
+    for i in _metadata_suspects(summaries, measured_flags, run_numbers, nonpositive):
+        info = summaries[i]
         texts = [_conflicts(info, metadata_tolerance, floors)]
         if info.get("pressure measured"):
             texts.append(
