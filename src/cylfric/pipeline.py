@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ._atomic import atomic_write_chunks
 from ._paths import failed, make_folder, refuse_link
 from .io.campaign import Campaign, read_run
 from .io.writers import atomic_write_text
@@ -57,10 +58,17 @@ class FitOutputs:
     dynamic: DynamicIdentification | None = None
 
 
-def _csv(path, frame: pd.DataFrame):
-    buffer = io.StringIO()
-    frame.to_csv(buffer, index=False)
-    return atomic_write_text(path, buffer.getvalue())
+def _csv(path, frame: pd.DataFrame, rows: int = 8192):
+    """``frame`` as CSV at ``path``, ``rows`` at a time (the same text as one to_csv: pandas
+    writes each value by itself; a large table is never held whole as text)."""
+
+    def chunks():
+        for start in range(0, max(len(frame), 1), rows):
+            buffer = io.StringIO()
+            frame.iloc[start : start + rows].to_csv(buffer, index=False, header=start == 0)
+            yield buffer.getvalue().encode()
+
+    return atomic_write_chunks(path, chunks())
 
 
 def fit_campaign(
@@ -447,7 +455,7 @@ def _fit(
     try:
         # while a pool reads the files, the libraries of the next steps load here (pandas,
         # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py)
-        from .datasheet import datasheet_model, write_datasheet
+        from .datasheet import datasheet_model  # noqa: F401  (loaded for _write)
         from .identify import UnphysicalFrictionError, identify
         from .quality import assess
 
@@ -489,6 +497,47 @@ def _fit(
         model = ident.model if dynamic is None else dynamic.model
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
+    drawing = None
+    if options.report:  # the figures draw on forked workers while the datasheet is written
+        drawing = _start_drawing(ident, extraction, dynamic, options, step)
+    try:
+        return _write(
+            out,
+            options,
+            folder,
+            config,
+            extraction,
+            quality,
+            correction,
+            ident,
+            dynamic,
+            timings,
+            drawing,
+        )
+    finally:
+        if drawing is not None:
+            drawing[0].close()
+
+
+def _start_drawing(ident, extraction, dynamic, options, step):
+    """The report's figures started (:func:`cylfric.report.start_rendering`) and the
+    progress step they advance."""
+    from .report import all_figures, start_rendering
+
+    advance = None
+    if step is not None:
+        shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
+        advance = step("drawing the figures", shown)
+    workers = 2 if options.workers is None else options.workers
+    return start_rendering(ident, extraction.offset, workers=workers, progress=advance), advance
+
+
+def _write(
+    out, options, folder, config, extraction, quality, correction, ident, dynamic, timings, drawing
+):
+    """The datasheet, the tables, the exports and (``drawing`` started) the report."""
+    from .datasheet import datasheet_model, write_datasheet
+
     t0 = time.perf_counter()
     model = datasheet_model(
         ident,
@@ -537,17 +586,12 @@ def _fit(
                 first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
                 raise ExportFailed(f"--export {target} failed: {first}", target) from exc
         timings["export"] = time.perf_counter() - t0
-    if options.report:
+    if drawing is not None:
         from .report import write_report_folder
 
         t0 = time.perf_counter()
         summaries = [_export_summary(out, result) for result in exports.values()]
-        advance = None
-        if step is not None:
-            from .report import all_figures
-
-            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
-            advance = step("drawing the figures", shown)
+        started, advance = drawing
         files.update(
             write_report_folder(
                 out,
@@ -557,8 +601,8 @@ def _fit(
                 quality.excluded,
                 exports=summaries,
                 dynamic=dynamic,
-                workers=2 if options.workers is None else options.workers,
                 progress=advance,
+                drawing=started,
             )
         )
         timings["report"] = time.perf_counter() - t0

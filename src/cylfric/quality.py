@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from ._runtable import RunTable, run_column
 from .levels import pressure_levels
 
 if TYPE_CHECKING:
@@ -107,11 +108,13 @@ def _runs_table(extraction):
     ]
     runs = pd.DataFrame(
         {
-            "run": [info.get("run") for info in extraction.runs],
-            "file": [_relative(info["file"], extraction) for info in extraction.runs],
-            "nominal_speed": [
-                abs(info.get("velocity [m/s]", math.nan)) for info in extraction.runs
-            ],
+            "run": run_column(extraction.runs, "run"),
+            "file": [_relative(f, extraction) for f in run_column(extraction.runs, "file")],
+            "nominal_speed": np.abs(
+                np.array(
+                    run_column(extraction.runs, "velocity [m/s]", default=math.nan), dtype=float
+                )
+            ),
         }
     )
     if extra:
@@ -157,6 +160,31 @@ def _said(quantity, source, value, where):
     scale, unit = _UNITS[quantity]
     place = _SOURCE_NAMES.get(source, source + " ({where})").format(where=where)
     return f"{value / scale:.4g} {unit} in {place}"
+
+
+def _metadata_suspects(runs, measured_flags, run_numbers, nonpositive) -> list[int]:
+    """Indices of the runs the metadata check must read in full: a measured pressure, a
+    run of ``nonpositive``, or nominal values of a quantity that are not all equal (equal
+    values never conflict, :func:`_conflicts`); from the columns, without a dict per run."""
+    zero = set(nonpositive)
+    suspect = np.array(measured_flags, dtype=bool) | np.array(
+        [r in zero for r in run_numbers], dtype=bool
+    )
+    if not isinstance(runs, RunTable):
+        return list(range(len(runs)))
+    for quantity in ("pressure", "velocity"):
+        try:
+            values = np.abs(np.array(runs.leaves("nominal", quantity, index=0), dtype=float))
+        except (TypeError, ValueError):  # not numbers: every run read in full
+            return list(range(len(runs)))
+        if not values.size:
+            continue
+        nan = np.isnan(values)
+        spread = np.nanmax(np.where(nan, -np.inf, values), axis=0) != np.nanmin(
+            np.where(nan, np.inf, values), axis=0
+        )
+        suspect |= (spread & ~nan.all(axis=0)) | (nan.any(axis=0) & ~nan.all(axis=0))
+    return np.flatnonzero(suspect).tolist()
 
 
 def _conflicts(info, tolerance, floors):
@@ -479,16 +507,21 @@ def assess(
     points = extraction.points
     windows = points[points["n [-]"] > 0] if "n [-]" in points else points
     measured = windows.groupby("run")["pressure [Pa]"].median()
-    unmeasured = [info for info in extraction.runs if not info.get("pressure measured")]
-    nominal_p = np.array([info.get("pressure [Pa]", math.nan) for info in extraction.runs])
+    summaries = extraction.runs
+    measured_flags = [bool(m) for m in run_column(summaries, "pressure measured", default=False)]
+    run_numbers = run_column(summaries, "run")
+    pressures = run_column(summaries, "pressure [Pa]", default=math.nan)
+    nominal_p = np.array(pressures, dtype=float)
     finite = nominal_p[np.isfinite(nominal_p)]
     per_level = float(np.median(np.bincount(pressure_levels(finite)[0]))) if finite.size else 0.0
+    unmeasured = [i for i, m in enumerate(measured_flags) if not m]
     nonpositive = _deliberate_zero(
-        [info.get("run") for info in unmeasured],
-        [info.get("pressure [Pa]", math.nan) for info in unmeasured],
+        [run_numbers[i] for i in unmeasured],
+        [pressures[i] for i in unmeasured],
         _zero_level_size(per_level, zero_level_runs),
     )
-    for info in extraction.runs:
+    for i in _metadata_suspects(summaries, measured_flags, run_numbers, nonpositive):
+        info = summaries[i]
         texts = [_conflicts(info, metadata_tolerance, floors)]
         if info.get("pressure measured"):
             texts.append(

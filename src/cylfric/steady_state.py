@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._parallel import start
+from ._runtable import RunTable
 from .friction.pressure import PRESSURE_REFERENCES, REFERENCE_CHAMBERS, operating_pressure
 from .io.campaign import Campaign, CampaignConfig, read_run
 from .io.text import BenchFileError
@@ -784,7 +785,7 @@ def _pack(results: list) -> tuple:
     a few arrays instead of a dict per point); rows whose keys differ (a run with labels the
     others lack) stay a list of rows."""
     rows = [r for file_rows, _, _ in results if file_rows is not None for r in file_rows]
-    summaries = [summary for _, summary, _ in results]
+    summaries = RunTable.from_dicts([summary for _, summary, _ in results])
     errors = [error for _, _, error in results]
     keys = _columns(rows)
     if all(len(r) == len(keys) for r in rows):
@@ -858,11 +859,12 @@ def extract_campaign(
 def _finish(campaign, infos, packs, skip_bad) -> Extraction:
     """The packed results of the files (:func:`_pack`, in file order) -> the
     :class:`Extraction`."""
-    skipped, runs = [], []
+    skipped, read = [], []
     total = 0
     index = 0
     for _, summaries, errors in packs:
-        for summary, error in zip(summaries, errors, strict=True):
+        read.append(summaries.select([error is None for error in errors]))
+        for error in errors:
             info = infos[index]
             index += 1
             if error is not None:
@@ -873,9 +875,8 @@ def _finish(campaign, infos, packs, skip_bad) -> Extraction:
                         error.line,
                     ) from None
                 skipped.append({"file": str(info.path), "reason": str(error)})
-            else:
-                runs.append(summary)
             total += _file_bytes(info.path)
+    runs = RunTable.join(read)  # the summaries as columns, not 30 objects a run
     if not runs:
         reasons = "; ".join(item["reason"] for item in skipped[:3])
         raise BenchFileError(

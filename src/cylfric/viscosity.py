@@ -184,7 +184,7 @@ class ViscosityCorrection:
     """
 
     points: object
-    runs: list
+    runs: Sequence
     record: dict | None
     note: str | None
 
@@ -274,7 +274,7 @@ def correct_campaign(
         Correction asked for (``enabled=True``) without ``[oil]`` or temperatures; some
         runs with a temperature and others without (and no campaign-wide one).
     """
-    unchanged = ViscosityCorrection(points, list(runs), None, None)
+    unchanged = ViscosityCorrection(points, runs, None, None)  # not copied: a RunTable stays one
     column = "temperature [K]"
     listed = points[column].to_numpy(dtype=float) if column in points else None
     has_listed = listed is not None and bool(np.isfinite(listed).any())

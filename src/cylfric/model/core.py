@@ -376,7 +376,9 @@ class FrictionModel:
             covariance = (names, matrix)
         self.covariance = covariance
         if influence is not None:
-            names, matrix = tuple(influence[0]), np.array(influence[1], dtype=float)
+            names, matrix = tuple(influence[0]), influence[1]
+            if not _frozen(matrix):  # one (runs x coefficients) array shared by replace()
+                matrix = np.array(matrix, dtype=float)
             if covariance is None or names != covariance[0] or matrix.ndim != 2:
                 raise ValueError(
                     "influence needs a covariance with the same names and a (runs x "
@@ -1107,3 +1109,14 @@ def _normal_quantile(q):
     from statistics import NormalDist
 
     return NormalDist().inv_cdf(q)
+
+
+def _frozen(matrix) -> bool:
+    """Whether ``matrix`` is a read-only float array owning its data (a model's own, which
+    another model may share instead of copying)."""
+    return (
+        isinstance(matrix, np.ndarray)
+        and matrix.dtype == np.float64
+        and not matrix.flags.writeable
+        and matrix.base is None
+    )
