@@ -455,7 +455,7 @@ def _fit(
     try:
         # while a pool reads the files, the libraries of the next steps load here (pandas,
         # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py)
-        from .datasheet import datasheet_model  # noqa: F401  (loaded for _write)
+        from .datasheet import datasheet_model, write_datasheet
         from .identify import UnphysicalFrictionError, identify
         from .quality import assess
 
@@ -497,47 +497,6 @@ def _fit(
         model = ident.model if dynamic is None else dynamic.model
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
-    drawing = None
-    if options.report:  # the figures draw on forked workers while the datasheet is written
-        drawing = _start_drawing(ident, extraction, dynamic, options, step)
-    try:
-        return _write(
-            out,
-            options,
-            folder,
-            config,
-            extraction,
-            quality,
-            correction,
-            ident,
-            dynamic,
-            timings,
-            drawing,
-        )
-    finally:
-        if drawing is not None:
-            drawing[0].close()
-
-
-def _start_drawing(ident, extraction, dynamic, options, step):
-    """The report's figures started (:func:`cylfric.report.start_rendering`) and the
-    progress step they advance."""
-    from .report import all_figures, start_rendering
-
-    advance = None
-    if step is not None:
-        shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
-        advance = step("drawing the figures", shown)
-    workers = 2 if options.workers is None else options.workers
-    return start_rendering(ident, extraction.offset, workers=workers, progress=advance), advance
-
-
-def _write(
-    out, options, folder, config, extraction, quality, correction, ident, dynamic, timings, drawing
-):
-    """The datasheet, the tables, the exports and (``drawing`` started) the report."""
-    from .datasheet import datasheet_model, write_datasheet
-
     t0 = time.perf_counter()
     model = datasheet_model(
         ident,
@@ -586,12 +545,17 @@ def _write(
                 first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
                 raise ExportFailed(f"--export {target} failed: {first}", target) from exc
         timings["export"] = time.perf_counter() - t0
-    if drawing is not None:
+    if options.report:
         from .report import write_report_folder
 
         t0 = time.perf_counter()
         summaries = [_export_summary(out, result) for result in exports.values()]
-        started, advance = drawing
+        advance = None
+        if step is not None:
+            from .report import all_figures
+
+            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
+            advance = step("drawing the figures", shown)
         files.update(
             write_report_folder(
                 out,
@@ -601,8 +565,8 @@ def _write(
                 quality.excluded,
                 exports=summaries,
                 dynamic=dynamic,
+                workers=2 if options.workers is None else options.workers,
                 progress=advance,
-                drawing=started,
             )
         )
         timings["report"] = time.perf_counter() - t0

@@ -2,7 +2,7 @@
 friction laws and writers, never :mod:`cylfric.identify`, and fits nothing. Imported by
 :mod:`cylfric.pipeline` and :mod:`cylfric.cli` only."""
 
-from .figures import all_figures, render_all, save_figure, save_rendered, start_rendering
+from .figures import all_figures, render_all, save_figure, save_rendered
 from .html import render_report, write_report, write_report_folder
 
 __all__ = [
@@ -10,7 +10,6 @@ __all__ = [
     "render_all",
     "save_rendered",
     "save_figure",
-    "start_rendering",
     "render_report",
     "write_report",
     "write_report_folder",

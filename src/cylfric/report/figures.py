@@ -37,7 +37,6 @@ __all__ = [
     "all_figures",
     "render",
     "render_all",
-    "start_rendering",
     "save_rendered",
     "log_axis",
     "not_identified_line",
@@ -714,38 +713,14 @@ def render_all(ident, offset=None, *, workers=2, progress=None):
     it loaded); where no pool can be forked, here, one after another. The result is the
     same either way. ``progress`` is called with each figure's stem once it is drawn.
     """
-    return start_rendering(ident, offset, workers=workers, progress=progress).results()
-
-
-class Drawing:
-    """Report figures being drawn (:func:`start_rendering`); :meth:`results` as
-    :func:`render_all` returns them, :meth:`close` stops the drawing."""
-
-    def __init__(self, figures, pending) -> None:
-        self._figures, self._pending = figures, pending
-
-    def results(self) -> list:
-        """``[(stem, caption, png, svg)]`` in report order (waits for the workers)."""
-        drawn = self._pending.results()
-        return [
-            (stem, caption, *images)
-            for (stem, caption, _), images in zip(self._figures, drawn, strict=True)
-        ]
-
-    def close(self) -> None:
-        self._pending.close()
-
-
-def start_rendering(ident, offset=None, *, workers=2, progress=None) -> Drawing:
-    """Start drawing the figures of :func:`render_all` on forked workers (they draw while
-    this process goes on: ``cylfric fit`` writes the datasheet and the tables meanwhile);
-    without a pool they are drawn by :meth:`Drawing.results`."""
-    from .._parallel import start
+    from .._parallel import run
 
     figures = all_figures(ident, offset)
     done = None if progress is None else (lambda i, _: progress(figures[i][0]))
-    pending = start(lambda i: render(figures[i][2]()), len(figures), workers=workers, done=done)
-    return Drawing(figures, pending)
+    drawn = run(lambda i: render(figures[i][2]()), len(figures), workers=workers, done=done)
+    return [
+        (stem, caption, *images) for (stem, caption, _), images in zip(figures, drawn, strict=True)
+    ]
 
 
 def all_figures(ident=None, offset=None, points=None):

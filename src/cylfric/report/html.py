@@ -12,7 +12,7 @@ import pandas as pd
 from .._runtable import run_column
 from ..escape import html_text
 from ..io.writers import atomic_write_text
-from .figures import Drawing, not_identified_line, save_rendered, start_rendering
+from .figures import not_identified_line, render_all, save_rendered
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -394,7 +394,6 @@ def write_report_folder(
     exports: Sequence[Mapping[str, Any]] | None = None,
     dynamic: _Results | None = None,
     progress: Callable[[str], object] | None = None,
-    drawing: Drawing | None = None,
 ) -> dict[str, Path]:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
@@ -403,17 +402,13 @@ def write_report_folder(
     simulator exports (target, folder, files, loss rows) for their section. ``dynamic`` (a
     :class:`~cylfric.identify.dynamic.DynamicIdentification`) adds the presliding and
     breakaway figure and tables. ``progress`` is called with each figure's name once drawn.
-    ``drawing``: the figures already started by
-    :func:`~cylfric.report.figures.start_rendering` (with this ``ident``), else drawn here.
     """
     from pathlib import Path
 
     out = Path(out)
     offset = None if extraction is None else extraction.offset
     files, shown = {}, []
-    if drawing is None:
-        drawing = start_rendering(ident, offset, workers=workers, progress=progress)
-    for stem, caption, png, svg in drawing.results():
+    for stem, caption, png, svg in render_all(ident, offset, workers=workers, progress=progress):
         files[f"figure_{stem}"] = save_rendered(out / "figures", stem, png, svg)["png"]
         shown.append((stem, caption, png))
     section = None
