@@ -383,8 +383,10 @@ def test_residual_function_clips_a_negative_component_and_keeps_the_mean_square(
         e = sign * 0.01 * force**power
         shape = residual_function(force, e, n_parameters=3)
         a, b = shape["absolute_std_N"], shape["relative_std_percent"] / 100
-        assert shape["components"] == components and (a == 0.0) == (power > 0) and (b == 0.0) == (
-            power < 0
+        assert (
+            shape["components"] == components
+            and (a == 0.0) == (power > 0)
+            and (b == 0.0) == (power < 0)
         )
         np.testing.assert_allclose(np.mean(a**2 + (b * force) ** 2), e @ e / 397, rtol=1e-12)
 
@@ -409,8 +411,9 @@ def test_point_band_follows_the_level_of_relative_scatter():
     assert scale[0] < scale[1] and scale[1] / scale[0] <= level[1] / level[0] + 1e-9
     sheet = model.to_datasheet()
     validate(sheet)
-    assert FrictionModel.from_datasheet(sheet).scatter["residual_function"] == (
-        model.scatter["residual_function"]
+    assert (
+        FrictionModel.from_datasheet(sheet).scatter["residual_function"]
+        == (model.scatter["residual_function"])
     )
     del sheet["fit"]["scatter"]["residual_function"]  # an earlier cylfric's datasheet
     old = FrictionModel.from_datasheet(validate(sheet))
