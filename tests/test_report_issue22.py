@@ -275,6 +275,19 @@ def test_scatter_table_and_lack_of_fit_line():
         "Action: bands widened by the lack-of-fit variance",
     ):
         assert expected in text, expected
+    assert "s(F)" not in text  # a record without the residual function: no line for it
+    shaped = scatter_html(
+        {
+            **SCATTER,
+            "residual_function": {
+                "absolute_std_N": 0.28,
+                "relative_std_percent": 16.3,
+                "components": "absolute and relative <b>",
+            },
+        },
+        None,
+    )
+    assert "s_a = 0.28 N, s_b = 16.3 %" in shaped and "relative &lt;b&gt;" in shaped
     assert scatter_html(None, None) == ""
     missing = scatter_html({"components": {"run": {"std_percent": None}}}, {"test": "runs"})
     assert "n/a" in missing and "verdict not stated" in missing

@@ -122,6 +122,15 @@ def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, An
         )
         if rows:
             parts.append(_table(pd.DataFrame(rows)))
+        shape = scatter.get("residual_function") or {}
+        if None not in (shape.get("absolute_std_N"), shape.get("relative_std_percent")):
+            parts.append(
+                "<p>Residual scatter at the friction level F (the point band's; "
+                + html_text(str(shape.get("components", "components not stated")))
+                + "): s(F) = sqrt(s_a<sup>2</sup> + (s_b F)<sup>2</sup>), s_a = "
+                f"{_number(shape['absolute_std_N'])} N, s_b = "
+                f"{_number(shape['relative_std_percent'])} %.</p>"
+            )
     if lack_of_fit:
         dof = lack_of_fit.get("dof")
         dof_text = f", dof {dof[0]}, {dof[1]}" if dof else ""
