@@ -421,3 +421,22 @@ def test_point_band_follows_the_level_of_relative_scatter():
     half = np.subtract(*model.prediction_band(v, p)[::-1])
     half_old = np.subtract(*old.prediction_band(v, p)[::-1])
     assert half[0] < half_old[0] and half[1] > half_old[1]
+
+
+def test_a_scaled_model_scales_its_residual_scatter_at_every_level():
+    """catalog.scale_model multiplies the forces by k: the residual scatter s(F) at every
+    operating point is k times the tested model's (its absolute part in N scaled, its
+    relative part kept)."""
+    from cylfric.catalog import scale_model
+
+    model = _identify(_points(5, sessions=1, runs_per_level=3)).model
+    v, p = np.full(3, 0.01), np.array([10e5, 50e5, 90e5])
+    scaled = scale_model(model, 1.7)
+    np.testing.assert_allclose(scaled.friction(v, p), 1.7 * model.friction(v, p), rtol=1e-12)
+    np.testing.assert_allclose(
+        scaled.residual_scale(v, p), 1.7 * model.residual_scale(v, p), rtol=1e-12
+    )
+    shape = scaled.scatter["residual_function"]
+    assert (
+        shape["relative_std_percent"] == model.scatter["residual_function"]["relative_std_percent"]
+    )

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import json
 import math
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -181,7 +181,8 @@ def scale_model(
         Coefficients ``k x`` (forces), covariance ``k^2 C + r^2 x' x'^T`` over the fitted
         coefficients and every scaled coefficient (no rule term for ``k = 1``, the tested
         size), standard errors from its diagonal, and
-        the residual scatter and RMSE scaled by ``k``.
+        the residual scatter and RMSE scaled by ``k`` (``fit.scatter.residual_function``'s
+        absolute part too: the point band of the scaled model is k times the tested one's).
     """
     if not (math.isfinite(rule_stderr) and 0 <= rule_stderr < 1):
         raise ValueError(f"rule_stderr = {rule_stderr}: expected a fraction 0 <= r < 1")
@@ -210,11 +211,21 @@ def scale_model(
     for key in ("rmse", "residual_std"):
         if statistics.get(key) is not None:
             statistics[key] = statistics[key] * ratio
+    changes: dict[str, Any] = {}
+    shape = (model.scatter or {}).get("residual_function")
+    if shape and shape.get("absolute_std_N") is not None:  # [N]: scales; the relative part not
+        fit = dict(model.record["fit"])
+        fit["scatter"] = {
+            **fit["scatter"],
+            "residual_function": {**shape, "absolute_std_N": shape["absolute_std_N"] * ratio},
+        }
+        changes["record"] = {**model.record, "fit": fit}
     return model.replace(
         coefficients=coefficients,
         stderr={k: v for k, v in stderr.items() if v is not None},
         covariance=(names, cov),
         statistics=statistics,
+        **changes,
     )
 
 

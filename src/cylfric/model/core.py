@@ -856,12 +856,11 @@ class FrictionModel:
         every run of its sessions shared, ``s_L^2 - s_run^2``, over n). The point and run
         bands' quantile is on the residual variance's degrees of freedom (both scales come
         from the same residuals); the session band's, Welch-Satterthwaite's over its terms.
-        ``s(F)`` [N] is the
-        residual scatter at the level F (:meth:`residual_scale`: ``s_a^2 + (s_b F)^2`` from
-        ``fit.scatter.residual_function``, whose mean over the fitted points is ``s_res^2``;
-        ``s_res`` for a datasheet without it). Half-width = a
-        quantile x u; the run band is never
-        narrower than the point band, nor the session band than the run band. ``se`` is the
+        ``s(F)`` [N] is the residual scatter at the level F (:meth:`residual_scale`:
+        ``s_a^2 + (s_b F)^2`` from ``fit.scatter.residual_function``, whose mean over the
+        fitted points is ``s_res^2``; ``s_res`` for a datasheet without it). Half-width = a
+        quantile x u; the run band is never narrower than the point band, nor the session
+        band than the run band. ``se`` is the
         standard error of the mean curve. For "point" and "run", new data of the same
         mount: the model-based ``se`` (``standard_error(robust=False)``, the residuals'
         dof) and the quantile of an internally studentised residual: such data repeat the
