@@ -14,6 +14,14 @@ def _run(script):
     return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
 
 
+def _loaded_after(imports: str, modules: tuple[str, ...]) -> str:
+    """Which of ``modules`` a fresh process has loaded after ``imports`` (its printed list)."""
+    script = f"import sys\n{imports}\nprint([m for m in {modules!r} if m in sys.modules])"
+    done = _run(script)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.strip()
+
+
 SCRIPT = """
 import sys, warnings
 warnings.simplefilter("ignore")
@@ -37,26 +45,17 @@ def test_fit_without_report_loads_no_plotting(tmp_path):
 
 
 def test_version_imports_no_numerical_library():
-    script = (
-        "import sys\nfrom cylfric.cli import app\n"
-        "print([m for m in ('numpy', 'scipy', 'pandas', 'matplotlib') if m in sys.modules])"
+    loaded = _loaded_after(
+        "from cylfric.cli import app", ("numpy", "scipy", "pandas", "matplotlib")
     )
-    done = _run(script)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
+    assert loaded == "[]"
 
 
 def test_the_command_line_starts_without_the_web_and_xml_libraries():
     """xml.sax.saxutils (escape.xml_attr, for the FMU export) is imported where it is used:
     at start-up it brought urllib.request, http.client and email into every command."""
-    script = (
-        "import sys\nfrom cylfric.cli import app\n"
-        "print([m for m in ('xml.sax', 'urllib.request', 'http.client', 'email.parser')"
-        " if m in sys.modules])"
-    )
-    done = _run(script)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
+    web = ("xml.sax", "urllib.request", "http.client", "email.parser")
+    assert _loaded_after("from cylfric.cli import app", web) == "[]"
 
 
 def test_window_velocity_is_the_savitzky_golay_derivative():
@@ -79,14 +78,9 @@ def test_the_pipeline_imports_the_identification_only_where_it_is_used():
     """pandas, the quality gate, scipy.optimize, jsonschema and the identification load
     where a fit first uses them, not when the pipeline is imported: the reading (also in
     the forked pool workers) needs none of them."""
-    script = (
-        "import sys\nimport cylfric.pipeline, cylfric.cli\n"
-        "print([m for m in ('scipy.optimize', 'scipy.ndimage', 'jsonschema', 'cylfric.identify',"
-        " 'pandas', 'cylfric.quality') if m in sys.modules])"
-    )
-    done = _run(script)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
+    later = ("scipy.optimize", "scipy.ndimage", "jsonschema", "cylfric.identify", "pandas")
+    loaded = _loaded_after("import cylfric.pipeline, cylfric.cli", (*later, "cylfric.quality"))
+    assert loaded == "[]"
 
 
 def test_the_version_is_the_installed_one():

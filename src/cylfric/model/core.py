@@ -904,15 +904,6 @@ class FrictionModel:
             quantile = self._quantile(level, dof, in_sample=same_mount)
             half = quantile * np.sqrt(se**2 + scatter_sd**2)
             return f - half, f + half
-        fit_dof = self.statistics.get("dof")
-        band_dof = np.asarray(
-            n_dof
-            if same_mount
-            else self.effective_dof(velocity, pressure)
-            if self.influence is not None
-            else (np.inf if fit_dof is None else fit_dof),
-            dtype=float,
-        )
         assert scatter is not None  # refused above for these scopes
         part = _band_parts(scatter, scope)
         force2 = np.asarray(f, dtype=float) ** 2
@@ -931,11 +922,20 @@ class FrictionModel:
         if same_mount:  # one scale, the residuals': their dof (the point band's)
             dof = np.full(np.shape(variance), float(n_dof))
         else:
+            fit_dof = self.statistics.get("dof")
+            band_dof = np.asarray(
+                self.effective_dof(velocity, pressure)
+                if self.influence is not None
+                else (np.inf if fit_dof is None else fit_dof),
+                dtype=float,
+            )
             with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
                 denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
                 dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
         half = self._quantile(level, np.minimum(dof, 1e9), in_sample=same_mount)
         half = half * np.sqrt(variance)
+        if same_mount:  # the point band's se, quantile and s(F)^2 under the max: never wider
+            return f - half, f + half
         # a new run is never predicted better than a new point, a new session than a new run
         narrower = "run" if scope == "session" else "point"
         with warnings.catch_warnings():
