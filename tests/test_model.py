@@ -398,3 +398,20 @@ def test_a_datasheet_is_read_from_any_path_like(tmp_path):
     model = FrictionModel.from_datasheet(Where())
     assert model.source == str(path)
     assert model.friction(0.01, 1e5) == FrictionModel.from_datasheet(path).friction(0.01, 1e5)
+
+
+def test_a_model_pickles_and_comes_back_the_same(fitted):
+    """A FrictionModel goes through pickle (a forked or Dask worker sends models back: the
+    sensitivity study's refits), its read-only mappings read-only again."""
+    import pickle
+    from types import MappingProxyType
+
+    model = fitted.model
+    back = pickle.loads(pickle.dumps(model))
+    assert back.to_datasheet() == model.to_datasheet()
+    assert back.friction(0.02, 50e5) == model.friction(0.02, 50e5)
+    assert isinstance(back.parameters, MappingProxyType) and isinstance(
+        back.record, MappingProxyType
+    )
+    with pytest.raises(TypeError):
+        back.parameters["F_c"] = None  # type: ignore[index]

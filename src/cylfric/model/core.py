@@ -518,6 +518,21 @@ class FrictionModel:
             f"reference={self.reference!r})"
         )
 
+    def __getstate__(self) -> dict[str, Any]:
+        """The model's attributes for pickle (a forked or Dask worker sends models back):
+        its read-only mappings as plain dicts, named so :meth:`__setstate__` restores them."""
+        state = dict(self.__dict__)
+        proxies = [k for k, v in state.items() if isinstance(v, MappingProxyType)]
+        state.update({k: dict(state[k]) for k in proxies})
+        state["__read_only__"] = proxies
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        state = dict(state)
+        proxies = state.pop("__read_only__", [])
+        state.update({k: MappingProxyType(state[k]) for k in proxies})
+        self.__dict__.update(state)
+
     # ------------------------------------------------------------------ evaluation
     def operating_pressure(
         self, pressure_a: ArrayLike, pressure_b: ArrayLike | None = None
