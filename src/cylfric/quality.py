@@ -39,7 +39,9 @@ counted once). Nothing is dropped silently.
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -140,10 +142,20 @@ def _relative(file, extraction):
     folder = getattr(extraction, "folder", None)
     if folder is None:
         return str(file)
+    prefix = _prefix(folder)  # the readers name a run folder / name: a slice of it
+    if isinstance(file, str) and prefix is not None and file.startswith(prefix):
+        return file[len(prefix) :]  # (20,000 Paths built and compared: 0.1 s)
     try:
         return Path(file).relative_to(folder).as_posix()
     except ValueError:
         return str(file)
+
+
+@functools.lru_cache(maxsize=8)
+def _prefix(folder: str) -> str | None:
+    """``folder`` as the start of the names of its files (None where the separator is not
+    "/": there :func:`_relative` goes through pathlib)."""
+    return str(Path(folder)) + "/" if os.sep == "/" else None
 
 
 _SOURCE_NAMES = {
