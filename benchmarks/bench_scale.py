@@ -162,7 +162,7 @@ def _warm(folder: Path) -> float:
     return time.perf_counter() - t0
 
 
-def _ratios(size: dict, first: dict | None) -> dict:
+def _ratios(size: dict, first: dict | None, previous: dict | None = None) -> dict:
     med = {m: v["wall_median_seconds"] for m, v in size["modes"].items()}
     pss = {m: v["peak_tree_pss_MB_max"] for m, v in size["modes"].items()}
     cpu = {m: v["cpu_median_seconds"] for m, v in size["modes"].items()}
@@ -184,6 +184,16 @@ def _ratios(size: dict, first: dict | None) -> dict:
         ratios["peak_pss_vs_smallest"] = (
             pss["fit_no_report"] / (first["modes"]["fit_no_report"]["peak_tree_pss_MB_max"])
         )
+    if previous is not None:
+        # the cost of each added run, the fixed start-up taken out: the wall time the runs
+        # added since the previous size took, per run [ms] (fit and script alike)
+        for mode, key in (("fit_no_report", "fit"), ("script", "script")):
+            added = med[mode] - previous["modes"][mode]["wall_median_seconds"]
+            ratios[f"{key}_added_ms_per_run"] = 1000 * added / (size["runs"] - previous["runs"])
+        if "fit_added_ms_per_run" in previous["ratios"]:
+            ratios["added_per_run_vs_previous"] = (
+                ratios["fit_added_ms_per_run"] / previous["ratios"]["fit_added_ms_per_run"]
+            )
     return ratios
 
 
@@ -194,7 +204,7 @@ def bench_scale():
     sizes = {}
     try:
         base = base_campaign(root / "base")
-        first = None
+        first = previous = None
         for n in SIZES:
             campaign = root / f"runs_{n}"
             written = make_campaign(campaign, n, base)
@@ -224,8 +234,8 @@ def bench_scale():
                     for mode, xs in runs.items()
                 },
             }
-            size["ratios"] = _ratios(size, first)
-            first = first or size
+            size["ratios"] = _ratios(size, first, previous)
+            first, previous = first or size, size
             sizes[str(n)] = size
             print(n, {k: round(v, 3) for k, v in size["ratios"].items()}, flush=True)
             shutil.rmtree(campaign, ignore_errors=True)
@@ -251,6 +261,7 @@ def bench_scale():
                 "report_over_no_report": "<= 1.15",
                 "per_run_time_vs_smallest": "within 20 % (0.8-1.2)",
                 "peak_pss_vs_smallest": "within 20 % (<= 1.2)",
+                "added_per_run_vs_previous": "(no goal: the time per added run, start-up out)",
             },
             "sizes": sizes,
         },
