@@ -94,11 +94,64 @@ def rolling_median(x: np.ndarray, size: int) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
+def _order_pair(x, k):
+    """The ``k``-th and ``k + 1``-th smallest values of ``x`` (without NaN; the ``k``-th
+    twice when it is the last), ``x`` unchanged.
+
+    Selection by sampling (Floyd and Rivest 1975): two values of a sorted sample of about
+    32 bracket the wanted ones, one pass keeps the values between them (and counts those
+    below), and the search goes on in them; a bracket that misses, or keeps most values, ends
+    in ``np.partition`` of the values left. About twice as fast as the quickselect of
+    ``np.median`` on the extraction's strokes (its branches are hard to predict); the values
+    are the same: an order statistic is a value of ``x``, whichever way it is found.
+    """
+    n = x.size
+    work = np.empty(2 * n)
+    src = x
+    base = 0  # the half of ``work`` written next
+    while n >= 256:
+        step = n // 32
+        sample = np.sort(src[step // 2 : n : step])
+        at = (k * sample.size) // n
+        lo = sample[max(at - 4, 0)]
+        hi = sample[min(at + 5, sample.size - 1)]
+        dst = work[base : base + n]
+        below = 0
+        kept = 0
+        for i in range(n):
+            value = src[i]
+            below += value < lo
+            dst[kept] = value
+            kept += (value >= lo) & (value <= hi)
+        if k < below or k + 1 >= below + kept or 4 * kept > 3 * n:
+            break  # missed (or little gained): partition what is left
+        src, n, k = dst[:kept], kept, k - below
+        base = 0 if base else x.size  # the other half of ``work``
+    left = np.partition(src[:n], k)
+    second = left[k]
+    if k + 1 < n:
+        second = left[k + 1]
+        for i in range(k + 2, n):
+            if left[i] < second:
+                second = left[i]
+    return left[k], second
+
+
+@numba.njit(cache=True, nogil=True)
+def _median_of(x):
+    """``np.median(x)`` of a non-empty ``x`` without NaN (an even count: (a + b) / 2, as
+    numpy's)."""
+    n = x.size
+    a, b = _order_pair(x, (n - 1) // 2)
+    return a if n % 2 else (a + b) / 2
+
+
+@numba.njit(cache=True, nogil=True)
 def _median(x):
     for value in x:
         if np.isnan(value):
             return np.nan
-    return np.median(x)  # quickselect; an even count: (a + b) / 2, as numpy's
+    return _median_of(x)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -106,8 +159,8 @@ def _median_deviation(x):
     for value in x:
         if np.isnan(value):
             return np.nan, np.nan
-    centre = np.median(x)
-    return centre, np.median(np.abs(x - centre))
+    centre = _median_of(x)
+    return centre, _median_of(np.abs(x - centre))
 
 
 def median(x: np.ndarray) -> float:
