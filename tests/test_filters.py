@@ -38,6 +38,15 @@ def test_filters_equal_scipy_ndimage_nearest(n, size):
             rolling_median(x, size)
 
 
+def test_rolling_median_of_nine_is_right_for_every_input():
+    """The size-9 rolling median (a compare-exchange network) equals scipy's on every window
+    of zeros and ones: by the 0-1 principle of comparator networks (Knuth, TAOCP vol. 3,
+    5.3.4), then on every input."""
+    bits = (np.arange(512)[:, None] >> np.arange(9)) & 1  # the 512 windows of 9 samples
+    x = np.concatenate([np.r_[row, 5 * [0.5]] for row in bits.astype(float)])
+    assert np.array_equal(rolling_median(x, 9), median_filter(x, 9, mode="nearest"))
+
+
 @pytest.mark.parametrize(
     "shape", ["noise", "quantised", "constant", "sorted", "reversed", "three values", "drift"]
 )

@@ -63,6 +63,10 @@ def rolling_mean(x: np.ndarray, size: int) -> np.ndarray:
 
 @numba.njit(cache=True, nogil=True)
 def _rolling_median(padded, size, out):
+    if size == 9:  # the extraction's default: a selection network, no branches
+        for i in range(out.size):
+            out[i] = _median9(padded, i)
+        return out
     window = np.sort(padded[:size])  # the current window, kept sorted
     half = size // 2
     out[0] = window[half]
@@ -80,6 +84,35 @@ def _rolling_median(padded, size, out):
         window[j] = entering
         out[i] = window[half]
     return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _median9(x, i):
+    """The median of ``x[i : i + 9]`` by the 19 compare-exchanges of Paeth's median-of-9
+    network (A. W. Paeth, "Median finding on a 3x3 grid", Graphics Gems, 1990; the order of
+    N. Devillard's ``opt_med9``): the same value as sorting them, about ten times faster than
+    the sorted window on noisy forces (its searches branch unpredictably)."""
+    p0, p1, p2, p3, p4 = x[i], x[i + 1], x[i + 2], x[i + 3], x[i + 4]
+    p5, p6, p7, p8 = x[i + 5], x[i + 6], x[i + 7], x[i + 8]
+    p1, p2 = min(p1, p2), max(p1, p2)
+    p4, p5 = min(p4, p5), max(p4, p5)
+    p7, p8 = min(p7, p8), max(p7, p8)
+    p0, p1 = min(p0, p1), max(p0, p1)
+    p3, p4 = min(p3, p4), max(p3, p4)
+    p6, p7 = min(p6, p7), max(p6, p7)
+    p1, p2 = min(p1, p2), max(p1, p2)
+    p4, p5 = min(p4, p5), max(p4, p5)
+    p7, p8 = min(p7, p8), max(p7, p8)
+    p3 = max(p0, p3)
+    p5 = min(p5, p8)
+    p4, p7 = min(p4, p7), max(p4, p7)
+    p6 = max(p3, p6)
+    p4 = max(p1, p4)
+    p2 = min(p2, p5)
+    p4 = min(p4, p7)
+    p4, p2 = min(p4, p2), max(p4, p2)
+    p4 = max(p6, p4)
+    return min(p4, p2)
 
 
 def rolling_median(x: np.ndarray, size: int) -> np.ndarray:
