@@ -247,7 +247,10 @@ def _rolling_mean_nb(x, size):
     for i in range(padded.size):
         total += padded[i] - base
         sums[i + 1] = total
-    return (sums[size:] - sums[:-size]) / size + base
+    out = np.empty(x.size)  # (sums[size:] - sums[:-size]) / size + base, in one loop
+    for i in range(x.size):
+        out[i] = (sums[i + size] - sums[i]) / size + base
+    return out
 
 
 @numba.njit(cache=True, nogil=True)
@@ -272,8 +275,11 @@ def _settled_from(force, rolling, noise, median_window, sigma, tolerance, spike_
     n = force.size
     w = max(median_window, n // 20) | 1
     clean = force
-    if noise > 0:
-        clean = np.where(np.abs(force - rolling) > spike_sigma * noise, rolling, force)
+    if noise > 0:  # np.where(np.abs(force - rolling) > spike_sigma * noise, rolling, force)
+        clean = np.empty(n)
+        limit = spike_sigma * noise
+        for i in range(n):
+            clean[i] = rolling[i] if abs(force[i] - rolling[i]) > limit else force[i]
     mean = _rolling_mean_nb(clean, w)
     half = n // 2
     final = _median_nb(clean[half:])
@@ -295,33 +301,37 @@ def _trimmed(force, rolling, noise, w, trim_sigma, trim_floor, spike_sigma):
     deviation = _deviation_nb(force)
     spread = 1.4826 * deviation / math.sqrt(w)
     limit = _max(trim_sigma * spread, trim_floor)
-    outside = np.abs(rolling - level) > limit
     # a slow drift (cushioning starting to engage) hides under the noise of a short median:
     # a rolling mean over a tenth of the window sees it, with its own 4-sigma limit
     w_long = max(w, n // 10)
+    mean = rolling  # (unused unless w_long > w)
+    long_limit = np.inf
     if w_long > w:
         sigma = 1.4826 * deviation
         # isolated spikes (a sample or a few, far from the rolling median) are replaced by
         # the rolling median first: one spike of 150 N in a mean over 370 samples moved it
         # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
-        residual = force - rolling
         if np.isnan(noise):
-            noise = 1.4826 * _deviation_nb(residual)
-        if noise > 0:
-            spikes = np.abs(residual) > spike_sigma * noise
-        else:
-            spikes = residual != 0
-        mean = _rolling_mean_nb(np.where(spikes, rolling, force), w_long)
-        outside |= np.abs(mean - level) > trim_sigma * sigma / math.sqrt(w_long)
+            noise = 1.4826 * _deviation_nb(force - rolling)
+        clean = np.empty(n)  # np.where(spikes, rolling, force), in one loop
+        spike = spike_sigma * noise
+        for i in range(n):
+            residual = force[i] - rolling[i]
+            is_spike = abs(residual) > spike if noise > 0 else residual != 0
+            clean[i] = rolling[i] if is_spike else force[i]
+        mean = _rolling_mean_nb(clean, w_long)
+        long_limit = trim_sigma * sigma / math.sqrt(w_long)
+    # a sample is outside when |rolling - level| > limit, or (w_long > w) when
+    # |mean - level| > long_limit; tested only where the search below looks
     mid = n // 2
     lo = 0
     for i in range(mid - 1, -1, -1):  # the last outside sample before the middle
-        if outside[i]:
+        if abs(rolling[i] - level) > limit or (w_long > w and abs(mean[i] - level) > long_limit):
             lo = i + 1
             break
     hi = n
     for i in range(mid, n):  # the first from the middle on
-        if outside[i]:
+        if abs(rolling[i] - level) > limit or (w_long > w and abs(mean[i] - level) > long_limit):
             hi = i
             break
     return lo, hi
