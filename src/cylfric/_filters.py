@@ -134,9 +134,11 @@ def _order_pair(x, k):
     Selection by sampling (Floyd and Rivest 1975): two values of a sorted sample of about
     32 bracket the wanted ones, one pass keeps the values between them (and counts those
     below), and the search goes on in them; a bracket that misses, or keeps most values, ends
-    in ``np.partition`` of the values left. About twice as fast as the quickselect of
+    in a quickselect of the values left. About twice as fast as the quickselect of
     ``np.median`` on the extraction's strokes (its branches are hard to predict); the values
-    are the same: an order statistic is a value of ``x``, whichever way it is found.
+    are the same: an order statistic is a value of ``x``, whichever way it is found. (No
+    ``np.sort`` or ``np.partition``: their compiled code would triple the size of every
+    cached function that takes a median, and the time to load it in each new process.)
     """
     n = x.size
     work = np.empty(2 * n)
@@ -144,7 +146,14 @@ def _order_pair(x, k):
     base = 0  # the half of ``work`` written next
     while n >= 256:
         step = n // 32
-        sample = np.sort(src[step // 2 : n : step])
+        sample = np.empty((n - step // 2 + step - 1) // step)  # src[step // 2 : n : step]
+        for i in range(sample.size):  # sorted by insertion (about 32 values)
+            value = src[step // 2 + i * step]
+            j = i
+            while j > 0 and sample[j - 1] > value:
+                sample[j] = sample[j - 1]
+                j -= 1
+            sample[j] = value
         at = (k * sample.size) // n
         lo = sample[max(at - 4, 0)]
         hi = sample[min(at + 5, sample.size - 1)]
@@ -157,17 +166,53 @@ def _order_pair(x, k):
             dst[kept] = value
             kept += (value >= lo) & (value <= hi)
         if k < below or k + 1 >= below + kept or 4 * kept > 3 * n:
-            break  # missed (or little gained): partition what is left
+            break  # missed (or little gained): select in what is left
         src, n, k = dst[:kept], kept, k - below
         base = 0 if base else x.size  # the other half of ``work``
-    left = np.partition(src[:n], k)
-    second = left[k]
-    if k + 1 < n:
-        second = left[k + 1]
+    a = work[base : base + n]
+    for i in range(n):
+        a[i] = src[i]
+    first = _select(a, k)
+    second = first
+    if k + 1 < n:  # the smallest of those after the k-th (none is smaller than it)
+        second = a[k + 1]
         for i in range(k + 2, n):
-            if left[i] < second:
-                second = left[i]
-    return left[k], second
+            if a[i] < second:
+                second = a[i]
+    return first, second
+
+
+@numba.njit(cache=True, nogil=True)
+def _select(a, k):
+    """``a[k]`` once ``a`` is rearranged so that no value before ``k`` is larger and none
+    after it smaller (quickselect, Hoare's partition around a median of three; in place)."""
+    lo, hi = 0, a.size - 1
+    while hi > lo:
+        mid = (lo + hi) // 2
+        if a[mid] < a[lo]:
+            a[mid], a[lo] = a[lo], a[mid]
+        if a[hi] < a[mid]:
+            a[hi], a[mid] = a[mid], a[hi]
+            if a[mid] < a[lo]:
+                a[mid], a[lo] = a[lo], a[mid]
+        pivot = a[mid]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while pivot < a[j]:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break  # a[j + 1 : i] all equal the pivot
+    return a[k]
 
 
 @numba.njit(cache=True, nogil=True)
