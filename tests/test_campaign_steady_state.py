@@ -308,3 +308,17 @@ def test_a_campaign_of_mat_runs_is_read_with_its_column_units(campaign_of_20, tm
     assert len(mat) == len(text) == 40
     pd.testing.assert_series_equal(mat["friction [N]"], text["friction [N]"], rtol=1e-12)
     pd.testing.assert_series_equal(mat["velocity [m/s]"], text["velocity [m/s]"], rtol=1e-12)
+
+
+def test_window_means_and_deviations_are_numpys_bit_for_bit():
+    """The points' means and standard deviations (_mean, _mean_std: numpy's pairwise sums
+    without its Python wrappers) equal ndarray.mean() and ndarray.std() exactly, for short
+    and long windows of forces [N], contiguous or strided."""
+    from cylfric.steady_state import _mean, _mean_std
+
+    rng = np.random.default_rng(27)
+    for n in [1, 2, 7, 8, 9, 127, 128, 129, 1000, 4831]:
+        x = 150.0 + rng.normal(size=n) * rng.choice([1e-3, 1.0, 1e3])
+        for y in (x, x[::2], np.round(x, 1)):
+            assert _mean(y) == y.mean()
+            assert _mean_std(y) == (y.mean(), y.std())

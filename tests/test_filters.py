@@ -13,6 +13,7 @@ from scipy.ndimage import convolve1d, median_filter, uniform_filter1d
 from cylfric._filters import (
     convolve_nearest,
     median,
+    median_and_deviation,
     median_deviation,
     rolling_mean,
     rolling_median,
@@ -35,6 +36,42 @@ def test_filters_equal_scipy_ndimage_nearest(n, size):
     else:
         with pytest.raises(ValueError, match="odd size"):
             rolling_median(x, size)
+
+
+def test_rolling_median_of_nine_is_right_for_every_input():
+    """The size-9 rolling median (a compare-exchange network) equals scipy's on every window
+    of zeros and ones: by the 0-1 principle of comparator networks (Knuth, TAOCP vol. 3,
+    5.3.4), then on every input."""
+    bits = (np.arange(512)[:, None] >> np.arange(9)) & 1  # the 512 windows of 9 samples
+    x = np.concatenate([np.r_[row, 5 * [0.5]] for row in bits.astype(float)])
+    assert np.array_equal(rolling_median(x, 9), median_filter(x, 9, mode="nearest"))
+
+
+@pytest.mark.parametrize(
+    "shape", ["noise", "quantised", "constant", "sorted", "reversed", "three values", "drift"]
+)
+def test_median_and_deviation_equal_numpy_exactly(shape):
+    """median and median_and_deviation (a selection by sampling from 256 values on) return
+    np.median's values, bit for bit, for short and long arrays of forces [N] with ties, runs
+    and trends; NaN for an empty array or one holding a NaN."""
+    rng = np.random.default_rng(len(shape))
+    for n in [1, 2, 3, 10, 255, 256, 257, 600, 1001, 1558, 4830, 9000]:
+        x = 150.0 + rng.normal(size=n)
+        x = {
+            "noise": x,
+            "quantised": np.round(x, 1),
+            "constant": np.full(n, 150.0),
+            "sorted": np.sort(x),
+            "reversed": np.sort(x)[::-1],
+            "three values": rng.integers(0, 3, n).astype(float),
+            "drift": np.cumsum(x - 150.0),
+        }[shape]
+        centre = np.median(x)
+        assert median(x) == centre
+        assert median_and_deviation(x) == (centre, np.median(np.abs(x - centre)))
+        assert median(x[::3]) == np.median(x[::3])  # a strided view
+    assert math.isnan(median(np.array([1.0, np.nan, 2.0])))
+    assert all(math.isnan(v) for v in median_and_deviation(np.zeros(0)))
 
 
 def _settling_reference(force, median_window, sigma, tolerance, min_samples, spike_sigma):

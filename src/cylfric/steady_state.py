@@ -371,11 +371,29 @@ def _window_speed(time, position, velocity, window, keep):
     Without a position column: the mean of the velocity column over the kept samples.
     """
     if position is None or window.stop - window.start < 3:
-        return float(velocity[window.start : window.stop][keep].mean())
+        return _mean(velocity[window.start : window.stop][keep])
     t = time[window.start : window.stop]
     x = position[window.start : window.stop]
-    t = t - t.mean()
-    return float(np.dot(t, x - x.mean()) / np.dot(t, t))
+    t = t - _mean(t)
+    return float(np.dot(t, x - _mean(x)) / np.dot(t, t))
+
+
+_sum = np.add.reduce
+
+
+def _mean(x) -> float:
+    """``x.mean()`` of a non-empty 1-D float array, the same value (numpy's pairwise sum,
+    divided by the count) without the Python wrapper of ``ndarray.mean``."""
+    return float(_sum(x) / x.size)
+
+
+def _mean_std(x) -> tuple[float, float]:
+    """``(x.mean(), x.std())`` of a non-empty 1-D float array, the same values (numpy's
+    ``_var``: the deviations from the mean squared and summed pairwise, divided by the
+    count; its square root) with the mean computed once."""
+    mean = _sum(x) / x.size
+    deviation = x - mean
+    return float(mean), math.sqrt(_sum(deviation * deviation) / x.size)
 
 
 def _point_rows(data, metadata, config, run, options):
@@ -461,13 +479,17 @@ def _point_rows(data, metadata, config, run, options):
         if pressure is not None and n:
             p = pressure[w.start : w.stop]
             p = p[keep] if n < p.size else p
-            p_mean, p_std = float(p.mean()), float(p.std())
+            p_mean, p_std = _mean_std(p)
         else:  # the nominal pressure is the chambers' (both, or the working one)
             if nominal_pressure is None:
                 nominal = np.asarray(float(metadata.get("pressure", math.nan)))
                 reference = PRESSURE_REFERENCES[config.pressure_reference]
                 nominal_pressure = float(reference(nominal, nominal))
             p_mean, p_std = nominal_pressure, 0.0
+        f_mean = f_std = v_std = nan
+        if n:
+            f_mean, f_std = _mean_std(f)
+            v_std = _mean_std(v)[1]
         rows.append(
             {
                 "run": run,
@@ -477,10 +499,10 @@ def _point_rows(data, metadata, config, run, options):
                 "pressure [Pa]": p_mean,
                 "pressure_std [Pa]": p_std,
                 "velocity [m/s]": _window_speed(time, position, velocity, w, keep) if n else nan,
-                "velocity_std [m/s]": float(v.std()) if n else nan,
-                "force [N]": float(f.mean()) if n else nan,
+                "velocity_std [m/s]": v_std,
+                "force [N]": f_mean,
                 "friction [N]": nan,
-                "friction_std [N]": float(f.std()) if n else nan,
+                "friction_std [N]": f_std,
                 "n [-]": n,
                 "window_start [s]": float(time[w.start]) if n else nan,
                 "window_end [s]": float(time[w.stop - 1]) if n else nan,
