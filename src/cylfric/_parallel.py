@@ -73,12 +73,10 @@ def start(
     fit`` imports the identification meanwhile); without a pool (see :func:`run`) nothing
     runs until :meth:`Pending.results`, which then runs the tasks here. ``background``: one
     worker is a forked process too (not this process later), for work that this process's
-    own meanwhile covers (then a single task, ``n = 1`` with ``min_items=1``, is forked
-    too: one computation beside this process's own). Other parameters as :func:`run`.
+    own meanwhile covers. Other parameters as :func:`run`.
     """
     pool = None
-    fewest = max(min_items, 1 if background else 2)  # one background task is a fork too
-    if (workers >= 2 or background) and workers >= 1 and n >= fewest and can_fork():
+    if (workers >= 2 or background) and workers >= 1 and n >= max(min_items, 2) and can_fork():
         pool = ProcessPoolExecutor(
             max_workers=min(workers, n),
             mp_context=multiprocessing.get_context("fork"),

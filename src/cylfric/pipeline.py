@@ -29,7 +29,6 @@ if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
 
     from .identify.dynamic import DynamicIdentification
     from .identify.steady import Identification
-    from .model import FrictionModel
     from .steady_state import Extraction
 
 __all__ = ["fit_campaign", "fit_seals", "FitOptions", "FitOutputs", "SealOutputs", "SealFitError"]
@@ -456,7 +455,7 @@ def _fit(
     try:
         # while a pool reads the files, the libraries of the next steps load here (pandas,
         # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py)
-        from . import datasheet  # noqa: F401 (loaded here while the pool reads)
+        from .datasheet import datasheet_model, write_datasheet
         from .identify import UnphysicalFrictionError, identify
         from .quality import assess
 
@@ -502,24 +501,40 @@ def _fit(
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    # points.csv (pandas writes each value by itself: 0.2 s at 10,000 points, 0.4 s at
-    # 40,000) is written by a forked process while the datasheet is built and written here
-    points_csv = _start_csv(out / "points.csv", extraction.points)
-    try:
-        files, sheet, model = _write_outputs(
-            out,
-            folder,
-            config,
-            options,
-            ident,
-            extraction,
-            quality,
-            correction,
-            dynamic,
-            points_csv,
-        )
-    finally:
-        points_csv.close()
+    model = datasheet_model(
+        ident,
+        extraction=extraction,
+        campaign=str(folder),
+        name=options.name,
+        recipe=_recipe(config, folder),
+    )
+    sheet, record = model.to_datasheet(), dict(model.record)
+    if correction.record is not None:
+        sheet["fit"]["viscosity_correction"] = correction.record
+        record["fit"] = {**record.get("fit", {}), "viscosity_correction": correction.record}
+    if dynamic is not None:
+        from .model.serialize import clean
+
+        sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
+    model = model.replace(record=record)  # the datasheet's model, for the exports as it is
+    files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
+    if dynamic is not None:
+        files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
+        files["breakaway"] = _csv(out / "breakaway.csv", dynamic.breakaway)
+    files["points"] = _csv(out / "points.csv", extraction.points)
+    files["per_pressure"] = _csv(out / "per_pressure.csv", ident.per_pressure)
+    files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
+    if ident.sensitivity is not None:
+        files["sensitivity"] = _csv(out / "sensitivity.csv", ident.sensitivity)
+    import pandas as pd
+
+    if extraction.skipped:
+        files["skipped"] = _csv(out / "skipped.csv", pd.DataFrame(extraction.skipped))
+    if not quality.excluded.empty:
+        files["excluded"] = _csv(out / "excluded.csv", quality.excluded)
+    if ident.directions:
+        frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
+        files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
     timings["datasheet"] = time.perf_counter() - t0
     exports = {}
     if options.export:
@@ -561,64 +576,6 @@ def _fit(
     return FitOutputs(
         out, sheet, ident, extraction, files, timings, quality.excluded, exports, dynamic
     )
-
-
-def _start_csv(path: Path, frame: pd.DataFrame):
-    """``frame`` written as CSV at ``path`` by a forked process (:func:`_csv`), from
-    :data:`BACKGROUND_CSV_MIN_ROWS` rows; else when the result is asked for, here."""
-    from ._parallel import start
-
-    background = len(frame) >= BACKGROUND_CSV_MIN_ROWS
-    return start(lambda _: _csv(path, frame), 1, min_items=1, background=background)
-
-
-BACKGROUND_CSV_MIN_ROWS = 2000
-"""Fewest points for which points.csv is written by a forked process (about 10 ms to fork
-and wait for; pandas writes about 40 ms per 2,000 rows)."""
-
-
-def _write_outputs(
-    out, folder, config, options, ident, extraction, quality, correction, dynamic, points_csv
-) -> tuple[dict[str, Path], dict, FrictionModel]:
-    """The datasheet and the tables of one fit in ``out`` -> (their paths by name, the
-    datasheet, its model); points.csv from ``points_csv`` (:func:`_start_csv`)."""
-    from .datasheet import datasheet_model, write_datasheet
-
-    model = datasheet_model(
-        ident,
-        extraction=extraction,
-        campaign=str(folder),
-        name=options.name,
-        recipe=_recipe(config, folder),
-    )
-    sheet, record = model.to_datasheet(), dict(model.record)
-    if correction.record is not None:
-        sheet["fit"]["viscosity_correction"] = correction.record
-        record["fit"] = {**record.get("fit", {}), "viscosity_correction": correction.record}
-    if dynamic is not None:
-        from .model.serialize import clean
-
-        sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
-    model = model.replace(record=record)  # the datasheet's model, for the exports as it is
-    files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
-    if dynamic is not None:
-        files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
-        files["breakaway"] = _csv(out / "breakaway.csv", dynamic.breakaway)
-    files["points"] = points_csv.results()[0]
-    files["per_pressure"] = _csv(out / "per_pressure.csv", ident.per_pressure)
-    files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
-    if ident.sensitivity is not None:
-        files["sensitivity"] = _csv(out / "sensitivity.csv", ident.sensitivity)
-    import pandas as pd
-
-    if extraction.skipped:
-        files["skipped"] = _csv(out / "skipped.csv", pd.DataFrame(extraction.skipped))
-    if not quality.excluded.empty:
-        files["excluded"] = _csv(out / "excluded.csv", quality.excluded)
-    if ident.directions:
-        frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
-        files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
-    return files, sheet, model
 
 
 STRICT_SHOWN = 8

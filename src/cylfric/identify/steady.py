@@ -629,22 +629,16 @@ def _identify(
         warnings.warn(message, IdentificationWarning, stacklevel=3)
         result = _level_only(used, levels, fixed, notes + [message], validity)
     else:
-        study = _start_study(used) if sensitivity else None
-        try:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                core = _core(
-                    used,
-                    levels,
-                    pressure_law=pressure_law,
-                    fixed=fixed,
-                    notes=notes,
-                    validity=validity,
-                )
-        except BaseException:
-            if study is not None:
-                study.close()
-            raise
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            core = _core(
+                used,
+                levels,
+                pressure_law=pressure_law,
+                fixed=fixed,
+                notes=notes,
+                validity=validity,
+            )
         notes += [str(w.message) for w in caught]
         notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
         for w in caught:  # recorded for the report, and still shown to the caller
@@ -675,12 +669,7 @@ def _identify(
             stribeck_identifiable=shape,
             notes=notes,
         )
-        if study is not None:
-            computed = study.results()[0] if shape and model.reference == "mean" else None
-            study.close()
-            if shape:
-                result = _with_study(result, computed)
-        elif sensitivity and shape:
+        if sensitivity and shape:
             result = add_sensitivity(result)
     tie = pressure_confounding(used)
     if tie is not None and tie.confounded:
@@ -821,19 +810,17 @@ def add_sensitivity(ident: Identification) -> Identification:
     added to ``notes``. :func:`identify` calls it unless ``sensitivity=False``. An
     identification without a Stribeck shape is returned unchanged.
     """
-    return _with_study(ident, None)
-
-
-def _with_study(ident: Identification, study: tuple | None) -> Identification:
-    """:func:`add_sensitivity` with the study already computed (``study``: what
-    :func:`_sensitivity_study` returned for these points and reference; None: computed here)."""
     if not ident.stribeck_identifiable:
         return ident
-    if study is None:
-        study = _sensitivity_study(ident.points, ident.model.reference)
-    table, grid, recommended, refits, caught = study
-    for message, category in caught:
-        warnings.warn(message, category, stacklevel=3)
+    points = ident.points
+    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = thesis_tables(*args)
+        grid, recommended = sensitivity_grid(*args)
+        refits = sensitivity_refits(*args, reference=ident.model.reference)
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
     return replace(
         ident,
         sensitivity=table,
@@ -841,39 +828,8 @@ def _with_study(ident: Identification, study: tuple | None) -> Identification:
         recommended=recommended,
         sensitivity_refits=refits,
         directions=dict(ident.directions),
-        notes=list(dict.fromkeys(ident.notes + [str(message) for message, _ in caught])),
+        notes=list(dict.fromkeys(ident.notes + [str(w.message) for w in caught])),
     )
-
-
-def _sensitivity_study(points: pd.DataFrame, reference: str) -> tuple:
-    """(Tables 4.2-4.4, grid, recommended, refits, the warnings raised as (message, category))
-    of the points used (picklable: a forked process may compute it, :func:`_start_study`)."""
-    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        table = thesis_tables(*args)
-        grid, recommended = sensitivity_grid(*args)
-        refits = sensitivity_refits(*args, reference=reference)
-    return table, grid, recommended, refits, [(w.message, w.category) for w in caught]
-
-
-STUDY_FORK_MIN_POINTS = 2000
-"""Fewest points for which :func:`identify` computes the sensitivity study in a forked
-process while it fits the models here (:func:`cylfric._parallel.start`, one background
-task). The study does not need the fits (it refits the points on its own grid of alpha and
-v_r); it costs about 0.04 s at 2,000 points, 0.18 s at 10,000 and 0.33 s at 40,000 (the
-scale benchmark's 5,000 and 20,000 runs), against about 10 ms to fork and send back."""
-
-
-def _start_study(used: pd.DataFrame):
-    """The sensitivity study of ``used`` started beside this process (None: too few points
-    for the fork to pay). The fits here use the reference ``"mean"``; :func:`_identify`
-    computes the study again here if the model's reference is another."""
-    if len(used) < STUDY_FORK_MIN_POINTS:
-        return None
-    from .._parallel import start
-
-    return start(lambda _: _sensitivity_study(used, "mean"), 1, min_items=1, background=True)
 
 
 def _level_only(points, levels, fixed, notes, validity):
