@@ -415,3 +415,25 @@ def test_a_model_pickles_and_comes_back_the_same(fitted):
     )
     with pytest.raises(TypeError):
         back.parameters["F_c"] = None  # type: ignore[index]
+
+
+def test_effective_dof_in_blocks_is_the_same_as_at_once(monkeypatch):
+    """The runs' shares are summed in blocks of points (SHARE_BLOCK entries: a report's band
+    over 20,000 runs held 66 MB at once, 19 MB in blocks); each point's sums are the same to
+    rounding (BLAS may take another kernel for a block's last rows)."""
+    from cylfric.model import core
+
+    rng = np.random.default_rng(7)
+    jacobian = rng.normal(size=(50, 8))
+    influence = rng.normal(size=(300, 8))
+    whole = (jacobian @ influence.T) ** 2
+    monkeypatch.setattr(core, "SHARE_BLOCK", 1000)  # 3 points a block
+    total, squares = core._shares(jacobian, influence)
+    assert_allclose(total, whole.sum(axis=-1), rtol=1e-13)
+    assert_allclose(squares, (whole**2).sum(axis=-1), rtol=1e-13)
+    grid, _ = core._shares(jacobian.reshape(5, 10, 8), influence)
+    assert grid.shape == (5, 10) and np.array_equal(grid.ravel(), total)
+    monkeypatch.setattr(core, "SHARE_BLOCK", 1 << 20)  # one block: the former sums exactly
+    total, squares = core._shares(jacobian, influence)
+    assert np.array_equal(total, whole.sum(axis=-1))
+    assert np.array_equal(squares, (whole**2).sum(axis=-1))

@@ -173,6 +173,29 @@ def _reference_basis(basis, reference):
     return MappingProxyType(basis)
 
 
+SHARE_BLOCK = 1 << 20
+"""Most entries of the (points x runs) matrix of the runs' shares that
+:meth:`FrictionModel.effective_dof` holds at once (8 MB): a band of 200 speeds over 20,000
+runs is 32 MB, and its squares as much again, in each process that draws the report."""
+
+
+def _shares(jacobian: np.ndarray, influence: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sum a_g, sum a_g^2) over the runs g at each point, a_g = (J . influence_g)^2: each
+    run's share of the variance [N^2], in blocks of points of at most :data:`SHARE_BLOCK`
+    entries, squared in place (each point's sums the same to rounding whatever the block: BLAS
+    may take another kernel for a block's last rows; in one block, as before, exactly)."""
+    flat = jacobian.reshape(-1, jacobian.shape[-1])
+    total, squares = np.empty(len(flat)), np.empty(len(flat))
+    rows = max(1, SHARE_BLOCK // max(len(influence), 1))
+    for start in range(0, len(flat), rows):
+        share = flat[start : start + rows] @ influence.T  # (points, runs)
+        np.square(share, out=share)
+        total[start : start + rows] = share.sum(axis=-1)
+        np.square(share, out=share)
+        squares[start : start + rows] = share.sum(axis=-1)
+    return total.reshape(jacobian.shape[:-1]), squares.reshape(jacobian.shape[:-1])
+
+
 class FrictionModel:
     """Pressure-dependent friction of a cylinder: steady-state law, LuGre dynamics, uncertainty.
 
@@ -784,10 +807,9 @@ class FrictionModel:
         dof = self.statistics.get("dof")
         if self.influence is None:
             return np.full(v.shape, np.nan if dof is None else float(dof))
-        share = (self._jacobian(v, p) @ self.influence[1].T) ** 2  # (..., runs)
-        total = share.sum(axis=-1)
+        total, squares = _shares(self._jacobian(v, p), self.influence[1])
         with np.errstate(invalid="ignore", divide="ignore"):
-            effective = np.where(total > 0, total**2 / (share**2).sum(axis=-1), np.inf)
+            effective = np.where(total > 0, total**2 / squares, np.inf)
         return np.clip(effective, 1.0, np.inf if dof is None else float(dof))
 
     def standard_error(
