@@ -459,9 +459,6 @@ def _fit(
         from .identify import UnphysicalFrictionError, identify
         from .quality import assess
 
-        if options.report:  # matplotlib too (about 0.4 s), off the report's serial path
-            from . import report  # noqa: F401
-
         extraction = reading.result()
     finally:
         reading.close()
