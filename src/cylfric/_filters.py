@@ -313,18 +313,24 @@ def _max(a, b):
     return b if b > a else a  # Python's max(a, b), NaN included
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _despiked(force, rolling, limit):
+    """``np.where(np.abs(force - rolling) > limit, rolling, force)`` in one loop: samples
+    farther than ``limit`` [N] from the rolling median replaced by it (0: every sample that
+    differs from it)."""
+    clean = np.empty(force.size)
+    for i in range(force.size):
+        clean[i] = rolling[i] if abs(force[i] - rolling[i]) > limit else force[i]
+    return clean
+
+
 @numba.njit(cache=True, nogil=True)
 def _settled_from(force, rolling, noise, median_window, sigma, tolerance, spike_sigma):
     """Samples at the start of ``force`` before it has settled (see :func:`stroke_window`),
     given its rolling median and the robust sigma of its residual."""
     n = force.size
     w = max(median_window, n // 20) | 1
-    clean = force
-    if noise > 0:  # np.where(np.abs(force - rolling) > spike_sigma * noise, rolling, force)
-        clean = np.empty(n)
-        limit = spike_sigma * noise
-        for i in range(n):
-            clean[i] = rolling[i] if abs(force[i] - rolling[i]) > limit else force[i]
+    clean = _despiked(force, rolling, spike_sigma * noise) if noise > 0 else force
     mean = _rolling_mean_nb(clean, w)
     half = n // 2
     final = _median_nb(clean[half:])
@@ -358,25 +364,20 @@ def _trimmed(force, rolling, noise, w, trim_sigma, trim_floor, spike_sigma):
         # beyond its limit in mid-stroke, and the whole stroke was trimmed away (issue 11, F4)
         if np.isnan(noise):
             noise = 1.4826 * _deviation_nb(force - rolling)
-        clean = np.empty(n)  # np.where(spikes, rolling, force), in one loop
-        spike = spike_sigma * noise
-        for i in range(n):
-            residual = force[i] - rolling[i]
-            is_spike = abs(residual) > spike if noise > 0 else residual != 0
-            clean[i] = rolling[i] if is_spike else force[i]
+        clean = _despiked(force, rolling, spike_sigma * noise if noise > 0 else 0.0)
         mean = _rolling_mean_nb(clean, w_long)
         long_limit = trim_sigma * sigma / math.sqrt(w_long)
-    # a sample is outside when |rolling - level| > limit, or (w_long > w) when
-    # |mean - level| > long_limit; tested only where the search below looks
+    # a sample is outside when |rolling - level| > limit or |mean - level| > long_limit
+    # (never with w_long = w: long_limit is then infinite); tested only where the search looks
     mid = n // 2
     lo = 0
     for i in range(mid - 1, -1, -1):  # the last outside sample before the middle
-        if abs(rolling[i] - level) > limit or (w_long > w and abs(mean[i] - level) > long_limit):
+        if abs(rolling[i] - level) > limit or abs(mean[i] - level) > long_limit:
             lo = i + 1
             break
     hi = n
     for i in range(mid, n):  # the first from the middle on
-        if abs(rolling[i] - level) > limit or (w_long > w and abs(mean[i] - level) > long_limit):
+        if abs(rolling[i] - level) > limit or abs(mean[i] - level) > long_limit:
             hi = i
             break
     return lo, hi
