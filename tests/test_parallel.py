@@ -3,6 +3,7 @@ as serial, and what happens when a worker dies or a task raises."""
 
 from __future__ import annotations
 
+import json
 import os
 import threading
 
@@ -154,3 +155,110 @@ def test_few_files_are_read_by_one_forked_reader_many_by_several(tmp_path, monke
     assert calls[0]["workers"] == 1 and calls[0]["background"] is True
     assert calls[1]["workers"] == 2 and calls[1]["background"] is False
     assert few.points.equals(many.points)  # the same table either way
+
+
+@needs_fork
+def test_one_background_task_is_forked_and_its_result_comes_back():
+    """start(task, 1, min_items=1, background=True): one computation in a forked process
+    beside this one (the sensitivity study, points.csv); its exception is raised here."""
+    here = os.getpid()
+    assert _parallel.start(lambda i: os.getpid(), 1, min_items=1, background=True).results() != [
+        here
+    ]
+    assert _parallel.start(lambda i: os.getpid(), 1, background=True).results() == [here]
+
+    def fails(i):
+        raise OSError(28, "No space left on device")
+
+    with pytest.raises(OSError, match="No space left"):
+        _parallel.start(fails, 1, min_items=1, background=True).results()
+
+
+@needs_fork
+def test_the_sensitivity_study_and_points_csv_from_forked_processes_equal_serial(
+    tmp_path, monkeypatch
+):
+    """The after-extraction overlap (issue 27): identify's sensitivity study in a forked
+    process while the models are fitted here, points.csv written by one while the datasheet
+    is built here. Forced on a small campaign (thresholds at 1), the outputs are byte for
+    byte those of the serial path (thresholds out of reach), and both forks happened."""
+    from cylfric import pipeline
+    from cylfric.identify import steady
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    generate_campaign(
+        tmp_path / "c",
+        BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11))),
+    )
+    forked = []
+    real = _parallel.start
+
+    def spy(task, n, **keywords):
+        pending = real(task, n, **keywords)
+        forked.append(pending._pool is not None)
+        return pending
+
+    monkeypatch.setattr(_parallel, "start", spy)
+    outputs = {}
+    for mode, threshold in (("serial", 10**9), ("forked", 1)):
+        monkeypatch.setattr(steady, "STUDY_FORK_MIN_POINTS", threshold)
+        monkeypatch.setattr(pipeline, "BACKGROUND_CSV_MIN_ROWS", threshold)
+        forked.clear()
+        result = pipeline.fit_campaign(tmp_path / "c", tmp_path / mode, report=False)
+        outputs[mode] = result
+        if mode == "forked":
+            assert forked.count(True) == 2  # the study, points.csv
+    for name in ("points.csv", "per_pressure.csv", "sensitivity.csv", "law_comparison.csv"):
+        assert (tmp_path / "serial" / name).read_bytes() == (
+            tmp_path / "forked" / name
+        ).read_bytes()
+    serial, fork = outputs["serial"].identification, outputs["forked"].identification
+    assert serial.sensitivity.equals(fork.sensitivity) and serial.grid.equals(fork.grid)
+    assert serial.recommended == fork.recommended and serial.notes == fork.notes
+    assert [r["rmse [N]"] for r in serial.sensitivity_refits] == [
+        r["rmse [N]"] for r in fork.sensitivity_refits
+    ]
+    sheets = [json.loads((tmp_path / mode / "datasheet.json").read_text()) for mode in outputs]
+    for sheet in sheets:
+        sheet.pop("created")
+    assert sheets[0] == sheets[1]
+
+
+@needs_fork
+def test_one_core_or_workers_1_keeps_the_fit_in_this_process(tmp_path, monkeypatch):
+    """With one usable core (an affinity of one CPU, :func:`_parallel.cores`) a background
+    task runs here and the extraction reads serially by default; ``workers=1`` (fit-many's
+    fits) forks neither the study nor points.csv even where both would pay."""
+    from cylfric import pipeline, steady_state
+    from cylfric.identify import steady
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    assert _parallel.cores() >= 1
+    if hasattr(os, "sched_getaffinity"):
+        assert _parallel.cores() == len(os.sched_getaffinity(0))
+    monkeypatch.setattr(_parallel, "cores", lambda: 1)
+    monkeypatch.setattr(steady_state, "cores", lambda: 1)  # imported by name there
+    here = os.getpid()
+    assert _parallel.start(lambda i: os.getpid(), 1, min_items=1, background=True).results() == [
+        here
+    ]
+    assert steady_state._readers(5000, None)[:2] == (1, False)  # one reader, no pool
+    monkeypatch.undo()
+
+    generate_campaign(
+        tmp_path / "c",
+        BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11))),
+    )
+    forked = []
+    real = _parallel.start
+
+    def spy(task, n, **keywords):
+        pending = real(task, n, **keywords)
+        forked.append(pending._pool is not None)
+        return pending
+
+    monkeypatch.setattr(_parallel, "start", spy)
+    monkeypatch.setattr(steady, "STUDY_FORK_MIN_POINTS", 1)
+    monkeypatch.setattr(pipeline, "BACKGROUND_CSV_MIN_ROWS", 1)
+    pipeline.fit_campaign(tmp_path / "c", tmp_path / "one", report=False, workers=1)
+    assert forked and not any(forked)

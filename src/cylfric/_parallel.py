@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import gc
 import multiprocessing
+import os
 import sys
 import threading
 from collections.abc import Callable, Sequence
@@ -34,7 +35,26 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
-__all__ = ["ClusterPending", "Pending", "can_fork", "connect", "run", "start", "starmap"]
+__all__ = [
+    "ClusterPending",
+    "Pending",
+    "can_fork",
+    "connect",
+    "cores",
+    "run",
+    "start",
+    "starmap",
+]
+
+
+def cores() -> int:
+    """The processor cores this process may run on (>= 1): its CPU affinity where the
+    system has one (``taskset``, a container's CPU set), else the machine's count. The
+    default number of workers of ``cylfric fit``."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # no affinity (macOS, Windows)
+        return os.cpu_count() or 1
 
 
 def can_fork() -> bool:
@@ -73,10 +93,16 @@ def start(
     fit`` imports the identification meanwhile); without a pool (see :func:`run`) nothing
     runs until :meth:`Pending.results`, which then runs the tasks here. ``background``: one
     worker is a forked process too (not this process later), for work that this process's
-    own meanwhile covers. Other parameters as :func:`run`.
+    own meanwhile covers (then a single task, ``n = 1`` with ``min_items=1``, is forked
+    too: one computation beside this process's own), where this process may run on a
+    second core (:func:`cores`; else the task runs here, in :meth:`Pending.results`).
+    Other parameters as :func:`run`.
     """
     pool = None
-    if (workers >= 2 or background) and workers >= 1 and n >= max(min_items, 2) and can_fork():
+    fewest = max(min_items, 1 if background else 2)  # one background task is a fork too
+    # a background worker beside this process's own work pays only with a second core
+    beside = background and cores() >= 2
+    if (workers >= 2 or beside) and workers >= 1 and n >= fewest and can_fork():
         pool = ProcessPoolExecutor(
             max_workers=min(workers, n),
             mp_context=multiprocessing.get_context("fork"),

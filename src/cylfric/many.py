@@ -275,7 +275,7 @@ def fit_many(
 
     make_folder(out)
     if scheduler != "serial" and (distributed or workers > 1) and options.workers is None:
-        # fits side by side: each on one core (a fit alone reads files on two)
+        # fits side by side: each on one core (a fit alone uses every core)
         options = replace(options, workers=1)
     t0, started = time.perf_counter(), time.time()
     jobs = [(folder, folder_out, name, options, started) for folder, folder_out, name in fitted]

@@ -52,7 +52,8 @@ class FitOptions:
         checked and without repeats (a string ``"fmu,matlab"`` is split), written into
         ``out/export/<target>/`` after the datasheet.
     workers : int or None
-        Processes for the extraction and the figures (default 2 on Linux, else 1; see
+        Processes for the extraction and the figures (default: the cores this process may
+        use, :func:`cylfric._parallel.cores`, forked on Linux, else 1; see
         :func:`~cylfric.steady_state.extract_campaign`); 1 keeps the fit on one core, as
         the workers of :func:`cylfric.many.fit_many` do when several fits run at once.
     scheduler : str or None

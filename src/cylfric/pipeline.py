@@ -29,6 +29,7 @@ if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
 
     from .identify.dynamic import DynamicIdentification
     from .identify.steady import Identification
+    from .model import FrictionModel
     from .steady_state import Extraction
 
 __all__ = ["fit_campaign", "fit_seals", "FitOptions", "FitOutputs", "SealOutputs", "SealFitError"]
@@ -455,7 +456,7 @@ def _fit(
     try:
         # while a pool reads the files, the libraries of the next steps load here (pandas,
         # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py)
-        from .datasheet import datasheet_model, write_datasheet
+        from . import datasheet  # noqa: F401 (loaded here while the pool reads)
         from .identify import UnphysicalFrictionError, identify
         from .quality import assess
 
@@ -483,6 +484,7 @@ def _fit(
             fixed=options.fixed,
             pressure_law=options.pressure_law,
             per_direction=options.per_direction,
+            workers=options.workers,
         )
     except UnphysicalFrictionError as exc:
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder, config)}") from None
@@ -498,6 +500,91 @@ def _fit(
         ident = replace(ident, model=model, notes=ident.notes + notes)
     timings["identify"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    # points.csv (pandas writes each value by itself: 0.2 s at 10,000 points, 0.4 s at
+    # 40,000) is written by a forked process while the datasheet is built and written here
+    points_csv = _start_csv(out / "points.csv", extraction.points, options.workers)
+    try:
+        files, sheet, model = _write_outputs(
+            out,
+            folder,
+            config,
+            options,
+            ident,
+            extraction,
+            quality,
+            correction,
+            dynamic,
+            points_csv,
+        )
+    finally:
+        points_csv.close()
+    timings["datasheet"] = time.perf_counter() - t0
+    exports = {}
+    if options.export:
+        from .export import export as export_to
+
+        t0 = time.perf_counter()
+        for target in options.export:
+            try:
+                exports[target] = export_to(model, target, out / "export" / target)
+            except (ValueError, RuntimeError, OSError) as exc:  # a compiler's output: 1st line
+                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
+                raise ExportFailed(f"--export {target} failed: {first}", target) from exc
+        timings["export"] = time.perf_counter() - t0
+    if options.report:
+        from ._parallel import cores
+        from .report import write_report_folder
+
+        t0 = time.perf_counter()
+        summaries = [_export_summary(out, result) for result in exports.values()]
+        advance = None
+        if step is not None:
+            from .report import all_figures
+
+            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
+            advance = step("drawing the figures", shown)
+        files.update(
+            write_report_folder(
+                out,
+                sheet,
+                ident,
+                extraction,
+                quality.excluded,
+                exports=summaries,
+                dynamic=dynamic,
+                workers=cores() if options.workers is None else options.workers,
+                progress=advance,
+            )
+        )
+        timings["report"] = time.perf_counter() - t0
+    return FitOutputs(
+        out, sheet, ident, extraction, files, timings, quality.excluded, exports, dynamic
+    )
+
+
+def _start_csv(path: Path, frame: pd.DataFrame, workers: int | None):
+    """``frame`` written as CSV at ``path`` by a forked process (:func:`_csv`), from
+    :data:`BACKGROUND_CSV_MIN_ROWS` rows and with ``workers`` 2 or more (None: the cores
+    this process may use); else when the result is asked for, here."""
+    from ._parallel import cores, start
+
+    two = (cores() if workers is None else workers) >= 2
+    background = two and len(frame) >= BACKGROUND_CSV_MIN_ROWS
+    return start(lambda _: _csv(path, frame), 1, min_items=1, background=background)
+
+
+BACKGROUND_CSV_MIN_ROWS = 2000
+"""Fewest points for which points.csv is written by a forked process (about 10 ms to fork
+and wait for; pandas writes about 40 ms per 2,000 rows)."""
+
+
+def _write_outputs(
+    out, folder, config, options, ident, extraction, quality, correction, dynamic, points_csv
+) -> tuple[dict[str, Path], dict, FrictionModel]:
+    """The datasheet and the tables of one fit in ``out`` -> (their paths by name, the
+    datasheet, its model); points.csv from ``points_csv`` (:func:`_start_csv`)."""
+    from .datasheet import datasheet_model, write_datasheet
+
     model = datasheet_model(
         ident,
         extraction=extraction,
@@ -518,7 +605,7 @@ def _fit(
     if dynamic is not None:
         files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
         files["breakaway"] = _csv(out / "breakaway.csv", dynamic.breakaway)
-    files["points"] = _csv(out / "points.csv", extraction.points)
+    files["points"] = points_csv.results()[0]
     files["per_pressure"] = _csv(out / "per_pressure.csv", ident.per_pressure)
     files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
     if ident.sensitivity is not None:
@@ -532,47 +619,7 @@ def _fit(
     if ident.directions:
         frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
         files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
-    timings["datasheet"] = time.perf_counter() - t0
-    exports = {}
-    if options.export:
-        from .export import export as export_to
-
-        t0 = time.perf_counter()
-        for target in options.export:
-            try:
-                exports[target] = export_to(model, target, out / "export" / target)
-            except (ValueError, RuntimeError, OSError) as exc:  # a compiler's output: 1st line
-                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
-                raise ExportFailed(f"--export {target} failed: {first}", target) from exc
-        timings["export"] = time.perf_counter() - t0
-    if options.report:
-        from .report import write_report_folder
-
-        t0 = time.perf_counter()
-        summaries = [_export_summary(out, result) for result in exports.values()]
-        advance = None
-        if step is not None:
-            from .report import all_figures
-
-            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
-            advance = step("drawing the figures", shown)
-        files.update(
-            write_report_folder(
-                out,
-                sheet,
-                ident,
-                extraction,
-                quality.excluded,
-                exports=summaries,
-                dynamic=dynamic,
-                workers=2 if options.workers is None else options.workers,
-                progress=advance,
-            )
-        )
-        timings["report"] = time.perf_counter() - t0
-    return FitOutputs(
-        out, sheet, ident, extraction, files, timings, quality.excluded, exports, dynamic
-    )
+    return files, sheet, model
 
 
 STRICT_SHOWN = 8

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._parallel import start
+from ._parallel import cores, start
 from ._runtable import RunTable
 from .friction.pressure import PRESSURE_REFERENCES, REFERENCE_CHAMBERS, operating_pressure
 from .io.campaign import Campaign, CampaignConfig, read_run
@@ -764,8 +764,9 @@ def _read_one(info, index: int, config: CampaignConfig, options: dict) -> tuple:
 
 def _readers(n: int, workers: int | None) -> tuple[int, bool, bool, int]:
     """How ``n`` files are read: (workers, pooled, one background reader, files read here
-    first) for ``workers`` asked (None: 2)."""
-    workers = 2 if workers is None else workers
+    first) for ``workers`` asked (None: the cores this process may use,
+    :func:`cylfric._parallel.cores`)."""
+    workers = cores() if workers is None else workers
     pooled = workers >= 2 and n >= PARALLEL_MIN_FILES
     # below TWO_READERS_MIN_FILES one forked reader loads the compiled reader and reads
     # every file while this process imports the identification; from it on, the first file
@@ -851,7 +852,8 @@ def extract_campaign(
     only each run's points are kept). By default the first bad file raises
     :class:`~cylfric.io.BenchFileError`; with ``skip_bad`` it is listed in
     ``Extraction.skipped`` with the reason and the rest goes on. ``progress`` is called with
-    each file name as it is done. ``workers`` (default 2): with 2 or more, and at least
+    each file name as it is done. ``workers`` (default: the cores this process may use,
+    :func:`cylfric._parallel.cores`): with 2 or more, and at least
     ``PARALLEL_MIN_FILES`` files, the files are read on a pool of forked processes (one
     reader below ``TWO_READERS_MIN_FILES``, started before this process's other work)
     (:func:`cylfric._parallel.run`; the per-file work is small numpy calls that hold the

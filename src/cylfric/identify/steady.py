@@ -515,6 +515,7 @@ def identify(
     pressure_law: str = "linear",
     per_direction: bool = False,
     sensitivity: bool = True,
+    workers: int | None = None,
 ) -> Identification:
     """Identify the pressure-dependent friction model from a points table.
 
@@ -532,6 +533,11 @@ def identify(
         Also identify extension and retraction separately.
     sensitivity : bool
         Run the alpha / v_r sensitivity study (see :func:`add_sensitivity`).
+    workers : int or None
+        Processes: with 2 or more (None: the cores this process may use,
+        :func:`cylfric._parallel.cores`) and from :data:`STUDY_FORK_MIN_POINTS` points, the
+        sensitivity study is computed by a forked process while the models are fitted here
+        (Linux; the same results); 1: everything here.
 
     Returns
     -------
@@ -557,6 +563,7 @@ def identify(
             pressure_law=pressure_law,
             per_direction=per_direction,
             sensitivity=sensitivity,
+            workers=workers,
         )
 
 
@@ -567,6 +574,7 @@ def _identify(
     pressure_law: str,
     per_direction: bool,
     sensitivity: bool,
+    workers: int | None = None,
 ) -> Identification:
     """The body of :func:`identify` (run under its one-thread BLAS limit)."""
     fixed = dict(fixed or {})
@@ -629,16 +637,22 @@ def _identify(
         warnings.warn(message, IdentificationWarning, stacklevel=3)
         result = _level_only(used, levels, fixed, notes + [message], validity)
     else:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            core = _core(
-                used,
-                levels,
-                pressure_law=pressure_law,
-                fixed=fixed,
-                notes=notes,
-                validity=validity,
-            )
+        study = _start_study(used, workers) if sensitivity else None
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                core = _core(
+                    used,
+                    levels,
+                    pressure_law=pressure_law,
+                    fixed=fixed,
+                    notes=notes,
+                    validity=validity,
+                )
+        except BaseException:
+            if study is not None:
+                study.close()
+            raise
         notes += [str(w.message) for w in caught]
         notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
         for w in caught:  # recorded for the report, and still shown to the caller
@@ -669,7 +683,12 @@ def _identify(
             stribeck_identifiable=shape,
             notes=notes,
         )
-        if sensitivity and shape:
+        if study is not None:
+            computed = study.results()[0] if shape and model.reference == "mean" else None
+            study.close()
+            if shape:
+                result = _with_study(result, computed)
+        elif sensitivity and shape:
             result = add_sensitivity(result)
     tie = pressure_confounding(used)
     if tie is not None and tie.confounded:
@@ -810,17 +829,19 @@ def add_sensitivity(ident: Identification) -> Identification:
     added to ``notes``. :func:`identify` calls it unless ``sensitivity=False``. An
     identification without a Stribeck shape is returned unchanged.
     """
+    return _with_study(ident, None)
+
+
+def _with_study(ident: Identification, study: tuple | None) -> Identification:
+    """:func:`add_sensitivity` with the study already computed (``study``: what
+    :func:`_sensitivity_study` returned for these points and reference; None: computed here)."""
     if not ident.stribeck_identifiable:
         return ident
-    points = ident.points
-    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        table = thesis_tables(*args)
-        grid, recommended = sensitivity_grid(*args)
-        refits = sensitivity_refits(*args, reference=ident.model.reference)
-    for w in caught:
-        warnings.warn(w.message, w.category, stacklevel=2)
+    if study is None:
+        study = _sensitivity_study(ident.points, ident.model.reference)
+    table, grid, recommended, refits, caught = study
+    for message, category in caught:
+        warnings.warn(message, category, stacklevel=3)
     return replace(
         ident,
         sensitivity=table,
@@ -828,8 +849,40 @@ def add_sensitivity(ident: Identification) -> Identification:
         recommended=recommended,
         sensitivity_refits=refits,
         directions=dict(ident.directions),
-        notes=list(dict.fromkeys(ident.notes + [str(w.message) for w in caught])),
+        notes=list(dict.fromkeys(ident.notes + [str(message) for message, _ in caught])),
     )
+
+
+def _sensitivity_study(points: pd.DataFrame, reference: str) -> tuple:
+    """(Tables 4.2-4.4, grid, recommended, refits, the warnings raised as (message, category))
+    of the points used (picklable: a forked process may compute it, :func:`_start_study`)."""
+    args = (points["velocity [m/s]"], points["pressure [Pa]"], points["friction [N]"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = thesis_tables(*args)
+        grid, recommended = sensitivity_grid(*args)
+        refits = sensitivity_refits(*args, reference=reference)
+    return table, grid, recommended, refits, [(w.message, w.category) for w in caught]
+
+
+STUDY_FORK_MIN_POINTS = 2000
+"""Fewest points for which :func:`identify` computes the sensitivity study in a forked
+process while it fits the models here (:func:`cylfric._parallel.start`, one background
+task). The study does not need the fits (it refits the points on its own grid of alpha and
+v_r); it costs about 0.04 s at 2,000 points, 0.18 s at 10,000 and 0.33 s at 40,000 (the
+scale benchmark's 5,000 and 20,000 runs), against about 10 ms to fork and send back."""
+
+
+def _start_study(used: pd.DataFrame, workers: int | None):
+    """The sensitivity study of ``used`` started beside this process (None: too few points
+    for the fork to pay, or ``workers`` 1). The fits here use the reference ``"mean"``;
+    :func:`_identify` computes the study again here if the model's reference is another."""
+    from .._parallel import cores, start
+
+    if len(used) < STUDY_FORK_MIN_POINTS or (cores() if workers is None else workers) < 2:
+        return None
+
+    return start(lambda _: _sensitivity_study(used, "mean"), 1, min_items=1, background=True)
 
 
 def _level_only(points, levels, fixed, notes, validity):
