@@ -121,9 +121,10 @@ def test_start_runs_the_tasks_while_the_caller_works_and_close_stops_them(tmp_pa
 
 
 @needs_fork
-def test_a_background_start_runs_one_worker_in_another_process():
+def test_a_background_start_runs_one_worker_in_another_process(monkeypatch):
     """start(background=True) with one worker: a forked process (the caller goes on with its
     own work meanwhile), one process for every task; without it, one worker means here."""
+    monkeypatch.setattr(_parallel, "cores", lambda: 2)  # a second core (else: here)
     here = os.getpid()
     pids = _parallel.start(lambda i: os.getpid(), 6, workers=1, background=True).results()
     assert here not in pids and len(set(pids)) == 1
@@ -148,6 +149,7 @@ def test_few_files_are_read_by_one_forked_reader_many_by_several(tmp_path, monke
         return real(task, n, **keywords)
 
     monkeypatch.setattr(steady_state, "start", spy)
+    monkeypatch.setattr(steady_state, "cores", lambda: 2)  # the default workers: 2 here
     monkeypatch.setattr(steady_state, "TWO_READERS_MIN_FILES", 1000)
     few = steady_state.start_extraction(tmp_path / "c").result()
     monkeypatch.setattr(steady_state, "TWO_READERS_MIN_FILES", 10)
@@ -158,9 +160,10 @@ def test_few_files_are_read_by_one_forked_reader_many_by_several(tmp_path, monke
 
 
 @needs_fork
-def test_one_background_task_is_forked_and_its_result_comes_back():
+def test_one_background_task_is_forked_and_its_result_comes_back(monkeypatch):
     """start(task, 1, min_items=1, background=True): one computation in a forked process
     beside this one (the sensitivity study, points.csv); its exception is raised here."""
+    monkeypatch.setattr(_parallel, "cores", lambda: 2)  # a second core (else: here)
     here = os.getpid()
     assert _parallel.start(lambda i: os.getpid(), 1, min_items=1, background=True).results() != [
         here
@@ -199,6 +202,7 @@ def test_the_sensitivity_study_and_points_csv_from_forked_processes_equal_serial
         return pending
 
     monkeypatch.setattr(_parallel, "start", spy)
+    monkeypatch.setattr(_parallel, "cores", lambda: 2)  # the forks need a second core
     outputs = {}
     for mode, threshold in (("serial", 10**9), ("forked", 1)):
         monkeypatch.setattr(steady, "STUDY_FORK_MIN_POINTS", threshold)
