@@ -10,10 +10,16 @@ Measured per size, each command a fresh process, in one run (ratios at one machi
 - ``cylfric fit --no-report`` and ``cylfric fit`` (with the report);
 - ``benchmarks/scale_script.py``: a competent user's own script (pyarrow CSV reader per
   file, a ``ProcessPoolExecutor(2)``, scipy's Stribeck fit per pressure, linear laws in
-  pressure), with 2 processes and with 1 (the second core's gain).
+  pressure), with 2 processes;
+- each again on one core (``cylfric fit --no-report`` and the script with 1 process, pinned
+  to processor 0 by their CPU affinity): the second core's gain.
 
-Wall time [s] and peak PSS [MB] of the process tree (the process and all its descendants,
-``/proc/PID/smaps_rollup`` sampled every 20 ms: shared pages counted once per process share).
+Wall time [s] and processor time [s] from rounds with nothing but the command running; peak
+PSS [MB] of the process tree (the process and all its descendants, ``/proc/PID/smaps_rollup``
+sampled every 20 ms: shared pages counted once per process share) from one more round of each
+command with the sampler, whose wall times are not used: reading smaps_rollup of the tree every
+20 ms took about 0.28 of the 2 cores itself (measured: other jobs' share 0.27-0.31 cores with
+it, 0.01 without), time that only the commands using both cores lose.
 
 Sizes from ``CYLFRIC_SCALE_SIZES`` (default ``1000,5000,20000``); the files go to
 ``CYLFRIC_SCALE_DIR`` (default a temporary folder; about 1.5 GB at 20,000 runs), deleted
@@ -35,7 +41,7 @@ from pathlib import Path
 BASE_PRESSURES_BAR = (0.1, 20, 30, 40, 50, 60, 80, 100, 130, 159)
 BASE_SPEEDS_MM_S = (1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 60, 70, 85, 100, 135)
 SIZES = tuple(int(n) for n in os.environ.get("CYLFRIC_SCALE_SIZES", "1000,5000,20000").split(","))
-ROUNDS = int(os.environ.get("CYLFRIC_SCALE_ROUNDS", "2"))
+ROUNDS = int(os.environ.get("CYLFRIC_SCALE_ROUNDS", "3"))
 HERE = Path(__file__).resolve().parent
 
 
@@ -103,9 +109,16 @@ def _tree(pid: int) -> list[int]:
     return found
 
 
-def measure(command: list[str], env: dict | None = None, interval: float = 0.02) -> dict:
-    """Run ``command``; its wall time [s], peak tree PSS [MB], processor time of the tree
-    [s] and the machine's load (others' share of the 2 cores) meanwhile."""
+def measure(
+    command: list[str],
+    env: dict | None = None,
+    interval: float = 0.02,
+    sample: bool = True,
+    cpus: set[int] | None = None,
+) -> dict:
+    """Run ``command`` (on the processors ``cpus`` only: its CPU affinity, as ``taskset``
+    sets it); its wall time [s], peak tree PSS [MB] (``sample``; else 0), processor time of
+    the tree [s] and the machine's load (others' share of the 2 cores) meanwhile."""
     import resource
 
     def children_cpu():
@@ -114,11 +127,15 @@ def measure(command: list[str], env: dict | None = None, interval: float = 0.02)
 
     cpu0, busy0 = children_cpu(), _busy_seconds()
     t0 = time.perf_counter()
-    process = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    pin = None if cpus is None else (lambda: os.sched_setaffinity(0, cpus))
+    process = subprocess.Popen(
+        command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, preexec_fn=pin
+    )
     peak = 0
-    while process.poll() is None:
+    while sample and process.poll() is None:
         peak = max(peak, sum(_pss_kb(p) for p in _tree(process.pid)))
         time.sleep(interval)
+    process.wait()
     wall = time.perf_counter() - t0
     stderr = process.stderr.read().decode(errors="replace") if process.stderr else ""
     if process.returncode != 0:
@@ -139,18 +156,23 @@ def _busy_seconds() -> float:
     return (sum(fields[:8]) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
 
 
+ONE_CORE = {0}
+"""The processor the one-core commands are pinned to (their CPU affinity): the same command
+on one core, which cylfric sees (its default workers, ``_parallel.cores``) and the script is
+told (one process)."""
+
+
 def _modes(campaign: Path, out: Path) -> dict:
-    """name: command of each measured process."""
+    """name: (command, the processors it may use or None: all) of each measured process."""
     cylfric = str(Path(sys.executable).with_name("cylfric"))
     fit = [cylfric, "fit", str(campaign), "--out", str(out)]
-    one_core = [sys.executable, str(HERE / "fit_process.py"), "quick", "serial"]
     script = [sys.executable, str(HERE / "scale_script.py"), str(campaign), str(out) + ".json"]
     return {
-        "fit_no_report": [*fit, "--no-report"],
-        "fit_report": fit,
-        "fit_no_report_1_core": [*one_core, *fit[1:], "--no-report"],
-        "script": [*script, "2"],
-        "script_1_core": [*script, "1"],
+        "fit_no_report": ([*fit, "--no-report"], None),
+        "fit_report": (fit, None),
+        "fit_no_report_1_core": ([*fit, "--no-report"], ONE_CORE),
+        "script": ([*script, "2"], None),
+        "script_1_core": ([*script, "1"], ONE_CORE),
     }
 
 
@@ -212,12 +234,18 @@ def bench_scale():
             out = root / f"out_{n}"
             modes = _modes(campaign, out)
             runs: dict = {m: [] for m in modes}
+            sampled: dict = {}
             names = list(modes)
-            for r in range(ROUNDS):
+            for r in range(ROUNDS + 1):  # the timed rounds, then the sampled one
                 for mode in names[r % len(names) :] + names[: r % len(names)]:
                     shutil.rmtree(out, ignore_errors=True)
-                    runs[mode].append(measure(modes[mode], env))
-                    print(n, mode, {k: round(v, 2) for k, v in runs[mode][-1].items()}, flush=True)
+                    command, cpus = modes[mode]
+                    result = measure(command, env, sample=r == ROUNDS, cpus=cpus)
+                    if r < ROUNDS:
+                        runs[mode].append(result)
+                    else:
+                        sampled[mode] = result
+                    print(n, mode, {k: round(v, 2) for k, v in result.items()}, flush=True)
             size = {
                 "runs": n,
                 "bytes": written,
@@ -226,7 +254,8 @@ def bench_scale():
                     mode: {
                         "wall_median_seconds": statistics.median(x["wall_seconds"] for x in xs),
                         "wall_seconds": [round(x["wall_seconds"], 2) for x in xs],
-                        "peak_tree_pss_MB_max": max(x["peak_tree_pss_MB"] for x in xs),
+                        "peak_tree_pss_MB_max": sampled[mode]["peak_tree_pss_MB"],
+                        "sampled_round_wall_seconds": round(sampled[mode]["wall_seconds"], 2),
                         "cpu_median_seconds": statistics.median(x["cpu_seconds"] for x in xs),
                         "cores_used_median": statistics.median(x["cores_used"] for x in xs),
                         "others_cores_median": statistics.median(x["others_cores"] for x in xs),
@@ -248,11 +277,15 @@ def bench_scale():
     return _save(
         "scale",
         {
-            "what": "cylfric fit (--no-report, with the report, on one core) and a pyarrow + "
+            "what": "cylfric fit (--no-report, with the report, --no-report on one core: its "
+            "CPU affinity processor 0) and a pyarrow + "
             "ProcessPoolExecutor + scipy script (benchmarks/scale_script.py, 2 and 1 "
             "processes) on replicated virtual campaigns, each a fresh process; medians of "
-            "rounds in rotated order; peak PSS of the process tree; others_cores = the "
-            "cores other jobs on the machine took meanwhile (of 2)",
+            "rounds in rotated order, nothing sampled meanwhile; peak PSS of the process "
+            "tree from one more round of each command, sampled every 20 ms (the sampler "
+            "takes about 0.28 of the 2 cores: that round's wall time is not used); "
+            "others_cores = the cores other jobs on the machine took during the timed rounds "
+            "(of 2)",
             "rounds": ROUNDS,
             "goals": {
                 "fit_over_script": "<= 1.0 at 5,000 and 20,000 runs",
