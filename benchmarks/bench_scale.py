@@ -128,8 +128,9 @@ def measure(
     cpu0, busy0 = children_cpu(), _busy_seconds()
     t0 = time.perf_counter()
     pin = None if cpus is None else (lambda: os.sched_setaffinity(0, cpus))
+    errors = tempfile.TemporaryFile()  # not a pipe: a command's long stderr cannot block it
     process = subprocess.Popen(
-        command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, preexec_fn=pin
+        command, env=env, stdout=subprocess.DEVNULL, stderr=errors, preexec_fn=pin
     )
     peak = 0
     while sample and process.poll() is None:
@@ -137,7 +138,9 @@ def measure(
         time.sleep(interval)
     process.wait()
     wall = time.perf_counter() - t0
-    stderr = process.stderr.read().decode(errors="replace") if process.stderr else ""
+    errors.seek(0)
+    stderr = errors.read().decode(errors="replace")
+    errors.close()
     if process.returncode != 0:
         raise RuntimeError(f"{command} failed ({process.returncode}): {stderr[-2000:]}")
     cpu, busy = children_cpu() - cpu0, _busy_seconds() - busy0

@@ -299,3 +299,22 @@ def test_the_summary_csv_reads_as_the_summary_frame():
     assert list(back.columns) == list(SUMMARY_COLUMNS)
     pd.testing.assert_frame_equal(back, expected)
     assert back.loc[1, "reason"] == failed["reason"]
+
+
+def test_a_lone_campaign_is_fitted_on_every_core(tmp_path, monkeypatch):
+    """fit-many gives fits that run side by side workers=1 (one core each); a single
+    campaign runs alone, so its fit keeps the default workers (every core), not one."""
+    import cylfric.pipeline as pipeline
+
+    seen = []
+    real = pipeline.fit_campaign
+
+    def spy(folder, out, options=None, **keywords):
+        seen.append(options.workers)
+        return real(folder, out, options, **keywords)
+
+    monkeypatch.setattr(pipeline, "fit_campaign", spy)
+    lone = tmp_path / "lone"
+    generate_campaign(lone / "cyl00", replace(SMALL, seed=0))
+    fit_many(lone, tmp_path / "out1", workers=2, report=False)
+    assert seen == [None]

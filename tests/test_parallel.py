@@ -266,3 +266,34 @@ def test_one_core_or_workers_1_keeps_the_fit_in_this_process(tmp_path, monkeypat
     monkeypatch.setattr(pipeline, "BACKGROUND_CSV_MIN_ROWS", 1)
     pipeline.fit_campaign(tmp_path / "c", tmp_path / "one", report=False, workers=1)
     assert forked and not any(forked)
+
+
+def _in_a_daemonic_worker(_):
+    """(can_fork, every task ran in this process) inside a multiprocessing.Pool worker."""
+    here = os.getpid()
+    pids = _parallel.start(lambda i: os.getpid(), 3, workers=2).results()
+    alone = _parallel.start(lambda i: os.getpid(), 1, min_items=1, background=True).results()
+    return _parallel.can_fork(), pids + alone == [here] * 4
+
+
+@needs_fork
+def test_a_daemonic_pool_worker_forks_nothing():
+    """A multiprocessing.Pool worker (daemonic: it may not have children) runs the tasks
+    itself: identify's background study or an extraction there does not fail."""
+    import multiprocessing
+
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        assert pool.map(_in_a_daemonic_worker, [0]) == [(False, True)]
+
+
+def test_many_cores_do_not_fork_a_reader_per_handful_of_files(monkeypatch):
+    """With 64 cores the extraction still gives each reader at least half of
+    TWO_READERS_MIN_FILES files (forking one costs more than it reads below that)."""
+    from cylfric import steady_state
+
+    monkeypatch.setattr(steady_state, "cores", lambda: 64)
+    half = steady_state.TWO_READERS_MIN_FILES // 2
+    assert steady_state._readers(20, None)[:3] == (1, True, True)  # one background reader
+    assert steady_state._readers(2 * half, None)[0] == 2
+    assert steady_state._readers(1000, None)[0] == 1000 // half
+    assert steady_state._readers(20_000, None)[0] == 64

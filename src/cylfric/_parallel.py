@@ -59,8 +59,13 @@ def cores() -> int:
 
 def can_fork() -> bool:
     """Whether :func:`run` may fork workers here: on Linux, in a process without other
-    threads."""
-    return sys.platform.startswith("linux") and threading.active_count() == 1
+    threads that is not itself a daemonic worker (a ``multiprocessing.Pool``'s worker may
+    not have children)."""
+    return (
+        sys.platform.startswith("linux")
+        and threading.active_count() == 1
+        and not multiprocessing.current_process().daemon
+    )
 
 
 _task: Callable[[int], Any] | None = None

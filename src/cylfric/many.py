@@ -223,7 +223,7 @@ def fit_many(
         be None: each datasheet is named after its campaign). Without ``options.workers``,
         fits that run side by side each read on one core.
     workers : int, optional
-        Local worker processes (default: the number of cores). Ignored only by a
+        Local worker processes (default: the cores this process may use). Ignored only by a
         distributed scheduler address, whose cluster has its own workers (then it must be
         None).
     scheduler : str, optional
@@ -274,7 +274,8 @@ def fit_many(
     from ._atomic import atomic_write_text  # not cylfric.io: its readers load numba, scipy
 
     make_folder(out)
-    if scheduler != "serial" and (distributed or workers > 1) and options.workers is None:
+    side_by_side = distributed or (workers > 1 and len(fitted) > 1)
+    if scheduler != "serial" and side_by_side and options.workers is None:
         # fits side by side: each on one core (a fit alone uses every core)
         options = replace(options, workers=1)
     t0, started = time.perf_counter(), time.time()
@@ -331,13 +332,16 @@ def _checked_options(options: FitOptions | None, fit_options: dict[str, Any]) ->
 
 def _checked_workers(workers: int | None, scheduler: str | None) -> tuple[int, bool]:
     """(local workers, whether ``scheduler`` is a distributed address): ``workers`` or the
-    number of cores; at least 1, and not given with a scheduler address."""
+    cores this process may use (:func:`cylfric._parallel.cores`); at least 1, and not given
+    with a scheduler address."""
     if workers is not None and workers < 1:
         raise ValueError(f"workers = {workers}; expected at least 1")
     distributed = scheduler not in (None, "local-cluster", "serial")
     if distributed and workers is not None:
         raise ValueError("workers is set by the cluster behind a scheduler address; leave it out")
-    return workers or os.cpu_count() or 1, distributed
+    from ._parallel import cores
+
+    return workers or cores(), distributed
 
 
 def _sort_campaigns(

@@ -776,6 +776,8 @@ def _readers(n: int, workers: int | None) -> tuple[int, bool, bool, int]:
     head = 1 if pooled and not one_reader else 0
     if one_reader:
         workers = 1
+    elif pooled:  # each reader's share at least half TWO_READERS_MIN_FILES (many cores)
+        workers = min(workers, n // (TWO_READERS_MIN_FILES // 2))
     return workers, pooled, one_reader, head
 
 

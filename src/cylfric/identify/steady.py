@@ -649,47 +649,45 @@ def _identify(
                     notes=notes,
                     validity=validity,
                 )
-        except BaseException:
+            notes += [str(w.message) for w in caught]
+            notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
+            for w in caught:  # recorded for the report, and still shown to the caller
+                warnings.warn(w.message, w.category, stacklevel=3)
+            per_pressure, fits, regressions, models, fits_by_law, comparison = core
+            model = models[pressure_law]
+            shape = model.friction_law == "stribeck"
+            for par in PRESSURE_DEPENDENT:
+                spec = model.coefficients()[par]
+                slope = spec.get("slope") if isinstance(spec, dict) else None
+                if slope is not None and slope < 0:
+                    notes.append(
+                        f"{par} falls with pressure (slope {slope * 1e5:.3g} per bar): check "
+                        "the pressure column and the force-balance signs"
+                    )
+            result = Identification(
+                model=model,
+                models=models,
+                residuals=fits_by_law[pressure_law].residuals,
+                points=used,
+                levels=levels,
+                per_pressure=per_pressure,
+                per_pressure_fits=fits,
+                regressions=regressions,
+                comparison=comparison,
+                pressure_law=pressure_law,
+                fixed=fixed,
+                stribeck_identifiable=shape,
+                notes=notes,
+            )
             if study is not None:
-                study.close()
-            raise
-        notes += [str(w.message) for w in caught]
-        notes[:] = dict.fromkeys(notes)  # each warning once (several fits repeat some)
-        for w in caught:  # recorded for the report, and still shown to the caller
-            warnings.warn(w.message, w.category, stacklevel=3)
-        per_pressure, fits, regressions, models, fits_by_law, comparison = core
-        model = models[pressure_law]
-        shape = model.friction_law == "stribeck"
-        for par in PRESSURE_DEPENDENT:
-            spec = model.coefficients()[par]
-            slope = spec.get("slope") if isinstance(spec, dict) else None
-            if slope is not None and slope < 0:
-                notes.append(
-                    f"{par} falls with pressure (slope {slope * 1e5:.3g} per bar): check "
-                    "the pressure column and the force-balance signs"
-                )
-        result = Identification(
-            model=model,
-            models=models,
-            residuals=fits_by_law[pressure_law].residuals,
-            points=used,
-            levels=levels,
-            per_pressure=per_pressure,
-            per_pressure_fits=fits,
-            regressions=regressions,
-            comparison=comparison,
-            pressure_law=pressure_law,
-            fixed=fixed,
-            stribeck_identifiable=shape,
-            notes=notes,
-        )
-        if study is not None:
-            computed = study.results()[0] if shape and model.reference == "mean" else None
-            study.close()
-            if shape:
-                result = _with_study(result, computed)
-        elif sensitivity and shape:
-            result = add_sensitivity(result)
+                computed = study.results()[0] if shape and model.reference == "mean" else None
+                if shape:
+                    result = _with_study(result, computed)
+            elif sensitivity and shape:
+                result = add_sensitivity(result)
+        finally:
+            if study is not None:
+                study.close()  # an error here too: its process is not left running
     tie = pressure_confounding(used)
     if tie is not None and tie.confounded:
         result = _mark_confounded(result, tie)
