@@ -532,7 +532,6 @@ def _fit(
                 raise ExportFailed(f"--export {target} failed: {first}", target) from exc
         timings["export"] = time.perf_counter() - t0
     if options.report:
-        from ._parallel import cores
         from .report import write_report_folder
 
         t0 = time.perf_counter()
@@ -552,7 +551,7 @@ def _fit(
                 quality.excluded,
                 exports=summaries,
                 dynamic=dynamic,
-                workers=cores() if options.workers is None else options.workers,
+                workers=options.workers,
                 progress=advance,
             )
         )

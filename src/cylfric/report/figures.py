@@ -705,18 +705,21 @@ def save_rendered(folder, stem, png: bytes, svg: bytes) -> dict:
     }
 
 
-def render_all(ident, offset=None, *, workers=2, progress=None):
+def render_all(ident, offset=None, *, workers=None, progress=None):
     """Draw every report figure: ``[(stem, caption, png, svg)]`` in report order.
 
-    With ``workers`` >= 2 the figures are drawn on a pool of forked processes
+    With ``workers`` >= 2 (None: the cores this process may use,
+    :func:`cylfric._parallel.cores`) the figures are drawn on a pool of forked processes
     (:func:`cylfric._parallel.run`: matplotlib is single-threaded, and the workers inherit
     it loaded); where no pool can be forked, here, one after another. The result is the
     same either way. ``progress`` is called with each figure's stem once it is drawn.
     """
-    from .._parallel import run
+    from .._parallel import cores, run
 
     figures = all_figures(ident, offset)
     done = None if progress is None else (lambda i, _: progress(figures[i][0]))
+    if workers is None:
+        workers = cores()
     drawn = run(lambda i: render(figures[i][2]()), len(figures), workers=workers, done=done)
     return [
         (stem, caption, *images) for (stem, caption, _), images in zip(figures, drawn, strict=True)

@@ -399,18 +399,19 @@ def write_report_folder(
     extraction: Extraction,
     excluded: pd.DataFrame | None = None,
     *,
-    workers: int = 2,
+    workers: int | None = None,
     exports: Sequence[Mapping[str, Any]] | None = None,
     dynamic: _Results | None = None,
     progress: Callable[[str], object] | None = None,
 ) -> dict[str, Path]:
     """Draw the figures (PNG, SVG into ``out/figures``) and write ``out/report.html``.
 
-    Returns {output name: path}. ``workers=2`` draws on two cores (see
-    :func:`~cylfric.report.figures.render_all`). ``exports``: plain summaries of the
-    simulator exports (target, folder, files, loss rows) for their section. ``dynamic`` (a
-    :class:`~cylfric.identify.dynamic.DynamicIdentification`) adds the presliding and
-    breakaway figure and tables. ``progress`` is called with each figure's name once drawn.
+    Returns {output name: path}. ``workers`` (None: the cores this process may use) draw
+    the figures (see :func:`~cylfric.report.figures.render_all`). ``exports``: plain
+    summaries of the simulator exports (target, folder, files, loss rows) for their section.
+    ``dynamic`` (a :class:`~cylfric.identify.dynamic.DynamicIdentification`) adds the
+    presliding and breakaway figure and tables. ``progress`` is called with each figure's
+    name once drawn.
     """
     from pathlib import Path
 
