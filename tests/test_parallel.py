@@ -135,12 +135,8 @@ def test_few_files_are_read_by_one_forked_reader_many_by_several(tmp_path, monke
     """Below TWO_READERS_MIN_FILES the extraction starts one background reader; from it on,
     the first file is read here and ``workers`` readers share the rest."""
     from cylfric import steady_state
-    from cylfric.simulate.bench import BenchSettings, generate_campaign
 
-    generate_campaign(
-        tmp_path / "c",
-        BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11))),
-    )
+    _small_campaign(tmp_path / "c")
     calls = []
     real = steady_state.start
 
@@ -187,21 +183,9 @@ def test_the_sensitivity_study_and_points_csv_from_forked_processes_equal_serial
     byte those of the serial path (thresholds out of reach), and both forks happened."""
     from cylfric import pipeline
     from cylfric.identify import steady
-    from cylfric.simulate.bench import BenchSettings, generate_campaign
 
-    generate_campaign(
-        tmp_path / "c",
-        BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11))),
-    )
-    forked = []
-    real = _parallel.start
-
-    def spy(task, n, **keywords):
-        pending = real(task, n, **keywords)
-        forked.append(pending._pool is not None)
-        return pending
-
-    monkeypatch.setattr(_parallel, "start", spy)
+    _small_campaign(tmp_path / "c")
+    forked = _count_forks(monkeypatch)
     monkeypatch.setattr(_parallel, "cores", lambda: 2)  # the forks need a second core
     outputs = {}
     for mode, threshold in (("serial", 10**9), ("forked", 1)):
@@ -235,7 +219,6 @@ def test_one_core_or_workers_1_keeps_the_fit_in_this_process(tmp_path, monkeypat
     fits) forks neither the study nor points.csv even where both would pay."""
     from cylfric import pipeline, steady_state
     from cylfric.identify import steady
-    from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     assert _parallel.cores() >= 1
     if hasattr(os, "sched_getaffinity"):
@@ -249,19 +232,8 @@ def test_one_core_or_workers_1_keeps_the_fit_in_this_process(tmp_path, monkeypat
     assert steady_state._readers(5000, None)[:2] == (1, False)  # one reader, no pool
     monkeypatch.undo()
 
-    generate_campaign(
-        tmp_path / "c",
-        BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11))),
-    )
-    forked = []
-    real = _parallel.start
-
-    def spy(task, n, **keywords):
-        pending = real(task, n, **keywords)
-        forked.append(pending._pool is not None)
-        return pending
-
-    monkeypatch.setattr(_parallel, "start", spy)
+    _small_campaign(tmp_path / "c")
+    forked = _count_forks(monkeypatch)
     monkeypatch.setattr(steady, "STUDY_FORK_MIN_POINTS", 1)
     monkeypatch.setattr(pipeline, "BACKGROUND_CSV_MIN_ROWS", 1)
     pipeline.fit_campaign(tmp_path / "c", tmp_path / "one", report=False, workers=1)
@@ -297,3 +269,26 @@ def test_many_cores_do_not_fork_a_reader_per_handful_of_files(monkeypatch):
     assert steady_state._readers(2 * half, None)[0] == 2
     assert steady_state._readers(1000, None)[0] == 1000 // half
     assert steady_state._readers(20_000, None)[0] == 64
+
+
+def _small_campaign(folder):
+    """A clean virtual campaign of 2 pressures x 10 speeds in ``folder``."""
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    generate_campaign(
+        folder, BenchSettings.clean(pressures_bar=(20.0, 80.0), speeds_mm_s=tuple(range(1, 11)))
+    )
+
+
+def _count_forks(monkeypatch) -> list[bool]:
+    """Watch ``_parallel.start``: the list gets, per call, whether it forked a pool."""
+    forked: list[bool] = []
+    real = _parallel.start
+
+    def spy(task, n, **keywords):
+        pending = real(task, n, **keywords)
+        forked.append(pending._pool is not None)
+        return pending
+
+    monkeypatch.setattr(_parallel, "start", spy)
+    return forked

@@ -565,10 +565,10 @@ def _start_csv(path: Path, frame: pd.DataFrame, workers: int | None):
     """``frame`` written as CSV at ``path`` by a forked process (:func:`_csv`), from
     :data:`BACKGROUND_CSV_MIN_ROWS` rows and with ``workers`` 2 or more (None: the cores
     this process may use); else when the result is asked for, here."""
-    from ._parallel import cores, start
+    from ._parallel import start
 
-    two = (cores() if workers is None else workers) >= 2
-    background = two and len(frame) >= BACKGROUND_CSV_MIN_ROWS
+    # start forks only where this process has a second core (else it writes here)
+    background = workers != 1 and len(frame) >= BACKGROUND_CSV_MIN_ROWS
     return start(lambda _: _csv(path, frame), 1, min_items=1, background=background)
 
 

@@ -875,11 +875,11 @@ def _start_study(used: pd.DataFrame, workers: int | None):
     """The sensitivity study of ``used`` started beside this process (None: too few points
     for the fork to pay, or ``workers`` 1). The fits here use the reference ``"mean"``;
     :func:`_identify` computes the study again here if the model's reference is another."""
-    from .._parallel import cores, start
+    from .._parallel import start
 
-    if len(used) < STUDY_FORK_MIN_POINTS or (cores() if workers is None else workers) < 2:
+    if len(used) < STUDY_FORK_MIN_POINTS or workers == 1:
         return None
-
+    # start forks only where this process has a second core (else the study runs here)
     return start(lambda _: _sensitivity_study(used, "mean"), 1, min_items=1, background=True)
 
 
