@@ -323,3 +323,32 @@ def _count_forks(monkeypatch) -> list[bool]:
 
     monkeypatch.setattr(_parallel, "start", spy)
     return forked
+
+
+def _resident_mb() -> float:
+    with open("/proc/self/statm") as handle:
+        return int(handle.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="needs Linux's /proc")
+def test_release_free_memory_gives_freed_heap_pages_back():
+    """Memory freed by numpy stays resident in the C heap (and would be shared by a fork)
+    until release_free_memory gives it back; nothing alive is touched."""
+    import ctypes
+
+    import numpy as np
+
+    if not hasattr(ctypes.CDLL(None), "malloc_trim"):
+        pytest.skip("the C library has no malloc_trim (not glibc)")
+    _parallel.release_free_memory()
+    kept = np.arange(1000.0)
+    blocks = [np.ones(1024) for _ in range(60_000)]  # 8 kB each: the heap, not mmap
+    blocks = blocks[::2]  # half freed, interleaved with live ones: no trim at the top
+    before = _resident_mb()
+    blocks = blocks[-1:]
+    freed = _resident_mb()
+    _parallel.release_free_memory()
+    after = _resident_mb()
+    assert before - after > 150  # about 490 MB allocated, then half, then all but one freed
+    assert freed - after > 100  # the freed pages were still resident before the call
+    assert kept.sum() == 499500.0 and blocks[0].sum() == 1024.0

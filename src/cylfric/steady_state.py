@@ -832,9 +832,13 @@ class PendingExtraction:
 
     def result(self) -> Extraction:
         """Wait for the files and build the :class:`Extraction` (bad files raise here)."""
-        return _finish(
+        from ._parallel import release_free_memory
+
+        extraction = _finish(
             self.campaign, self._infos, self._first + self._pending.results(), self._skip_bad
         )
+        release_free_memory()  # the workers' packed results, unpacked into the Extraction
+        return extraction
 
 
 def extract_campaign(
