@@ -94,3 +94,50 @@ def test_a_campaign_is_passed_with_its_own_configuration(folder, tmp_path):
         fit_campaign(campaign, tmp_path / "o", glob="*.txt")
     with pytest.raises(ValueError, match="config comes with the Campaign"):
         extract_campaign(campaign, campaign.config)
+
+
+def test_a_run_keeps_only_what_the_manifest_did_not_say(tmp_path):
+    """RunInfo keeps no dictionaries for a run whose values all come from manifest.csv (made
+    when asked for, the same as before); a run named by name_pattern keeps its own; both
+    compare, copy, pickle and refuse changes like the dataclass they were."""
+    import math
+    import pickle
+
+    from cylfric.io.campaign import Campaign, RunInfo
+
+    (tmp_path / "campaign.toml").write_text(
+        '[files]\nname_pattern = "p(?P<pressure_bar>[0-9]+)bar"\n'
+    )
+    (tmp_path / "manifest.csv").write_text(
+        "file,pressure_bar,velocity_mm_s,seal\n"
+        "a.txt,20,5,S1\n"  # everything from the manifest
+        "b_p30bar.txt,,8,\n"  # the pressure from the file name
+        "c.txt,,,\n"  # nothing known
+    )
+    for name in ("a.txt", "b_p30bar.txt", "c.txt"):
+        (tmp_path / name).write_text(f"{name}\n")
+    a, b, c = Campaign.open(tmp_path).runs
+    assert a._source is None and a._nominal is None  # made from pressure, velocity, line
+    assert a.source == {"pressure": "manifest", "velocity": "manifest"}
+    assert a.nominal == {
+        "pressure": {"manifest": (20e5, "manifest.csv line 2")},
+        "velocity": {"manifest": (5e-3, "manifest.csv line 2")},
+    }
+    assert a.extra == {"seal": "S1"} and a.seal == "S1"
+    assert b._nominal is not None  # a value from name_pattern: its own dictionaries
+    assert b.source == {"velocity": "manifest", "pressure": "campaign.toml name_pattern"}
+    assert b.nominal["pressure"] == {"campaign.toml name_pattern": (30e5, "pressure_bar = 30")}
+    assert b.seal is None
+    assert math.isnan(c.pressure) and c.source == {}
+    assert c.nominal == {"pressure": {}, "velocity": {}}
+    for run in (a, b):
+        assert pickle.loads(pickle.dumps(run)) == run  # to a Dask worker and back
+    assert repr(pickle.loads(pickle.dumps(c))) == repr(c)  # NaN != NaN
+    assert repr(a).startswith("RunInfo(path=") and "nominal={'pressure': {'manifest'" in repr(a)
+    moved = a.replace(path=tmp_path / "elsewhere.txt")
+    assert moved.path.name == "elsewhere.txt" and moved.nominal == a.nominal and moved != a
+    assert moved.replace(path=a.path) == a
+    built = RunInfo(a.path, a.pressure, a.velocity, a.extra, a.source, a.nominal, 2, a.manifest)
+    assert built == a and built._nominal is None
+    with pytest.raises(AttributeError, match="immutable"):
+        a.pressure = 1.0

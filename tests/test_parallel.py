@@ -121,37 +121,6 @@ def test_start_runs_the_tasks_while_the_caller_works_and_close_stops_them(tmp_pa
 
 
 @needs_fork
-def test_this_process_stays_frozen_while_forked_workers_share_its_pages():
-    """A full collection writes into every object it visits: while workers share this
-    process's pages, its objects stay frozen (no copy on write of its heap), from the fork
-    until the last pool is shut down; new objects are still collected."""
-    import gc
-    import time
-
-    assert gc.get_freeze_count() == 0
-    first = _parallel.start(lambda i: time.sleep(0.05) or i, 4, workers=2)
-    frozen = gc.get_freeze_count()
-    assert frozen > 0
-    gc.collect()
-    assert gc.get_freeze_count() == frozen  # a collection meanwhile leaves them frozen
-    cycle: list = []
-    cycle.append(cycle)
-    del cycle
-    assert gc.collect() >= 1  # garbage made after the fork is collected as usual
-    # no second pool forks while one lives (its manager thread): one freeze at a time
-    assert _parallel.start(lambda i: os.getpid(), 3, workers=2).results() == [os.getpid()] * 3
-    assert gc.get_freeze_count() == frozen
-    assert first.results() == [0, 1, 2, 3]
-    assert gc.get_freeze_count() == 0  # the pool shut down: thawed
-    dropped = _parallel.start(lambda i: time.sleep(0.05) or i, 40, workers=2)
-    assert gc.get_freeze_count() > 0
-    dropped.close()
-    assert gc.get_freeze_count() == 0  # closed early: thawed too
-    assert _parallel.start(lambda i: i, 3, workers=1).results() == [0, 1, 2]
-    assert gc.get_freeze_count() == 0  # no pool, nothing frozen
-
-
-@needs_fork
 def test_a_background_start_runs_one_worker_in_another_process(monkeypatch):
     """start(background=True) with one worker: a forked process (the caller goes on with its
     own work meanwhile), one process for every task; without it, one worker means here."""

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import os
 import stat
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -703,8 +703,7 @@ def read_chunk(
     """
     results = []
     for index, info in runs:
-        where = replace(
-            info,
+        where = info.replace(
             path=Path(here, info.path),
             manifest=None if info.manifest is None else Path(here, info.manifest),
         )
