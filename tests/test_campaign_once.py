@@ -141,3 +141,10 @@ def test_a_run_keeps_only_what_the_manifest_did_not_say(tmp_path):
     assert built == a and built._nominal is None
     with pytest.raises(AttributeError, match="immutable"):
         a.pressure = 1.0
+    # built by hand: kept as given unless exactly the manifest's own form
+    assert RunInfo(a.path).nominal == {} and RunInfo(a.path).source == {}
+    given = {"velocity": "manifest", "pressure": "manifest"}  # another order
+    assert list(RunInfo(a.path, 2e6, 5e-3, None, given, a.nominal, 2).source) == list(given)
+    exact = {"pressure": {"manifest": (2000000, "manifest.csv line 2")}, "velocity": {}}
+    as_int = RunInfo(a.path, 2e6, math.nan, None, {"pressure": "manifest"}, exact, 2)
+    assert as_int.nominal["pressure"]["manifest"][0].__class__ is int  # not made from 2e6

@@ -45,3 +45,12 @@ def test_this_process_stays_frozen_while_forked_workers_share_its_pages():
     assert gc.get_freeze_count() == 0  # closed early: thawed too
     assert _parallel.start(lambda i: i, 3, workers=1).results() == [0, 1, 2]
     assert gc.get_freeze_count() == 0  # no pool, nothing frozen
+
+
+@needs_fork
+def test_a_pending_dropped_without_close_thaws():
+    pending = _parallel.start(_frozen_in_worker, 4, workers=2)
+    assert gc.get_freeze_count() > 0
+    del pending  # its pool goes with it
+    gc.collect()
+    assert gc.get_freeze_count() == 0

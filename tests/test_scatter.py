@@ -440,3 +440,26 @@ def test_a_scaled_model_scales_its_residual_scatter_at_every_level():
     assert (
         shape["relative_std_percent"] == model.scatter["residual_function"]["relative_std_percent"]
     )
+
+
+def test_strata_groups_are_those_of_the_labels_text():
+    """The points are grouped by their labels' text (as str(v)), the integer columns by value
+    without a string per point: the same groups, numbered as first seen."""
+    import pandas as pd
+
+    from cylfric.identify.scatter import _label_codes, _nested
+
+    big = 2**53
+    points = pd.DataFrame(
+        {
+            "run": pd.array([big, big + 1, None, big + 1, 3], dtype="Int64"),  # NA: "<NA>"
+            "level": np.array([0, 0, 1, 1, 0]),
+            "session": [None, float("nan"), "A", "A", 1],  # "None", "nan", "A", "A", "1"
+        }
+    )
+    assert list(_label_codes(points, "run")) == [0, 1, 2, 1, 3]  # not merged as floats
+    assert list(_label_codes(points, "level")) == [0, 0, 1, 1, 0]
+    assert list(_label_codes(points, "session")) == [0, 1, 2, 2, 3]
+    assert list(_label_codes(points, "missing")) == [0] * 5
+    block = _nested(_label_codes(points, "session"), _label_codes(points, "level"))
+    assert list(block) == [0, 1, 2, 2, 3]

@@ -81,9 +81,14 @@ def release_free_memory() -> None:
     if _malloc_trim is None:
         _malloc_trim = False
         if sys.platform.startswith("linux"):
-            import ctypes
+            try:
+                import ctypes
 
-            _malloc_trim = getattr(ctypes.CDLL(None), "malloc_trim", False)
+                _malloc_trim = getattr(ctypes.CDLL(None), "malloc_trim", False)
+            except (ImportError, OSError):  # a Python without ctypes: no trim, no harm
+                pass
+            if _malloc_trim:
+                _malloc_trim.argtypes, _malloc_trim.restype = [ctypes.c_size_t], ctypes.c_int
     if _malloc_trim:
         _malloc_trim(0)
 
@@ -247,9 +252,14 @@ class Pending:
 
     def _thaw(self) -> None:
         """The pool is shut down: nothing shares this process's pages any more."""
-        if self._frozen:
+        if getattr(self, "_frozen", False):
             self._frozen = False
             gc.unfreeze()
+
+    def __del__(self) -> None:
+        # dropped without close() or results(): its pool goes with it, so thaw here (else
+        # this process's reference cycles among the frozen would wait for the next pool)
+        self._thaw()
 
     def results(self) -> list:
         """The results in order (once; a second call is a RuntimeError)."""

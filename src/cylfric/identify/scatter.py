@@ -313,15 +313,16 @@ def _group_sums(index: np.ndarray, values: np.ndarray, groups: int) -> np.ndarra
 
 def _label_codes(points: pd.DataFrame, column: str) -> np.ndarray:
     """Each point's group (int, numbered as first seen) by the text of its label in
-    ``column`` (None and NaN: labels "None" and "nan"; no column: one group). Integer
-    labels are grouped as they are (the same groups as by their text), others by their
-    text; no label text is kept per point (at 40,000 points those strings took 16 MB)."""
+    ``column`` (None and NaN: labels "None" and "nan"; no column: one group). A numpy
+    integer or boolean column is grouped by its values (the same groups, without a string
+    per point: the run and level columns); any other by each label's text, one column at a
+    time (strings per point and stratum took 16 MB at 40,000 points)."""
     if column not in points:
         return np.zeros(len(points), dtype=np.int64)
-    values = points[column].to_numpy()
-    if values.dtype.kind in "iub":
-        return pd.factorize(values)[0]
-    return pd.factorize(np.array([str(v) for v in values], dtype=object))[0]
+    series = points[column]
+    if isinstance(series.dtype, np.dtype) and series.dtype.kind in "iub":
+        return pd.factorize(series.to_numpy())[0]
+    return pd.factorize(np.array([str(v) for v in series.to_numpy(dtype=object)], dtype=object))[0]
 
 
 def _nested(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:

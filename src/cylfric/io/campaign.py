@@ -308,25 +308,35 @@ def _nan(value: float) -> bool:
 
 
 def _from_manifest(info: RunInfo, source: Mapping, nominal: Mapping) -> bool:
-    """Whether ``source`` and ``nominal`` say only what manifest.csv gave ``info``: its
-    pressure and velocity from the row ``info.manifest_line`` (then made when asked for)."""
-    if set(nominal) - {"pressure", "velocity"}:
+    """Whether ``source`` and ``nominal`` are exactly what :func:`_manifest_nominal` makes
+    from manifest.csv's row ``info.manifest_line`` for ``info`` (the same keys in the same
+    order, ``info``'s own value objects), so that the properties give them back as given."""
+    if type(source) is not dict or type(nominal) is not dict:
+        return False
+    if list(nominal) != ["pressure", "velocity"]:
         return False
     where = f"{MANIFEST_NAME} line {info.manifest_line}"
+    used = []
     for quantity in ("pressure", "velocity"):
-        value = getattr(info, quantity)
-        found = nominal.get(quantity, {})
+        value, found = getattr(info, quantity), nominal[quantity]
+        if type(found) is not dict:
+            return False
         if _nan(value):
-            if found or quantity in source:
+            if found:
                 return False
-        elif (
-            source.get(quantity) != "manifest"
+            continue
+        entry = found.get("manifest")
+        if (
+            info.manifest_line is None
             or len(found) != 1
-            or found.get("manifest") != (value, where)
-            or info.manifest_line is None
+            or type(entry) is not tuple
+            or len(entry) != 2
+            or entry[0] is not value
+            or entry[1] != where
         ):
             return False
-    return set(source) <= {"pressure", "velocity"}
+        used.append(quantity)
+    return list(source.items()) == [(quantity, "manifest") for quantity in used]
 
 
 def _label(value) -> str | None:
