@@ -210,8 +210,9 @@ class RunInfo:
         manifest: Path | None = None,
         session: str | None = None,
     ) -> None:
+        kept = ("path", "pressure", "velocity", "manifest_line", "manifest", "session")
         values = (path, pressure, velocity, manifest_line, manifest, session)
-        for name, value in zip(RunInfo.__slots__, values, strict=False):
+        for name, value in zip(kept, values, strict=True):
             object.__setattr__(self, name, value)
         source, nominal = source or {}, nominal or {}
         derived = _from_manifest(self, source, nominal)
