@@ -174,3 +174,92 @@ def test_non_finite_numbers_beside_strings_and_nulls_are_found():
         validate(sheet)
     sheet["fit"]["statistics"] = {"aic": [None, "nan", "inf", 1.0]}  # strings, not numbers
     validate(sheet)
+
+
+def _clean_by_lists(value):
+    """clean() as it was before its array shortcut: every array through its lists."""
+    if isinstance(value, dict):
+        return {str(k): _clean_by_lists(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return _clean_by_lists(value.tolist())
+    if isinstance(value, list | tuple):
+        return [_clean_by_lists(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _typed(value):
+    """``value`` with the type of every leaf beside it (1 == 1.0 == True in Python)."""
+    if isinstance(value, dict):
+        return {k: _typed(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_typed(v) for v in value]
+    return (type(value).__name__, value)
+
+
+@pytest.mark.parametrize(
+    "array",
+    [
+        np.array([[1.5, -2.0], [3.25, 1e-300]]),
+        np.array([[1.0, np.nan], [np.inf, -np.inf]]),
+        np.array([1, 2, 3], dtype=np.int32),
+        np.array([[True, False]]),
+        np.array([7], dtype=np.uint64),
+        np.array(2.5),
+        np.array(np.nan),
+        np.zeros((0, 3)),
+        np.array([1.5, 2.5], dtype=np.float32),
+        np.array([1 + 2j]),
+        np.array(["a", "b"]),
+        np.array([1.0, None], dtype=object),
+    ],
+    ids=lambda a: f"{a.dtype}{a.shape}",
+)
+def test_clean_gives_an_array_the_same_lists_and_types_as_through_its_lists(array):
+    from cylfric.model.serialize import clean
+
+    expected = _clean_by_lists({"matrix": array})
+    got = clean({"matrix": array})
+    assert _typed(got) == _typed(expected)
+    assert got["matrix"] is not None or array.ndim == 0
+
+
+def test_a_datasheet_has_the_influence_matrix_as_lists_of_floats_and_writes_as_before(tmp_path):
+    """to_datasheet hands the model's arrays to clean() whole: the same JSON as lists."""
+    import json
+
+    from cylfric.datasheet import write_datasheet
+
+    coefficients = {"F_c": 70.0, "F_s": 110.0, "sigma_2": 300.0, "v_r": 0.01, "alpha": 1.0}
+    names = ["F_c", "F_s"]
+    influence = np.random.default_rng(27).normal(0.0, 1e-3, (N_RUNS, 2))
+    model = FrictionModel(
+        coefficients,
+        pressure_law="constant",
+        covariance=(names, influence.T @ influence),
+        influence=(names, influence),
+        statistics={"dof": 30},
+    )
+    sheet = model.to_datasheet()
+    rows = sheet["fit"]["influence"]["matrix"]
+    assert type(rows) is list and all(type(r) is list for r in rows)
+    assert all(type(x) is float for r in rows for x in r)
+    assert rows == influence.tolist()
+    assert sheet["fit"]["covariance"]["matrix"] == (influence.T @ influence).tolist()
+    path = write_datasheet(tmp_path / "d.json", sheet)
+    assert json.loads(path.read_text())["fit"]["influence"]["matrix"] == influence.tolist()
+    again = FrictionModel.from_datasheet(path)
+    np.testing.assert_array_equal(again.influence[1], influence)
+
+
+def test_compile_schema_compiles_once_per_process():
+    from cylfric.model.serialize import compile_schema
+
+    compile_schema()
+    before = _compiled_schema.cache_info()
+    compile_schema()
+    after = _compiled_schema.cache_info()
+    assert after.misses == before.misses and after.hits == before.hits + 1

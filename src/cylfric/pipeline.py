@@ -457,10 +457,14 @@ def _fit(
     )
     try:
         # while a pool reads the files, the libraries of the next steps load here (pandas,
-        # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py)
+        # scipy.optimize, jsonschema: about 0.7 s; benchmarks/bench_parallel.py), and the
+        # datasheet's validator is compiled (0.1 s, 15 MB for a moment; not in the tail)
         from . import datasheet  # noqa: F401 (loaded here while the pool reads)
         from .identify import UnphysicalFrictionError, identify
+        from .model.serialize import compile_schema
         from .quality import assess
+
+        compile_schema()
 
         extraction = reading.result()
     finally:
