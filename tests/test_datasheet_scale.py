@@ -263,3 +263,27 @@ def test_compile_schema_compiles_once_per_process():
     compile_schema()
     after = _compiled_schema.cache_info()
     assert after.misses == before.misses and after.hits == before.hits + 1
+
+
+def test_a_schema_fastjsonschema_cannot_compile_leaves_validate_to_jsonschema(monkeypatch):
+    """compile_schema (called by cylfric fit while its pool reads) does not fail a fit where
+    validate() would fall back to jsonschema."""
+    import fastjsonschema
+
+    from cylfric.model.serialize import compile_schema
+
+    def refuse(*args, **kwargs):
+        raise fastjsonschema.JsonSchemaDefinitionException("unsupported keyword (simulated)")
+
+    sheet = _large_sheet()
+    _compiled_schema.cache_clear()
+    monkeypatch.setattr(fastjsonschema, "compile", refuse)
+    try:
+        compile_schema()  # no error
+        assert validate(sheet) is sheet  # jsonschema decided
+        sheet["fit"]["influence"]["matrix"][3][1] = "x"
+        with pytest.raises(DatasheetError, match="influence/matrix/3/1"):
+            validate(sheet)
+    finally:
+        monkeypatch.undo()
+        _compiled_schema.cache_clear()  # the next check compiles the real one

@@ -347,9 +347,15 @@ def compile_schema() -> None:
     Once per process: about 0.1 s and some 15 MB of memory while fastjsonschema builds and
     compiles the validator's code (0.6 MB kept). ``cylfric fit`` does it while its pool
     reads the files, so neither falls in the fit's tail (where the second core is mostly
-    idle and its forked helpers share this process's pages).
+    idle and its forked helpers share this process's pages). A fastjsonschema that cannot
+    compile the schema is no error here: :func:`validate` then lets jsonschema decide.
     """
-    _compiled_schema()
+    import fastjsonschema
+
+    try:
+        _compiled_schema()
+    except fastjsonschema.JsonSchemaException:  # JsonSchemaDefinitionException: see validate
+        pass
 
 
 def _schema_problem(sheet: Any) -> str | None:
