@@ -354,7 +354,7 @@ def compile_schema() -> None:
 
     try:
         _compiled_schema()
-    except fastjsonschema.JsonSchemaException:  # JsonSchemaDefinitionException: see validate
+    except (fastjsonschema.JsonSchemaException, TypeError, ValueError):  # as _schema_problem
         pass
 
 
