@@ -232,7 +232,7 @@ class RunInfo:
         be modified."""
         if self._source is not None:
             return self._source
-        return {q: "manifest" for q in ("pressure", "velocity") if not _nan(getattr(self, q))}
+        return _manifest_sources(self.pressure, self.velocity, self.manifest_line)[0]
 
     @property
     def nominal(self) -> dict[str, dict[str, tuple[float, str]]]:
@@ -240,11 +240,7 @@ class RunInfo:
         [SI], where)}}``; not to be modified."""
         if self._nominal is not None:
             return self._nominal
-        where = f"{MANIFEST_NAME} line {self.manifest_line}"
-        return {
-            q: {} if _nan(getattr(self, q)) else {"manifest": (getattr(self, q), where)}
-            for q in ("pressure", "velocity")
-        }
+        return _manifest_sources(self.pressure, self.velocity, self.manifest_line)[1]
 
     @property
     def seal(self) -> str | None:
@@ -1200,20 +1196,24 @@ def _manifest_nominal(name: str, manifest: _Manifest):
     ``source`` maps a quantity to where its value comes from; ``nominal`` maps each
     quantity to {origin: (value [SI], where)}.
     """
-    pressure = velocity = math.nan
-    extra: dict = {}
+    if name not in manifest:
+        return math.nan, math.nan, {}, {}, {"pressure": {}, "velocity": {}}
+    pressure, velocity, extra = manifest[name]
+    return (pressure, velocity, extra, *_manifest_sources(pressure, velocity, manifest.lines[name]))
+
+
+def _manifest_sources(pressure: float, velocity: float, line: int | None) -> tuple[dict, dict]:
+    """(source, nominal) of a run whose pressure [Pa] and velocity [m/s] are manifest.csv's
+    row ``line`` (NaN: not given there), as new dictionaries; :class:`RunInfo` makes them
+    again from its values when asked (:func:`_from_manifest`)."""
     source: dict[str, str] = {}
     nominal: dict[str, dict[str, tuple[float, str]]] = {"pressure": {}, "velocity": {}}
-    if name in manifest:
-        pressure, velocity, extra = manifest[name]
-        source = {"pressure": "manifest", "velocity": "manifest"}
-        where = f"{MANIFEST_NAME} line {manifest.lines[name]}"
-        for quantity, value in (("pressure", pressure), ("velocity", velocity)):
-            if math.isnan(value):
-                del source[quantity]
-            else:
-                nominal[quantity]["manifest"] = (value, where)
-    return pressure, velocity, extra, source, nominal
+    where = f"{MANIFEST_NAME} line {line}"
+    for quantity, value in (("pressure", pressure), ("velocity", velocity)):
+        if not _nan(value):
+            source[quantity] = "manifest"
+            nominal[quantity]["manifest"] = (value, where)
+    return source, nominal
 
 
 _PATTERN_GROUPS = (("pressure", "pressure_bar", 1e5), ("velocity", "velocity_mm_s", 1e-3))
