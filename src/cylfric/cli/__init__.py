@@ -78,8 +78,8 @@ def _arrow_system_pool():
     pyarrow's default pool (mimalloc) keeps memory it has freed: a ``cylfric fit
     --no-report`` of 20,000 runs peaked at 393 MB of the process tree's PSS with it and
     373-377 MB without (a 30 ms sampler; 4-5 MB less at 1,000 runs), in the same time (the
-    README, section Performance). Only the command line does this: a notebook's pool is its own. Set
-    before pyarrow's first allocation, which is where the pool is chosen."""
+    README, section Performance). Only the command line does this: a notebook's pool is its
+    own. Set before pyarrow's first allocation, which is where the pool is chosen."""
     import os
 
     os.environ.setdefault("ARROW_DEFAULT_MEMORY_POOL", "system")
