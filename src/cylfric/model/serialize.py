@@ -341,6 +341,14 @@ def _compiled_schema() -> Callable[[Any], Any]:
     return fastjsonschema.compile(SCHEMA)
 
 
+def _compiled_failures() -> tuple[type[Exception], ...]:
+    """What the compiled schema may raise where jsonschema is left to decide: a violation, or
+    a schema or value fastjsonschema cannot handle."""
+    import fastjsonschema
+
+    return (fastjsonschema.JsonSchemaException, TypeError, ValueError)
+
+
 def compile_schema() -> None:
     """Compile the datasheet schema now rather than at the first :func:`validate`.
 
@@ -350,11 +358,9 @@ def compile_schema() -> None:
     idle and its forked helpers share this process's pages). A fastjsonschema that cannot
     compile the schema is no error here: :func:`validate` then lets jsonschema decide.
     """
-    import fastjsonschema
-
     try:
         _compiled_schema()
-    except (fastjsonschema.JsonSchemaException, TypeError, ValueError):  # as _schema_problem
+    except _compiled_failures():
         pass
 
 
@@ -368,11 +374,9 @@ def _schema_problem(sheet: Any) -> str | None:
     error by path; inside a ``oneOf``, of the alternative that came closest:
     :func:`jsonschema.exceptions.best_match`).
     """
-    import fastjsonschema
-
     try:
         _compiled_schema()(sheet)
-    except (fastjsonschema.JsonSchemaException, TypeError, ValueError):
+    except _compiled_failures():
         pass  # jsonschema decides and names the problem
     else:
         return None
