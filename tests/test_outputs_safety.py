@@ -10,6 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 import cylfric.report.figures
+from cylfric import _outfolder
 from cylfric.cli import app
 from cylfric.pipeline import MARKER, fit_campaign
 from cylfric.simulate.bench import BenchSettings, generate_campaign
@@ -151,7 +152,7 @@ def test_files_added_to_an_earlier_output_folder_are_never_deleted(campaign, tmp
 
 
 def test_more_than_four_foreign_files_are_counted(tmp_path):
-    from cylfric.pipeline import _check_reusable
+    from cylfric._outfolder import check_reusable as _check_reusable
 
     out = tmp_path / "out"
     out.mkdir()
@@ -234,7 +235,6 @@ def test_fix_accepts_a_comma_separated_list_and_glob_selects_runs(campaign, tmp_
 
 
 def test_leftovers_of_a_killed_fit_are_removed_and_a_failed_swap_restores(campaign, tmp_path):
-    import cylfric.pipeline as pipeline
 
     out = tmp_path / "out"
     (tmp_path / ".out.staging-killed").mkdir()
@@ -253,5 +253,36 @@ def test_leftovers_of_a_killed_fit_are_removed_and_a_failed_swap_restores(campai
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(Path, "rename", failing)
         with pytest.raises(OSError, match="disk full"):
-            pipeline._swap_in(staging, out)
+            _outfolder.swap_in(staging, out)
     assert (out / "datasheet.json").read_bytes() == before
+
+
+@pytest.mark.parametrize("kind", ["old", "staging"])
+def test_a_folder_named_like_a_leftover_but_not_made_by_cylfric_is_kept(campaign, tmp_path, kind):
+    """Issue 43 (data loss; main deleted it with exit 0): `.OUT.old-*` / `.OUT.staging-*`
+    beside OUT is removed only when cylfric's marker says it made it."""
+    out = tmp_path / "res"
+    theirs = tmp_path / f".res.{kind}-2024"
+    theirs.mkdir()
+    (theirs / "thesis.docx").write_text("four years of work\n")
+    result = runner.invoke(app, ["fit", str(campaign), "--out", str(out), "--no-report"])
+    assert result.exit_code == 2, result.output
+    assert ".res." in result.output and "cylfric did not make it" in result.output
+    assert (theirs / "thesis.docx").read_text() == "four years of work\n"
+    assert not out.exists()
+
+
+def test_leftovers_cylfric_made_are_removed(campaign, tmp_path):
+    out = tmp_path / "res"
+    fit_campaign(campaign, out, report=False)
+    killed = tmp_path / ".res.staging-killed"  # a writer killed before its output marker
+    killed.mkdir()
+    (killed / _outfolder.STAGING_MARKER).write_text("12345\n")
+    (killed / "points.csv").write_text("half written")
+    old = tmp_path / ".res.old-777"  # a previous output moved aside, then the writer died
+    old.mkdir()
+    (old / "datasheet.json").write_text("{}")
+    (old / MARKER).write_text("# header\ndatasheet.json\n")
+    fit_campaign(campaign, out, report=False)
+    assert not killed.exists() and not old.exists()
+    assert (out / MARKER).is_file() and not (out / _outfolder.STAGING_MARKER).exists()

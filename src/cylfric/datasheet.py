@@ -15,9 +15,9 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
-from . import __version__
 from ._atomic import atomic_write_chunks
 from ._runtable import run_column
+from ._version import __version__
 from .io.campaign import file_sha256
 from .model import SCHEMA, SCHEMA_ID, DatasheetError, FrictionModel, read_datasheet, validate
 from .model.serialize import clean

@@ -1,43 +1,58 @@
-"""The main job as one Python function: a campaign folder -> datasheet, tables, figures, report.
+"""The main job: a campaign folder -> one fit in memory -> datasheet, tables, figures, report.
 
-``fit_campaign(folder, out)`` is what ``cylfric fit`` runs; notebooks can call it too.
+``fit(folder)`` fits a campaign in memory and returns a :class:`FitResult` (the datasheet's
+model, its points, the gate's exclusions, the dynamic identification, the notes);
+``FitResult.write(out)`` writes the output folder. ``cylfric fit``, ``fit --seal``,
+``fit-many`` and the catalogue all go through :func:`fit`, so the Python route and the
+command line give the same datasheet. :func:`fit_campaign` is ``fit(...).write(out)``.
+The output folder's transaction (lock, staging, marker, swap) is :mod:`cylfric._outfolder`.
 """
 
 from __future__ import annotations
 
-import contextlib
 import io
 import os
-import shutil
-import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from . import _outfolder
 from ._atomic import atomic_write_chunks
-from ._paths import failed, make_folder, refuse_link
+from ._outfolder import MARKER
+from ._paths import make_folder
 from .io.campaign import Campaign, read_run
-from .io.writers import atomic_write_text
 from .options import FitOptions
 from .steady_state import start_extraction
 
 if TYPE_CHECKING:  # pandas and the gate are imported where they are first used
-    from collections.abc import Callable
+    from collections.abc import Callable, Sequence
 
     import pandas as pd
 
     from .identify.dynamic import DynamicIdentification
     from .identify.steady import Identification
     from .model import FrictionModel
+    from .quality import QualityReport
     from .steady_state import Extraction
+    from .viscosity import ViscosityCorrection
 
-__all__ = ["fit_campaign", "fit_seals", "FitOptions", "FitOutputs", "SealOutputs", "SealFitError"]
+__all__ = [
+    "fit",
+    "fit_campaign",
+    "fit_seals",
+    "FitOptions",
+    "FitResult",
+    "FitOutputs",
+    "SealOutputs",
+    "SealFitError",
+    "MARKER",
+]
 
 
 @dataclass
 class FitOutputs:
-    """What :func:`fit_campaign` wrote and found.
+    """What :meth:`FitResult.write` (and :func:`fit_campaign`) wrote and found.
 
     ``excluded`` lists the runs the data-quality gate left out (:mod:`cylfric.quality`).
     ``exports`` maps each export target to its :class:`~cylfric.export.ExportResult`.
@@ -46,6 +61,7 @@ class FitOutputs:
     ``files`` maps each output to its path; ``timings`` holds the wall time of each stage
     [s]: ``extract``, ``identify`` (with the sensitivity study), ``datasheet`` (with the
     CSV tables) and, with the report, ``report`` (figures and report.html).
+    ``result`` is the in-memory :class:`FitResult` that was written.
     """
 
     out: Path
@@ -57,6 +73,216 @@ class FitOutputs:
     excluded: pd.DataFrame | None = None
     exports: dict = field(default_factory=dict)
     dynamic: DynamicIdentification | None = None
+    result: FitResult | None = None
+
+
+@dataclass
+class FitResult:
+    """One campaign fitted in memory (:func:`fit`): what every path of cylfric writes.
+
+    Attributes
+    ----------
+    model : FrictionModel
+        The datasheet's model: the campaign's pressure reference
+        (``model.pressure_reference_basis``), the sigma_0/sigma_1 of presliding tests when
+        the campaign has them, and the record (``model.record``) the datasheet holds.
+    datasheet : dict
+        ``model.to_datasheet()`` with the fit's records: what ``datasheet.json`` holds.
+    identification : Identification
+        The steady-state identification (laws compared, per-pressure table, sensitivity).
+    extraction : Extraction
+        The points of every run as extracted (before the gate), the offset, skipped files.
+    quality : QualityReport
+        The data-quality gate: ``quality.points`` (the points fitted: excluded runs flagged)
+        and ``quality.excluded`` (one row per excluded run, with its check and reason).
+    correction : ViscosityCorrection
+        The viscosity correction to the ``[oil]`` reference temperature (or why none).
+    dynamic : DynamicIdentification or None
+        sigma_0/sigma_1 from presliding tests, validated on breakaway ramps.
+    campaign : Campaign
+        The campaign read (folder, campaign.toml, manifest.csv).
+    options : FitOptions
+        How it was fitted (and, by default, how :meth:`write` writes it).
+    timings : dict
+        Wall time [s] of ``extract`` and ``identify``.
+    """
+
+    model: FrictionModel
+    datasheet: dict
+    identification: Identification
+    extraction: Extraction
+    quality: QualityReport
+    correction: ViscosityCorrection
+    dynamic: DynamicIdentification | None
+    campaign: Campaign
+    options: FitOptions
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def points(self) -> pd.DataFrame:
+        """The points the model was fitted to (excluded runs flagged ``"excluded: ..."``)."""
+        return self.quality.points
+
+    @property
+    def excluded(self) -> pd.DataFrame:
+        """The runs the data-quality gate left out: ``file``, ``run``, ``check``, ``reason``."""
+        return self.quality.excluded
+
+    @property
+    def notes(self) -> list[str]:
+        """What the fit assumed, simplified or left out, one line each."""
+        return list(self.identification.notes)
+
+    def __repr__(self) -> str:
+        folder = self.campaign.folder
+        kept = int(self.points["flag"].eq("ok").sum()) if "flag" in self.points else 0
+        return (
+            f"<FitResult of {folder}: {self.model.friction_law} law, {kept} points, "
+            f"{len(self.excluded)} run(s) excluded, {len(self.notes)} note(s)>"
+        )
+
+    def write(
+        self,
+        out: str | os.PathLike[str],
+        *,
+        report: bool | None = None,
+        export: Sequence[str] | str | None = None,
+        step: Callable[[str, int], Callable[[str], object]] | None = None,
+    ) -> FitOutputs:
+        """Write the output folder ``out`` (what ``cylfric fit --out OUT`` writes).
+
+        ``datasheet.json``, ``points.csv``, ``per_pressure.csv``, ``sensitivity.csv``,
+        ``law_comparison.csv``, ``dynamic.csv``/``breakaway.csv`` (with presliding tests),
+        ``skipped.csv``/``excluded.csv`` (when files were skipped or left out), the exports
+        (``export/<target>/``) and, with ``report``, the figures and ``report.html``.
+        ``report`` and ``export`` default to the fit's options.
+
+        The folder is written as one transaction (:mod:`cylfric._outfolder`): into a staging
+        folder beside ``out``, swapped in whole when every output succeeded; an existing
+        ``out`` is replaced only when it is a cylfric output folder holding nothing else
+        (ValueError naming what it holds); an ``out`` inside the campaign folder or that is
+        a symbolic link is refused. A failed export writes nothing (:class:`ExportFailed`).
+        """
+        out = Path(out)
+        _outfolder.check_out(Path(self.campaign.folder), out)
+        return self._write_checked(out, report=report, export=export, step=step)
+
+    def _write_checked(self, out: Path, *, locked=False, **how) -> FitOutputs:
+        folder = Path(self.campaign.folder)
+        try:
+            staging, outputs = _outfolder.staged(
+                out, lambda staging: self._write_into(staging, **how), locked=locked
+            )
+        except ExportFailed as failure:  # name the campaign and the (untouched) output folder
+            kept = "keeps its earlier contents" if out.exists() else "was not created"
+            raise ExportFailed(
+                f"{folder}: {failure}. Nothing was written (--out {out} {kept}); fit without "
+                f"--export {failure.target} to get the datasheet and the other outputs",
+                failure.target,
+            ) from failure.__cause__
+        return _moved(staging, outputs, out, out)
+
+    def _write_into(
+        self,
+        out: Path,
+        *,
+        report: bool | None = None,
+        export: Sequence[str] | str | None = None,
+        step: Callable[[str, int], Callable[[str], object]] | None = None,
+    ) -> FitOutputs:
+        """The outputs in the folder ``out`` as it is (the staging folder); no transaction."""
+        options = self.options
+        if report is not None or export is not None:
+            options = replace(
+                options,
+                report=options.report if report is None else report,
+                export=options.export if export is None else export,  # type: ignore[arg-type]  # __post_init__ makes the tuple
+            )
+        timings = dict(self.timings)
+        t0 = time.perf_counter()
+        # points.csv (pandas writes each value by itself: 0.2 s at 10,000 points, 0.4 s at
+        # 40,000) is written by a forked process while the datasheet is written here
+        points_csv = _start_csv(out / "points.csv", self.extraction.points, options.workers)
+        try:
+            files = self._write_tables(out, points_csv)
+        finally:
+            points_csv.close()
+        timings["datasheet"] = time.perf_counter() - t0
+        exports = {}
+        if options.export:
+            from .export import export as export_to
+
+            t0 = time.perf_counter()
+            for target in options.export:
+                try:
+                    exports[target] = export_to(self.model, target, out / "export" / target)
+                except (ValueError, RuntimeError, OSError) as exc:  # a compiler's: 1st line
+                    lines = str(exc).strip().splitlines() or [type(exc).__name__]
+                    first = lines[0].rstrip(":")
+                    raise ExportFailed(f"--export {target} failed: {first}", target) from exc
+            timings["export"] = time.perf_counter() - t0
+        if options.report:
+            files.update(self._write_report(out, exports, options, step))
+            timings["report"] = time.perf_counter() - t0
+        return FitOutputs(
+            out,
+            self.datasheet,
+            self.identification,
+            self.extraction,
+            files,
+            timings,
+            self.excluded,
+            exports,
+            self.dynamic,
+            self,
+        )
+
+    def _write_tables(self, out: Path, points_csv) -> dict[str, Path]:
+        """The datasheet and the tables in ``out``; points.csv from ``points_csv``."""
+        import pandas as pd
+
+        from .datasheet import write_datasheet
+
+        ident, extraction, dynamic = self.identification, self.extraction, self.dynamic
+        files = {"datasheet": write_datasheet(out / "datasheet.json", self.datasheet)}
+        if dynamic is not None:
+            files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
+            files["breakaway"] = _csv(out / "breakaway.csv", dynamic.breakaway)
+        files["points"] = points_csv.results()[0]
+        files["per_pressure"] = _csv(out / "per_pressure.csv", ident.per_pressure)
+        files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
+        if ident.sensitivity is not None:
+            files["sensitivity"] = _csv(out / "sensitivity.csv", ident.sensitivity)
+        if extraction.skipped:
+            files["skipped"] = _csv(out / "skipped.csv", pd.DataFrame(extraction.skipped))
+        if not self.excluded.empty:
+            files["excluded"] = _csv(out / "excluded.csv", self.excluded)
+        if ident.directions:
+            frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
+            files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
+        return files
+
+    def _write_report(self, out: Path, exports: dict, options: FitOptions, step) -> dict:
+        from .report import write_report_folder
+
+        summaries = [_export_summary(out, result) for result in exports.values()]
+        advance = None
+        if step is not None:
+            from .report import all_figures
+
+            shown = len(all_figures(self.identification, self.extraction.offset))
+            advance = step("drawing the figures", shown + (self.dynamic is not None))
+        return write_report_folder(
+            out,
+            self.datasheet,
+            self.identification,
+            self.extraction,
+            self.excluded,
+            exports=summaries,
+            dynamic=self.dynamic,
+            workers=options.workers,
+            progress=advance,
+        )
 
 
 def _csv(path, frame: pd.DataFrame, rows: int = 2048):
@@ -74,6 +300,88 @@ def _csv(path, frame: pd.DataFrame, rows: int = 2048):
     return atomic_write_chunks(path, chunks())
 
 
+def fit(
+    folder: Campaign | str | os.PathLike[str],
+    options: FitOptions | None = None,
+    *,
+    seal: str | None = None,
+    progress: Callable[[str], object] | None = None,
+    after_extraction: Callable[[], object] | None = None,
+    step: Callable[[str, int], Callable[[str], object]] | None = None,
+    **keywords: Any,
+) -> FitResult:
+    """Fit a campaign folder in memory: what ``cylfric fit`` fits, nothing written.
+
+    The runs are read (campaign.toml and manifest.csv once), the steady windows extracted,
+    the data-quality gate applied, the speeds corrected to the ``[oil]`` reference
+    temperature (when campaign.toml gives it), the model identified in the campaign's
+    pressure reference, sigma_0/sigma_1 identified from presliding tests (when the campaign
+    has them) and the datasheet built. ``fit(folder).write(out)`` writes what
+    ``cylfric fit folder --out out`` writes, the same datasheet.
+
+    One model per seal: a campaign whose runs carry several seal labels (a ``seal`` group
+    of ``name_pattern`` or a manifest.csv column ``seal``) is never pooled; it is refused
+    (ValueError naming the seals) unless ``seal`` picks one, whose runs are then fitted as a
+    campaign of their own (the datasheet named after the campaign and the seal).
+
+    Parameters
+    ----------
+    folder : path-like or Campaign
+        Campaign folder of raw bench files (never modified), or the
+        :class:`~cylfric.io.campaign.Campaign` already opened from it (``options.glob``,
+        when set, must be its glob).
+    options : FitOptions, optional
+        How to fit (:class:`~cylfric.options.FitOptions`: fixed parameters, pressure law,
+        per direction, skip bad files, glob, strict, viscosity correction, workers; the
+        report and export targets are what :meth:`FitResult.write` writes by default);
+        default ``FitOptions(**keywords)``.
+    seal : str, optional
+        Fit only the runs of this seal (ValueError listing the seals for a name no run
+        carries).
+    progress : callable, optional
+        Called with each file name as it is read.
+    after_extraction : callable, optional
+        Called once every file is read (e.g. to stop a progress display).
+    step : callable, optional
+        ``step(description, total)`` as a later step that can take seconds starts (the
+        sigma_0/sigma_1 identification); it returns the callable the step then calls with
+        each item's name as it is done, ``total`` times (a progress display).
+    **keywords
+        The fields of :class:`~cylfric.options.FitOptions` (``fixed=``,
+        ``pressure_law=``, ...) when no ``options`` is given; both at once is a ValueError,
+        and so is an unknown keyword.
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ValueError
+        Bad input (named: the file, the line, what was expected), a campaign the gate
+        refuses (:class:`cylfric.quality.QualityError`), an unphysical friction level.
+    """
+    options = FitOptions.from_keywords(options, **keywords)
+    campaign, options = _open(folder, options, seal)
+    return _fit(campaign, options, progress, after_extraction, step)
+
+
+def _open(folder, options: FitOptions, seal: str | None) -> tuple[Campaign, FitOptions]:
+    """The campaign to fit (one seal's runs with ``seal``) and the options naming it."""
+    source, path = _source(folder, options)
+    campaign = (
+        source
+        if isinstance(source, Campaign)
+        else Campaign.open(path, options.glob, config=options.config)
+    )
+    if seal is not None:
+        campaign = campaign.for_seal(seal)
+        options = replace(options, name=_seal_name(options, path, seal))
+    elif len(campaign.seals) > 1:
+        raise ValueError(_several_seals(campaign))
+    return campaign, options
+
+
 def fit_campaign(
     folder: Campaign | str | os.PathLike[str],
     out: str | os.PathLike[str],
@@ -85,77 +393,23 @@ def fit_campaign(
     step: Callable[[str, int], Callable[[str], object]] | None = None,
     **keywords: Any,
 ) -> FitOutputs:
-    """Read a campaign, extract the points, identify the model, write the outputs.
+    """``fit(folder, options, seal=...).write(out)``: read, fit and write one campaign.
 
-    One model per seal: a campaign whose runs carry several seal labels (a ``seal`` group
-    of ``name_pattern`` or a manifest.csv column ``seal``) is never pooled; it is refused
-    (ValueError naming the seals) unless ``seal`` picks one, whose runs are then fitted
-    into ``out`` as a campaign of their own. :func:`fit_seals` fits every seal.
-
-    Every output is written into a staging folder beside ``out`` and swapped in only when
-    all succeeded: an earlier ``out`` is replaced whole (no stale files of another campaign)
-    or, on failure, left as it was. An existing ``out`` is re-used only when it is a cylfric
-    output folder whose marker (:data:`MARKER`) lists everything in it: a folder without
-    the marker, or holding any file or folder cylfric did not write, is refused
-    (ValueError naming those files), so nothing of the user's is ever deleted. A lock file
-    beside ``out`` refuses a second concurrent fit into it; an ``out`` inside the campaign
-    folder is refused (it would be read back as runs), and so is an ``out`` that is a
-    symbolic link (:func:`cylfric._paths.refuse_link`: the message names its target, which
-    can be passed instead). An OSError (full disk, read-only folder) names the file or
-    folder and the action.
-
-    Parameters
-    ----------
-    folder : path-like or Campaign
-        Campaign folder of raw bench files (never modified), or the
-        :class:`~cylfric.io.campaign.Campaign` already opened from it (its campaign.toml
-        and manifest.csv are not read again; ``options.glob``, when set, must be its glob).
-    out : path-like
-        Output folder: ``datasheet.json``, ``points.csv``, ``per_pressure.csv``,
-        ``sensitivity.csv``, ``law_comparison.csv``, ``dynamic.csv`` and ``breakaway.csv``
-        (with presliding/breakaway tests), ``skipped.csv`` (when files were
-        skipped), ``excluded.csv`` (when the data-quality gate left runs out), and with
-        ``report`` the figures (PNG, SVG) and ``report.html``.
-    options : FitOptions, optional
-        How to fit (:class:`~cylfric.options.FitOptions`: fixed parameters, pressure law,
-        per direction, skip bad files, report, name, glob, strict, export targets, workers,
-        viscosity correction); default ``FitOptions(**keywords)``.
-    seal : str, optional
-        Fit only the runs of this seal (ValueError listing the seals for a name no run
-        carries); the datasheet's name is the campaign's followed by the seal's.
-    progress : callable, optional
-        Called with each file name as it is read.
-    after_extraction : callable, optional
-        Called once every file is read (e.g. to stop a progress display).
-    step : callable, optional
-        ``step(description, total)`` as each later step that can take seconds starts (the
-        sigma_0/sigma_1 identification, the report); it returns the callable the step then
-        calls with each item's name as it is done, ``total`` times (a progress display).
-    **keywords
-        The fields of :class:`~cylfric.options.FitOptions` (``fixed=``,
-        ``pressure_law=``, ``report=``, ...) when no ``options`` is given; both at once is
-        a ValueError, and so is an unknown keyword.
+    The output folder is checked before anything is read (an ``out`` inside the campaign,
+    a symbolic link, a folder holding files cylfric did not write: ValueError), and its
+    lock is held from the start, so a second fit into the same ``out`` is refused at once.
+    Parameters are those of :func:`fit` and :meth:`FitResult.write`; the report and the
+    export targets are ``options.report`` and ``options.export``.
     """
     options = FitOptions.from_keywords(options, **keywords)
-    source, folder = _source(folder, options)
+    _, path = _source(folder, options)
     out = Path(out)
-    _check_out(folder, out)
-    campaign = (
-        source
-        if isinstance(source, Campaign)
-        else Campaign.open(folder, options.glob, config=options.config)
-    )
-    if seal is not None:
-        campaign = campaign.for_seal(seal)
-        options = replace(options, name=_seal_name(options, folder, seal))
-    elif len(campaign.seals) > 1:
-        raise ValueError(_several_seals(campaign))
-    staged = _staged(
-        folder,
-        out,
-        lambda staging: _fit(campaign, staging, options, progress, after_extraction, step),
-    )
-    return _moved(staged, out, out)
+    _outfolder.check_out(path, out)
+    campaign, options = _open(folder, options, seal)
+    make_folder(out.parent, f"--out {out}: its folder")
+    with _outfolder.lock(out):
+        result = _fit(campaign, options, progress, after_extraction, step)
+        return result._write_checked(out, locked=True, step=step)
 
 
 def _source(folder, options: FitOptions) -> tuple[Campaign | Path, Path]:
@@ -170,44 +424,9 @@ def _source(folder, options: FitOptions) -> tuple[Campaign | Path, Path]:
     return Path(folder), Path(folder)
 
 
-def _staged(folder: Path, out: Path, write: Callable[[Path], Any]):
-    """``write(staging)`` into a staging folder beside ``out``, swapped in whole under the
-    lock (see :func:`fit_campaign`); returns what ``write`` returned, its paths still in the
-    staging folder (:func:`_moved` maps them)."""
-    make_folder(out.parent, f"--out {out}: its folder")
-    with _lock(out):
-        _remove_leftovers(out)
-        try:
-            staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
-        except OSError as exc:
-            action = f"writing --out {out}: creating a staging folder in"
-            raise failed(exc, action, out.parent) from exc
-        mask = os.umask(0)
-        os.umask(mask)
-        staging.chmod(0o777 & ~mask)  # mkdtemp makes it private; the output is not
-        try:
-            result = write(staging)
-            _write_marker(staging)
-            _check_reusable(out)  # again: a file may have been added during the fit
-            _swap_in(staging, out)
-        except ExportFailed as failure:  # name the campaign and the (untouched) output folder
-            shutil.rmtree(staging, ignore_errors=True)
-            kept = "keeps its earlier contents" if out.exists() else "was not created"
-            raise ExportFailed(
-                f"{folder}: {failure}. Nothing was written (--out {out} {kept}); fit without "
-                f"--export {failure.target} to get the datasheet and the other outputs",
-                failure.target,
-            ) from failure.__cause__
-        except BaseException:
-            shutil.rmtree(staging, ignore_errors=True)
-            raise
-    return staging, result
-
-
-def _moved(staged, out: Path, result_out: Path) -> FitOutputs:
-    """The :class:`FitOutputs` of ``staged`` = (staging folder, result) with its paths
-    moved from the staging folder to ``out`` (and ``result.out`` = ``result_out``)."""
-    staging, result = staged
+def _moved(staging: Path, result: FitOutputs, out: Path, result_out: Path) -> FitOutputs:
+    """``result`` (written into ``staging``) with its paths moved from the staging folder to
+    ``out`` (and ``result.out`` = ``result_out``)."""
     result.out = result_out
     result.files = {k: out / Path(v).relative_to(staging) for k, v in result.files.items()}
     result.exports = {
@@ -220,7 +439,7 @@ def _moved(staged, out: Path, result_out: Path) -> FitOutputs:
 
 
 class ExportFailed(ValueError):
-    """An export of :func:`fit_campaign` failed, so nothing of the fit was written.
+    """An export of :meth:`FitResult.write` failed, so nothing of the fit was written.
 
     The message names the campaign, the target, the first line of the cause (chained as
     ``__cause__``) and what became of the output folder; ``target`` is the export target.
@@ -232,183 +451,6 @@ class ExportFailed(ValueError):
 
     def __str__(self):
         return self.args[0]
-
-
-MARKER = ".cylfric-output"
-"""File that marks a folder written by :func:`fit_campaign` and lists every file and folder
-cylfric wrote into it (one path a line, relative, folders ending in ``/``). The next fit
-replaces such a folder whole only when it holds nothing else."""
-
-_MARKER_HEADER = (
-    "# Written by cylfric fit. The next cylfric fit into this folder replaces it whole, but\n"
-    "# only while it holds nothing but the files listed here (anything else: it refuses).\n"
-)
-
-
-def _write_marker(folder: Path):
-    """List everything in ``folder`` (the finished staging folder) in its marker file."""
-    entries = sorted(
-        path.relative_to(folder).as_posix() + ("/" if path.is_dir() else "")
-        for path in folder.rglob("*")
-    )
-    listed = [e for e in entries if e != MARKER]
-    atomic_write_text(folder / MARKER, _MARKER_HEADER + "".join(f"{e}\n" for e in listed))
-
-
-def _listed(out: Path) -> set[str]:
-    """Paths the marker of ``out`` lists (empty for a marker of an older cylfric)."""
-    try:
-        text = (out / MARKER).read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return set()
-    return {line.strip() for line in text.splitlines() if line.strip() and line[0] != "#"}
-
-
-def _foreign(out: Path) -> list[str]:
-    """Files and folders in ``out`` that its marker does not list (folders end in ``/``;
-    a folder that is not listed is named once, without its contents)."""
-    listed = _listed(out) | {MARKER}
-    foreign = []
-
-    def walk(folder: Path):
-        for path in sorted(folder.iterdir()):
-            name = path.relative_to(out).as_posix()
-            if path.is_dir() and not path.is_symlink():
-                if name + "/" in listed:
-                    walk(path)
-                else:
-                    foreign.append(name + "/")
-            elif name not in listed:
-                foreign.append(name)
-
-    walk(out)
-    return foreign
-
-
-def _named(paths: list[str], limit: int = 4) -> str:
-    shown = ", ".join(paths[:limit])
-    return shown + (f" and {len(paths) - limit} more" if len(paths) > limit else "")
-
-
-def _check_reusable(out: Path):
-    """Refuse an existing ``out`` that holds anything cylfric did not write there."""
-    if not out.exists() and not out.is_symlink():
-        return
-    if not out.is_dir():
-        raise ValueError(f"--out {out} is a file; expected a folder")
-    if not any(out.iterdir()):
-        return
-    if not (out / MARKER).is_file():
-        held = sorted(p.name + ("/" if p.is_dir() else "") for p in out.iterdir())
-        raise ValueError(
-            f"--out {out} exists and is not a cylfric output folder (no {MARKER} marker); "
-            f"it holds {_named(held)}. "
-            "The output folder is replaced whole: choose a new or empty --out, or move "
-            "those files"
-        )
-    foreign = _foreign(out)
-    if foreign:
-        raise ValueError(
-            f"--out {out} holds files cylfric did not write ({_named(foreign)}; not listed in "
-            f"its {MARKER}). The output folder is replaced whole and they would be lost: "
-            "choose another --out, or move them out of it"
-        )
-
-
-def _check_out(folder: Path, out: Path):
-    """Refuse an output folder that would read back as runs or whose files would be lost,
-    or that is a symbolic link."""
-    refuse_link(out)
-    campaign, target = folder.resolve(), out.resolve()
-    if target == campaign or campaign in target.parents or target in campaign.parents:
-        sibling = campaign.parent / f"{campaign.name or 'campaign'}-fit"
-        if not folder.is_absolute():  # as the user would type it: 'fit .' -> ../NAME-fit
-            with contextlib.suppress(ValueError):  # (another drive on Windows)
-                sibling = Path(os.path.relpath(sibling))
-        unnamed = folder.name in ("", ".", "..")  # 'fit .': which folder that is
-        where = f"{folder}" + (f" ({campaign})" if unnamed else "")
-        if target in campaign.parents:
-            problem = (
-                f"--out {out} contains the campaign folder {where}; the output folder is "
-                "replaced whole, so choose one that does not hold the raw files"
-            )
-        else:
-            problem = (
-                f"--out {out} is inside the campaign folder {where}: its files would be read "
-                "back as runs; choose an output folder outside the campaign"
-            )
-        import shlex
-
-        raise ValueError(f"{problem}, e.g. --out {shlex.quote(str(sibling))}")
-    _check_reusable(out)
-
-
-@contextlib.contextmanager
-def _lock(out: Path):
-    """Hold ``.OUT.lock`` beside ``out`` (with this process id); refuse a live holder."""
-    lock = out.parent / f".{out.name}.lock"
-    for _ in range(2):
-        try:
-            handle = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-            break
-        except FileExistsError:
-            try:
-                holder = int(lock.read_text().strip() or 0)
-            except (OSError, ValueError):
-                holder = 0
-            if holder and _alive(holder):
-                raise ValueError(
-                    f"another cylfric fit (process {holder}) is writing {out}; wait for it or "
-                    f"choose another --out (lock file {lock})"
-                ) from None
-            lock.unlink(missing_ok=True)  # a stale lock of a process that is gone
-        except OSError as exc:  # a read-only folder, a full disk
-            raise failed(exc, f"writing --out {out}: creating the lock file", lock) from exc
-    else:  # pragma: no cover - lost a race twice
-        raise ValueError(f"cannot take the lock {lock}")
-    try:
-        os.write(handle, str(os.getpid()).encode())
-        os.close(handle)
-        yield
-    finally:
-        lock.unlink(missing_ok=True)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def _swap_in(staging: Path, out: Path):
-    """Replace ``out`` by ``staging`` (two renames on one file system); on a failed second
-    rename the previous ``out`` is put back."""
-    old = None
-    if out.exists():
-        old = out.parent / f".{out.name}.old-{os.getpid()}"
-        try:
-            out.rename(old)
-        except OSError as exc:
-            raise failed(exc, "writing --out: moving the previous folder aside", out) from exc
-    try:
-        staging.rename(out)
-    except OSError as exc:
-        if old is not None:
-            old.rename(out)
-        raise failed(exc, "writing --out: renaming the finished folder to", out) from exc
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
-
-
-def _remove_leftovers(out: Path):
-    """Staging and old folders of fits into ``out`` that were killed (called under the lock)."""
-    for pattern in (f".{out.name}.staging-*", f".{out.name}.old-*"):
-        for path in out.parent.glob(pattern):
-            shutil.rmtree(path, ignore_errors=True)
 
 
 def _sign_settings(folder, config=None) -> str:
@@ -429,22 +471,16 @@ def _sign_settings(folder, config=None) -> str:
 
 
 def _fit(
-    source: Campaign | Path,
-    out: Path,
+    campaign: Campaign,
     options: FitOptions,
     progress: Callable[[str], object] | None = None,
     after_extraction: Callable[[], object] | None = None,
     step: Callable[[str, int], Callable[[str], object]] | None = None,
-) -> FitOutputs:
-    """Fit the campaign (opened here from a folder) into ``out`` (the staging folder) as
-    ``options`` say; campaign.toml and manifest.csv are read once, by :meth:`Campaign.open`."""
+) -> FitResult:
+    """The fit of :func:`fit`, in order: extraction, gate, viscosity, identification,
+    dynamic parameters, the datasheet's model."""
     timings = {}
     t0 = time.perf_counter()
-    campaign = (
-        source
-        if isinstance(source, Campaign)
-        else Campaign.open(source, options.glob, config=options.config)
-    )
     folder, config = campaign.folder, campaign.config
     dynamic_runs = campaign.dynamic_runs
     reading = start_extraction(
@@ -491,10 +527,10 @@ def _fit(
             pressure_law=options.pressure_law,
             per_direction=options.per_direction,
             workers=options.workers,
+            pressure_reference=config.pressure_basis,
         )
     except UnphysicalFrictionError as exc:
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder, config)}") from None
-    ident = _with_pressure_reference(ident, config.pressure_basis)
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
     if correction.note:
@@ -504,67 +540,34 @@ def _fit(
         dynamic, notes = _identify_dynamic(dynamic_runs, config, ident.model, step)
         model = ident.model if dynamic is None else dynamic.model
         ident = replace(ident, model=model, notes=ident.notes + notes)
+    sheet, model = _datasheet(campaign, options, ident, extraction, correction, dynamic)
     timings["identify"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    # points.csv (pandas writes each value by itself: 0.2 s at 10,000 points, 0.4 s at
-    # 40,000) is written by a forked process while the datasheet is built and written here
-    points_csv = _start_csv(out / "points.csv", extraction.points, options.workers)
-    try:
-        files, sheet, model = _write_outputs(
-            out,
-            folder,
-            config,
-            options,
-            ident,
-            extraction,
-            quality,
-            correction,
-            dynamic,
-            points_csv,
-        )
-    finally:
-        points_csv.close()
-    timings["datasheet"] = time.perf_counter() - t0
-    exports = {}
-    if options.export:
-        from .export import export as export_to
-
-        t0 = time.perf_counter()
-        for target in options.export:
-            try:
-                exports[target] = export_to(model, target, out / "export" / target)
-            except (ValueError, RuntimeError, OSError) as exc:  # a compiler's output: 1st line
-                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(":")
-                raise ExportFailed(f"--export {target} failed: {first}", target) from exc
-        timings["export"] = time.perf_counter() - t0
-    if options.report:
-        from .report import write_report_folder
-
-        t0 = time.perf_counter()
-        summaries = [_export_summary(out, result) for result in exports.values()]
-        advance = None
-        if step is not None:
-            from .report import all_figures
-
-            shown = len(all_figures(ident, extraction.offset)) + (dynamic is not None)
-            advance = step("drawing the figures", shown)
-        files.update(
-            write_report_folder(
-                out,
-                sheet,
-                ident,
-                extraction,
-                quality.excluded,
-                exports=summaries,
-                dynamic=dynamic,
-                workers=options.workers,
-                progress=advance,
-            )
-        )
-        timings["report"] = time.perf_counter() - t0
-    return FitOutputs(
-        out, sheet, ident, extraction, files, timings, quality.excluded, exports, dynamic
+    return FitResult(
+        model, sheet, ident, extraction, quality, correction, dynamic, campaign, options, timings
     )
+
+
+def _datasheet(campaign, options, ident, extraction, correction, dynamic):
+    """(the datasheet, its model): the identified model with the campaign's record."""
+    from .datasheet import datasheet_model
+
+    folder, config = campaign.folder, campaign.config
+    model = datasheet_model(
+        ident,
+        extraction=extraction,
+        campaign=str(folder),
+        name=options.name,
+        recipe=_recipe(config, folder),
+    )
+    sheet, record = model.to_datasheet(), dict(model.record)
+    if correction.record is not None:
+        sheet["fit"]["viscosity_correction"] = correction.record
+        record["fit"] = {**record.get("fit", {}), "viscosity_correction": correction.record}
+    if dynamic is not None:
+        from .model.serialize import clean
+
+        sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
+    return sheet, model.replace(record=record)  # the datasheet's model, for the exports
 
 
 def _start_csv(path: Path, frame: pd.DataFrame, workers: int | None):
@@ -581,50 +584,6 @@ def _start_csv(path: Path, frame: pd.DataFrame, workers: int | None):
 BACKGROUND_CSV_MIN_ROWS = 2000
 """Fewest points for which points.csv is written by a forked process (about 10 ms to fork
 and wait for; pandas writes about 40 ms per 2,000 rows)."""
-
-
-def _write_outputs(
-    out, folder, config, options, ident, extraction, quality, correction, dynamic, points_csv
-) -> tuple[dict[str, Path], dict, FrictionModel]:
-    """The datasheet and the tables of one fit in ``out`` -> (their paths by name, the
-    datasheet, its model); points.csv from ``points_csv`` (:func:`_start_csv`)."""
-    from .datasheet import datasheet_model, write_datasheet
-
-    model = datasheet_model(
-        ident,
-        extraction=extraction,
-        campaign=str(folder),
-        name=options.name,
-        recipe=_recipe(config, folder),
-    )
-    sheet, record = model.to_datasheet(), dict(model.record)
-    if correction.record is not None:
-        sheet["fit"]["viscosity_correction"] = correction.record
-        record["fit"] = {**record.get("fit", {}), "viscosity_correction": correction.record}
-    if dynamic is not None:
-        from .model.serialize import clean
-
-        sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
-    model = model.replace(record=record)  # the datasheet's model, for the exports as it is
-    files = {"datasheet": write_datasheet(out / "datasheet.json", sheet)}
-    if dynamic is not None:
-        files["dynamic"] = _csv(out / "dynamic.csv", dynamic.per_pressure)
-        files["breakaway"] = _csv(out / "breakaway.csv", dynamic.breakaway)
-    files["points"] = points_csv.results()[0]
-    files["per_pressure"] = _csv(out / "per_pressure.csv", ident.per_pressure)
-    files["law_comparison"] = _csv(out / "law_comparison.csv", ident.comparison)
-    if ident.sensitivity is not None:
-        files["sensitivity"] = _csv(out / "sensitivity.csv", ident.sensitivity)
-    import pandas as pd
-
-    if extraction.skipped:
-        files["skipped"] = _csv(out / "skipped.csv", pd.DataFrame(extraction.skipped))
-    if not quality.excluded.empty:
-        files["excluded"] = _csv(out / "excluded.csv", quality.excluded)
-    if ident.directions:
-        frames = [r.per_pressure.assign(direction=d) for d, r in ident.directions.items()]
-        files["per_direction"] = _csv(out / "per_direction.csv", pd.concat(frames))
-    return files, sheet, model
 
 
 STRICT_SHOWN = 8
@@ -666,22 +625,6 @@ def _export_summary(out: Path, result) -> dict:
             for report in result.loss
         ],
     }
-
-
-def _with_pressure_reference(ident, basis):
-    """The identification with the campaign's pressure reference recorded in its model (the
-    points were formed in it, steady_state.operating_pressure_signal), and a note when the
-    reference is a default rather than stated by campaign.toml."""
-    model = ident.model.replace(reference=basis["rule"], pressure_reference_basis=basis)
-    notes = list(ident.notes)
-    if basis["stated_by"].startswith("default"):
-        reason = basis["stated_by"].removeprefix("default: ")
-        notes.append(
-            f'pressure reference "{basis["rule"]}" is a default: {reason}; state [cylinder] '
-            "pressure_reference in campaign.toml if the laws should see another pressure "
-            '("a", "b", "sum", "mean" or "max")'
-        )
-    return replace(ident, model=model, notes=notes)
 
 
 def _correct_viscosity(extraction, config, enabled):
@@ -793,7 +736,7 @@ def _seal_folders(campaign: Campaign, out: Path) -> dict[str, str]:
 
     unlabelled = [info.path.name for info in campaign.runs if info.seal is None]
     if unlabelled:
-        shown = _named(unlabelled, 3)
+        shown = _outfolder.named(unlabelled, 3)
         raise ValueError(
             f"{campaign.folder}: {len(unlabelled)} run(s) carry no seal label ({shown}) "
             f"while the others name the seals {', '.join(campaign.seals)}; runs of different "
@@ -853,7 +796,7 @@ def fit_seals(
     options = FitOptions.from_keywords(options, **keywords)
     source, folder = _source(folder, options)
     out = Path(out)
-    _check_out(folder, out)
+    _outfolder.check_out(folder, out)
     campaign = (
         source
         if isinstance(source, Campaign)
@@ -876,14 +819,14 @@ def fit_seals(
             target = make_folder(inside(staging, folders[name], what="seal"))
             named = replace(options, name=_seal_name(options, folder, name))
             try:
-                results[name] = _fit(
+                fitted = _fit(
                     campaign.for_seal(name),
-                    target,
                     named,
                     progress,
                     after_extraction if last else None,
                     step,
                 )
+                results[name] = fitted._write_into(target, step=step)
             except ExportFailed as failure:
                 raise ExportFailed(f"seal {name}: {failure}", failure.target) from (
                     failure.__cause__
@@ -896,10 +839,17 @@ def fit_seals(
         _csv(staging / SEALS_NAME, summary)
         return results, summary
 
-    staging, (results, summary) = _staged(folder, out, write)
+    try:
+        staging, (results, summary) = _outfolder.staged(out, write)
+    except ExportFailed as failure:
+        kept = "keeps its earlier contents" if out.exists() else "was not created"
+        raise ExportFailed(
+            f"{folder}: {failure}. Nothing was written (--out {out} {kept}); fit without "
+            f"--export {failure.target} to get the datasheet and the other outputs",
+            failure.target,
+        ) from failure.__cause__
     fits = {
-        name: _moved((staging, result), out, out / folders[name])
-        for name, result in results.items()
+        name: _moved(staging, result, out, out / folders[name]) for name, result in results.items()
     }
     return SealOutputs(out, fits, summary, {"seals": out / SEALS_NAME})
 

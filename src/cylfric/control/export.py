@@ -275,7 +275,7 @@ def _c_sources(k: _Constants) -> dict[str, bytes]:
 
 # ------------------------------------------------------------------------------- FMU
 def _fmu_description(k: _Constants, name: str, guid: str, kind: str) -> str:
-    from .. import __version__
+    from .._version import __version__
     from ..export.fmu import _BASE, _unit_xml
 
     pa, pb = k.axis.rest_pressures()

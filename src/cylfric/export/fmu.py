@@ -466,7 +466,7 @@ def _nominals(element, nominal_z):
 
 
 def _model_description(model, name, guid, rows, units, nominals, element) -> str:
-    from .. import __version__
+    from .._version import __version__
 
     what = (
         "moving mass of a hydraulic cylinder driven by a force, with its"

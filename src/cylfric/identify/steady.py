@@ -516,8 +516,15 @@ def identify(
     per_direction: bool = False,
     sensitivity: bool = True,
     workers: int | None = None,
+    pressure_reference: str | Mapping[str, Any] | None = None,
 ) -> Identification:
     """Identify the pressure-dependent friction model from a points table.
+
+    This is the step of :func:`cylfric.fit` that sees only the points: it cannot know the
+    campaign (its cylinder, its pressure reference, its data-quality gate, its viscosity
+    correction, its presliding tests). ``cylfric.fit(folder)`` is the route that gives
+    what ``cylfric fit`` gives; use this one for points of your own, and say which chamber
+    pressure their ``pressure [Pa]`` is (``pressure_reference``).
 
     Parameters
     ----------
@@ -538,6 +545,12 @@ def identify(
         :func:`cylfric._parallel.cores`) and from :data:`STUDY_FORK_MIN_POINTS` points, the
         sensitivity study is computed by a forked process while the models are fitted here
         (Linux; the same results); 1: everything here.
+    pressure_reference : str or mapping, optional
+        Which chamber pressure the points' ``pressure [Pa]`` is, recorded in the model
+        (``model.reference`` and ``model.pressure_reference_basis``) so that it is evaluated
+        in the same pressure: a rule (``"a"``, ``"b"``, ``"sum"``, ``"mean"``, ``"max"``) or
+        a campaign's basis (``Campaign.config.pressure_basis``). None: ``"mean"`` is assumed,
+        and a note says so.
 
     Returns
     -------
@@ -556,8 +569,9 @@ def identify(
     """
     from threadpoolctl import threadpool_limits
 
+    basis = _reference_basis(pressure_reference)  # a bad rule refused before the fit
     with threadpool_limits(limits=1, user_api="blas"):
-        return _identify(
+        ident = _identify(
             points,
             fixed=fixed,
             pressure_law=pressure_law,
@@ -565,6 +579,47 @@ def identify(
             sensitivity=sensitivity,
             workers=workers,
         )
+    return with_pressure_reference(ident, basis)
+
+
+def _reference_basis(reference: str | Mapping[str, Any] | None) -> dict[str, Any]:
+    """The pressure-reference basis of :func:`identify`'s ``pressure_reference``."""
+    from ..friction.pressure import pressure_reference_basis
+
+    if reference is None:
+        basis = pressure_reference_basis(None, None, where="identify()")
+        return {
+            **basis,
+            "stated_by": (
+                "default: identify() was not told which chamber pressure the points' "
+                "'pressure [Pa]' is (pressure_reference=None)"
+            ),
+        }
+    if isinstance(reference, str):
+        return pressure_reference_basis(None, reference, where="identify(pressure_reference=)")
+    missing = {"kind", "rule", "chamber", "stated_by"} - set(reference)
+    if missing:
+        raise ValueError(
+            f"pressure_reference: a basis needs {sorted(missing)} too "
+            "(cylfric.friction.pressure.pressure_reference_basis makes one)"
+        )
+    return dict(reference)
+
+
+def with_pressure_reference(ident: Identification, basis: Mapping[str, Any]) -> Identification:
+    """The identification with the pressure reference ``basis`` recorded in its model (the
+    points were formed in it, steady_state.operating_pressure_signal), and a note when the
+    reference is a default rather than stated."""
+    model = ident.model.replace(reference=basis["rule"], pressure_reference_basis=basis)
+    notes = list(ident.notes)
+    if basis["stated_by"].startswith("default"):
+        reason = basis["stated_by"].removeprefix("default: ")
+        notes.append(
+            f'pressure reference "{basis["rule"]}" is a default: {reason}; state [cylinder] '
+            "pressure_reference in campaign.toml if the laws should see another pressure "
+            '("a", "b", "sum", "mean" or "max")'
+        )
+    return replace(ident, model=model, notes=notes)
 
 
 def _identify(

@@ -120,7 +120,7 @@ def _bound(x):
 
 def to_datasheet(model: FrictionModel) -> dict[str, Any]:
     """The datasheet dict of ``model`` (see the module docstring for who owns which key)."""
-    from .. import __version__
+    from .._version import __version__
 
     record = dict(model.record)
     record_fit = dict(record.pop("fit", {}))
