@@ -236,3 +236,29 @@ def test_each_stroke_draws_its_own_level_from_the_noise_seed():
     assert ratios[0] != ratios[1]  # the strokes of one run differ
     assert BenchSettings().stroke_scatter == pytest.approx(0.010)  # the calibrated default
     assert BenchSettings.clean().stroke_scatter == 0.0
+
+
+def test_truth_check_is_the_manifest_truth_and_the_band_holds_it(tmp_path):
+    """Issue 39.9: the demo prints its own truth. The campaign's true F_c line is the thesis
+    law times the mean friction_scale of each pressure's runs, read back here from the
+    manifest.csv the bench wrote (not from draw_truth), and the fit's band of a new run
+    holds most runs' true friction."""
+    import pandas as pd
+
+    import cylfric
+    from cylfric.simulate.bench import truth_check
+
+    settings = BenchSettings(pressures_bar=(10, 55, 103, 159), speeds_mm_s=(2, 5, 10, 25, 60, 135))
+    generate_campaign(tmp_path / "c", settings)
+    truth = truth_check(cylfric.fit(tmp_path / "c").model, settings)
+    manifest = pd.read_csv(tmp_path / "c" / "manifest.csv")
+    scales = manifest.groupby("pressure_bar")["friction_scale"].mean()
+    levels = [(70.2 + 0.5 * p) * scales[p] for p in scales.index]  # thesis eq. 4.1 [N]
+    slope, intercept = np.polyfit(scales.index.to_numpy(float), levels, 1)
+    a, b = truth["campaign_law"]["F_c"]
+    assert a == pytest.approx(intercept, rel=1e-4) and b * 1e5 == pytest.approx(slope, rel=1e-4)
+    assert truth["runs"] == len(manifest) == 24
+    assert truth["multipliers"]["total"] == pytest.approx(
+        (manifest["friction_scale"].min(), manifest["friction_scale"].max()), rel=1e-5
+    )
+    assert truth["run_band_coverage"] >= 0.8  # 24 runs; 97 % on the 270-run demo

@@ -194,7 +194,8 @@ def test_simulate_from_a_datasheet(fitted, tmp_path):
 def test_demo_prints_recovered_beside_thesis(tmp_path):
     result = runner.invoke(app, ["demo", "--clean", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    assert "Recovered against the thesis" in result.output
+    assert "Recovered against the truth" in result.output
+    assert "the 95% band of a new run holds the true friction of" in " ".join(result.output.split())
     sheet = json.loads((tmp_path / "fit" / "datasheet.json").read_text())
     assert np.isclose(sheet["parameters"]["F_s"]["intercept"], 112.9, rtol=0.02)
     assert len(list((tmp_path / "campaign").glob("*.txt"))) == 270

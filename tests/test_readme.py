@@ -27,4 +27,6 @@ def test_readme_tour_runs(tmp_path):
         [sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    assert "[[Variables]]" in done.stdout and (tmp_path / "datasheet.json").is_file()
+    assert "[[Variables]]" in done.stdout
+    assert (tmp_path / "my_campaign-fit" / "datasheet.json").is_file()
+    assert (tmp_path / "my_campaign-fit" / "report.html").is_file()  # what `cylfric fit` writes

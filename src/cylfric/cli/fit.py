@@ -336,6 +336,65 @@ THESIS_VALUES = {
 }
 
 
+def _demo_table(sheet: dict, truth: dict, clean: bool) -> Table:
+    """The thesis law, this campaign's truth (the law x its runs' multipliers) and the fit."""
+    title = "Recovered against the truth (eq. 4.1-4.3, alpha, v_r; p in bar)"
+    table = Table(title=title)
+    columns = ("parameter", "bench law (thesis)", "this campaign's truth", "recovered")
+    for col in columns if not clean else (columns[0], columns[1], columns[3]):
+        table.add_column(col, justify="right")
+    params = sheet["parameters"]
+    for name, (a, b, unit) in THESIS_VALUES.items():
+        k = 1e-3 if name == "sigma_2" else 1.0
+        c = params[name]
+        row = [name, f"{a:g} + {b:g} p {unit}"]
+        if not clean:
+            ta, tb = truth["campaign_law"][name]
+            row.append(f"{ta * k:.4g} + {tb * k * 1e5:.3g} p {unit}")
+        fitted = (
+            "not identified"
+            if c is None
+            else f"{c['intercept'] * k:.4g} + {c['slope'] * k * 1e5:.3g} p {unit}"
+        )
+        table.add_row(*row, fitted)
+
+    def scalar(value, scale=1.0, digits=3):
+        return "not identified" if value is None else f"{value * scale:.{digits}f}"
+
+    truth_cell = [] if clean else ["(not drawn)"]
+    table.add_row("alpha", "1", *truth_cell, scalar(params["alpha"]))
+    table.add_row("v_r", "10 mm/s", *truth_cell, f"{scalar(params['v_r'], 1e3, 2)} mm/s")
+    offsets = ", ".join(f"{o:.2f}" for o in truth["offset"])
+    offset_truth = [] if clean else [f"{offsets} N"]
+    table.add_row(
+        "offset", f"{35.67 / 2:.2f} N (35.67 N up-down)", *offset_truth, f"{sheet['offset']:.2f} N"
+    )
+    return table
+
+
+def _demo_truth_lines(truth: dict, clean: bool) -> list[str]:
+    """The multipliers the bench drew and how often the fit's bands hold the truth."""
+    m = truth["multipliers"]
+    level = f"{truth['level']:.0%}"
+    runs, inside = truth["runs"], round(truth["run_band_coverage"] * truth["runs"])
+    lines = []
+    if not clean:
+        sessions = ", ".join(f"{s:.3f}" for s in m["session"])
+        lines.append(
+            "the bench's multipliers of the law (session x pressure block x run x warm-up): "
+            f"session {sessions}; pressure blocks {m['pressure_block'][0]:.2f}-"
+            f"{m['pressure_block'][1]:.2f}; runs {m['run'][0]:.2f}-{m['run'][1]:.2f}; warm-up "
+            f"{m['warmup'][0]:.2f}-{m['warmup'][1]:.2f}; in all {m['total'][0]:.2f}-"
+            f"{m['total'][1]:.2f} (manifest.csv, column friction_scale)"
+        )
+    lines.append(
+        f"the {level} band of a new run holds the true friction of {inside} of {runs} runs "
+        f"({truth['run_band_coverage']:.1%}); the band of a new session holds the bench's law "
+        f"at {truth['session_band_coverage']:.1%} of the runs' speeds and pressures"
+    )
+    return lines
+
+
 @app.command()
 @guarded
 def demo(
@@ -352,7 +411,7 @@ def demo(
     each run's drawn multiplier (OUT/campaign/manifest.csv, column friction_scale).
     """
     from .._paths import refuse_link
-    from ..simulate.bench import BenchSettings, generate_campaign
+    from ..simulate.bench import BenchSettings, generate_campaign, truth_check
 
     refuse_link(out)  # a symbolic link is refused (exit 2), not written through
     settings = BenchSettings.clean(seed=seed) if clean else BenchSettings(seed=seed)
@@ -361,27 +420,17 @@ def demo(
     with _progress() as progress:
         task = progress.add_task("virtual bench", total=n)
         generate_campaign(campaign, settings, progress=lambda _: progress.advance(task))
-    rough = "" if clean else " (rough bench: the truth is the thesis law x friction_scale)"
+    rough = "" if clean else " (rough bench: the truth is the thesis law x each run's multiplier)"
     console.print(terminal(f"virtual campaign: {n} files in {campaign}{rough}"))
     result = run_fit(campaign, out / "fit", FitOptions(), quiet=True)
     sheet = result.datasheet
     print_table(_summary_table(sheet, "Recovered from the virtual campaign"))
-    table = Table(title="Recovered against the thesis (eq. 4.1-4.3, alpha, v_r; p in bar)")
-    for col in ("parameter", "thesis", "recovered"):
-        table.add_column(col, justify="right")
-    params = sheet["parameters"]
-    for name, (a, b, unit) in THESIS_VALUES.items():
-        k = 1e-3 if name == "sigma_2" else 1.0
-        c = params[name]
-        table.add_row(
-            name,
-            f"{a:g} + {b:g} p {unit}",
-            f"{c['intercept'] * k:.4g} + {c['slope'] * k * 1e5:.3g} p {unit}",
-        )
-    table.add_row("alpha", "1", f"{params['alpha']:.3f}")
-    table.add_row("v_r", "10 mm/s", f"{params['v_r'] * 1e3:.2f} mm/s")
-    table.add_row("offset", f"{35.67 / 2:.2f} N (35.67 N up-down)", f"{sheet['offset']:.2f} N")
-    print_table(table)
+    from ..model import FrictionModel
+
+    truth = truth_check(FrictionModel.from_datasheet(sheet), settings)
+    print_table(_demo_table(sheet, truth, clean))
+    for line in _demo_truth_lines(truth, clean):
+        console.print(terminal(line, markup=False), markup=False)
     console.print(terminal(f"report: {out / 'fit' / 'report.html'}"))
 
 

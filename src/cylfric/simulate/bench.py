@@ -53,6 +53,7 @@ __all__ = [
     "write_test_manifest",
     "run_plan",
     "draw_truth",
+    "truth_check",
     "TRUTH_COLUMNS",
 ]
 
@@ -1107,3 +1108,75 @@ def write_test_manifest(
             ]
         lines.append(",".join(cells))
     return atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def truth_check(model: FrictionModel, settings: BenchSettings, level: float = 0.95) -> dict:
+    """A fit of a virtual campaign judged against the bench's own truth.
+
+    The bench simulates every run with ``settings.friction`` (the thesis law by default)
+    times the run's multiplier (:func:`draw_truth`: session x pressure block x run x warm-up;
+    1 on a clean bench). Returns plain numbers (SI unless the key names another unit):
+
+    - ``true_law``: the law the bench was given (``F_c``, ``F_s``, ``sigma_2`` as
+      ``(intercept, slope)`` [N, N/Pa] or [N*s/m, N*s/m/Pa]);
+    - ``campaign_law``: per parameter ``(intercept, slope)`` of the straight line through
+      the campaign's true values (the law's value at each pressure times the mean multiplier
+      of that pressure's runs): what a fit of this campaign can recover;
+    - ``multipliers``: ``session`` (one per session), ``pressure_block`` (min, max),
+      ``run`` (min, max), ``warmup`` (min, max), ``total`` (min, max) [-];
+    - ``run_band_coverage``: the share of runs whose true friction (the law at the run's
+      speed and pressure times its multiplier) lies in the model's ``level`` band of a new
+      run (``prediction_band(scope="run")``), and ``runs``;
+    - ``session_band_coverage``: the share of the runs' (speed, pressure) at which the
+      bench's law itself (multiplier 1: the median session) lies in the band of a new
+      session (``scope="session"``);
+    - ``offset``: the true load-cell offsets [N] (weight offset plus each session's).
+    """
+    import warnings
+
+    truth = draw_truth(settings)
+    law = settings.friction
+    velocity = np.array([t["velocity_mm_s"] for t in truth]) * 1e-3
+    pressure = np.array([t["pressure_bar"] for t in truth]) * 1e5
+    scale = np.array([t["friction_scale"] for t in truth])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a band at the edge of the validity range
+        nominal = np.asarray(law.friction(velocity, pressure), dtype=float)
+        low, high = model.prediction_band(velocity, pressure, level, scope="run")
+        run_inside = (low <= nominal * scale) & (nominal * scale <= high)
+        low, high = model.prediction_band(velocity, pressure, level, scope="session")
+        session_inside = (low <= nominal) & (nominal <= high)
+    levels = sorted(set(pressure.tolist()))
+    mean_scale = [scale[pressure == p].mean() for p in levels]
+    campaign = {}
+    for name in ("F_c", "F_s", "sigma_2"):
+        values = np.array([law.params_at(p)[name] * k for p, k in zip(levels, mean_scale)])
+        line = np.polyfit(levels, values, 1) if len(levels) > 1 else (0.0, values[0])
+        campaign[name] = (float(line[1]), float(line[0]))
+    coefficients = law.coefficients()
+
+    def span(key: str) -> tuple[float, float]:
+        values = [t[key] for t in truth if t.get(key) is not None]
+        return (min(values), max(values)) if values else (1.0, 1.0)
+
+    clean = settings.is_clean
+    return {
+        "true_law": {
+            name: (coefficients[name]["intercept"], coefficients[name]["slope"])
+            for name in ("F_c", "F_s", "sigma_2")
+            if isinstance(coefficients[name], dict)
+        },
+        "campaign_law": campaign,
+        "multipliers": {
+            "session": sorted({t["session_scale"] for t in truth}) if not clean else [1.0],
+            "pressure_block": (1.0, 1.0) if clean else span("pressure_scale"),
+            "run": (1.0, 1.0) if clean else span("run_scale"),
+            "warmup": (1.0, 1.0) if clean else span("warmup_scale"),
+            "total": span("friction_scale"),
+        },
+        "run_band_coverage": float(run_inside.mean()),
+        "session_band_coverage": float(session_inside.mean()),
+        "runs": len(truth),
+        "level": level,
+        "offset": sorted({settings.weight_offset + t["load_cell_offset_N"] for t in truth}),
+    }
