@@ -424,12 +424,13 @@ def force_balance(config: CampaignConfig, data: dict, velocity_from: str = "") -
         ("B", config.area_b, pb, "-"),
     ):
         if not area:
+            kind = config.pressure_basis["kind"]
             terms.append(
                 {
                     "term": f"chamber {chamber}",
                     "value": "none (no [cylinder] in campaign.toml: no areas)"
                     if cylinder == "default"
-                    else f"none (no chamber {chamber} in a {config.pressure_basis['kind']} cylinder)",
+                    else f"none (a {kind} cylinder has no chamber {chamber})",
                     "applied": False,
                     "set_in": cylinder,
                 }
@@ -625,6 +626,7 @@ def gate_verdicts(campaign: Campaign, seal: str | None = None) -> GateVerdicts:
     from .quality import QualityError, assess
     from .steady_state import extract_campaign
 
+    parts: dict[str | None, Campaign]
     if seal is not None:
         parts = {seal: campaign.for_seal(seal)}
     elif len(campaign.seals) > 1:
@@ -652,13 +654,14 @@ def gate_verdicts(campaign: Campaign, seal: str | None = None) -> GateVerdicts:
         files = extraction.points["file"].map(
             lambda f: Path(f).relative_to(campaign.folder).as_posix()
         )
-        for name, count in files.value_counts().items():
-            verdicts.points[name] = int(count)
+        for file, count in files.value_counts().items():
+            verdicts.points[str(file)] = int(count)
         verdicts.offsets[label] = extraction.offset
         try:
             report = assess(extraction, duplicates=part.duplicates)
         except QualityError as exc:
-            text = f"the gate refuses the campaign{'' if label is None else ' of seal ' + label}: {exc}"
+            whose = "" if label is None else f" of seal {label}"
+            text = f"the gate refuses the campaign{whose}: {exc}"
             verdicts.notes.append(text)
             for name in names:
                 verdicts.refused[name] = text
