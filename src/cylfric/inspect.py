@@ -131,7 +131,8 @@ class RunInspection:
     velocity_from : str
         How the velocity was obtained (a column, or the derivative of the position).
     windows : pandas.DataFrame
-        One row per stroke: its steady window, means and flag (:data:`WINDOW_COLUMNS`);
+        One row per stroke: its extent (``stroke_start [s]``, ``stroke_end [s]``: the
+        samples in motion), its steady window, means and flag (:data:`WINDOW_COLUMNS`);
         the points the extraction finds in this file.
     offset : float
         The load-cell weight offset removed [N] (NaN: none could be found).
@@ -607,7 +608,12 @@ def inspect_run(
             points["friction [N]"] = points["direction [-]"] * (points["force [N]"] - offset)
         else:
             run.offset_from = "none: no ok window in both directions, here or in the campaign"
-    run.windows = points[WINDOW_COLUMNS].reset_index(drop=True)
+    windows = points[WINDOW_COLUMNS].reset_index(drop=True)
+    time, stroke = signals["time [s]"], np.asarray(signals["stroke [-]"])
+    spans = [np.flatnonzero(stroke == k) for k in windows["stroke"]]
+    windows.insert(2, "stroke_start [s]", [time[i[0]] if i.size else math.nan for i in spans])
+    windows.insert(3, "stroke_end [s]", [time[i[-1]] if i.size else math.nan for i in spans])
+    run.windows = windows
     if gate is not None:
         run.gate = list(gate.excluded.get(name, []))
         run.gate_note = gate.refused.get(name, "")

@@ -83,6 +83,7 @@ def _windows_table(run: RunInspection) -> Table:
     titles = (
         "stroke",
         "dir",
+        "stroke [s]",
         "window [s]",
         "n",
         "speed [mm/s]",
@@ -97,9 +98,11 @@ def _windows_table(run: RunInspection) -> Table:
     for row in run.windows.to_dict("records"):
         start, end = row["window_start [s]"], row["window_end [s]"]
         span = f"{start:.3f}-{end:.3f}" if math.isfinite(start) else "-"
+        a, b = row["stroke_start [s]"], row["stroke_end [s]"]
         table.add_row(
             str(row["stroke"]),
             "ext" if row["direction [-]"] > 0 else "ret",
+            f"{a:.3f}-{b:.3f}" if math.isfinite(a) else "-",
             span,
             str(row["n [-]"]),
             _value(row["velocity [m/s]"], 1e-3, ""),

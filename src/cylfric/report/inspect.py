@@ -57,13 +57,24 @@ def _shade(ax, windows) -> None:
         start, end = row["window_start [s]"], row["window_end [s]"]
         if not (math.isfinite(start) and math.isfinite(end)):
             continue
-        if row["flag"] != "ok":
-            colour = WINDOW_COLOURS["flagged"]
-        elif row["direction [-]"] > 0:
-            colour = WINDOW_COLOURS["extension"]
-        else:
-            colour = WINDOW_COLOURS["retraction"]
-        ax.axvspan(start, end, color=colour, alpha=0.18, lw=0)
+        ax.axvspan(start, end, color=_colour(row), alpha=0.18, lw=0)
+
+
+def _highlight(ax, time, values, windows) -> None:
+    """The samples of each window drawn again over the trace, thick, in its colour."""
+    for row in windows:
+        start, end = row["window_start [s]"], row["window_end [s]"]
+        if not (math.isfinite(start) and math.isfinite(end)):
+            continue
+        inside = (time >= start) & (time <= end)
+        colour = _colour(row)
+        ax.plot(*envelope(time[inside], values[inside]), color=colour, lw=1.8)
+
+
+def _colour(row) -> str:
+    if row["flag"] != "ok":
+        return WINDOW_COLOURS["flagged"]
+    return WINDOW_COLOURS["extension" if row["direction [-]"] > 0 else "retraction"]
 
 
 def _strokes(ax, time, stroke) -> None:
@@ -125,23 +136,28 @@ def figure_run(
         panels = 3 if position is not None else 2
         fig = Figure(figsize=(9, 2.1 * panels + 0.9))
         axes = fig.subplots(panels, 1, sharex=True)
-        fig.subplots_adjust(left=0.09, right=0.98, top=0.91, bottom=0.15, hspace=0.12)
+        fig.subplots_adjust(
+            left=0.09, right=0.98, top=0.92, bottom=0.6 / (2.1 * panels + 0.9) + 0.06, hspace=0.12
+        )
         i = 0
         if position is not None:
             axes[0].plot(*_scaled(time, position, 1e3), color="0.2", lw=0.8)
+            _highlight(axes[0], time, np.asarray(position, dtype=float) * 1e3, rows)
             axes[0].set_ylabel("position [mm]")
             i = 1
         ax_v, ax_f = axes[i], axes[i + 1]
         ax_v.plot(*_scaled(time, velocity, 1e3), color="0.2", lw=0.8)
+        _highlight(ax_v, time, np.asarray(velocity, dtype=float) * 1e3, rows)
         if math.isfinite(nominal_speed) and nominal_speed:
             for sign in (1, -1):
                 ax_v.axhline(sign * abs(nominal_speed) * 1e3, color="tab:orange", lw=0.7, ls="--")
         ax_v.set_ylabel("velocity [mm/s]")
         ax_f.plot(*_scaled(time, force, 1.0), color="0.2", lw=0.6)
+        _highlight(ax_f, time, np.asarray(force, dtype=float), rows)
         for row in rows:
             start, end, level = row["window_start [s]"], row["window_end [s]"], row["force [N]"]
             if math.isfinite(start) and math.isfinite(end) and math.isfinite(level):
-                ax_f.plot([start, end], [level, level], color="black", lw=1.4)
+                ax_f.plot([start, end], [level, level], color="black", lw=1.0)
         if math.isfinite(offset):
             ax_f.axhline(offset, color="tab:purple", lw=0.8, ls="--")
         ax_f.set_ylabel("force balance [N]")
@@ -159,7 +175,8 @@ def figure_run(
         ]
         fig.legend(handles=handles, loc="lower center", ncol=5, frameon=False, fontsize=8)
         fig.suptitle(
-            f"{plot_text(title)}: {len(rows)} strokes, {ok} steady windows ok",
+            f"{plot_text(title)}: {len(rows)} strokes, {ok} steady windows ok "
+            "(shaded; stroke ends dotted)",
             fontsize=10,
         )
     return fig
