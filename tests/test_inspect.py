@@ -277,3 +277,14 @@ def test_every_manifest_column_is_documented():
         assert column in rows, column
     for column in TEMPERATURE_COLUMNS:
         assert f"`{column}`" in text, column
+
+
+def test_out_that_is_a_link_is_refused_before_reading(campaign, tmp_path):
+    target = tmp_path / "elsewhere"
+    target.mkdir()
+    link = tmp_path / "out"
+    link.symlink_to(target, target_is_directory=True)
+    result = runner.invoke(app, ["inspect", str(_runs(campaign)[0]), "--out", str(link)])
+    assert result.exit_code == 2, result.output
+    assert "is a symbolic link to" in result.output
+    assert list(target.iterdir()) == []
