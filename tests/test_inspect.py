@@ -288,3 +288,27 @@ def test_out_that_is_a_link_is_refused_before_reading(campaign, tmp_path):
     assert result.exit_code == 2, result.output
     assert "is a symbolic link to" in result.output
     assert list(target.iterdir()) == []
+
+
+def test_rig_without_load_cell_force_from_pressures(tmp_path):
+    """The virtual servo-valve rig (its campaign.toml: force = "pressures", bore 40 mm, rod
+    25 mm, single-rod, 20 kg): the chamber terms with the areas of those diameters, the
+    inertia, no weight offset; the windows are the extraction's points."""
+    from cylfric.inspect import inspect
+    from cylfric.simulate.valve_bench import ValveRigSettings, generate_valve_campaign
+    from cylfric.steady_state import extract_campaign
+
+    folder = tmp_path / "valve"
+    generate_valve_campaign(folder, ValveRigSettings(voltages=(2.0,), repeats=1))
+    (run,) = inspect(folder).runs
+    balance = {t["term"]: t for t in run.force_balance}
+    assert balance["force"]["value"].startswith("the chamber pressures")
+    assert f"+ {math.pi / 4 * 40.0**2:.5g} mm^2 x pressure_a [Pa]" == balance["chamber A"]["value"]
+    annulus = math.pi / 4 * (40.0**2 - 25.0**2)
+    assert f"- {annulus:.5g} mm^2 x pressure_b [Pa]" == balance["chamber B"]["value"]
+    assert balance["inertia"]["applied"] and "20 kg" in balance["inertia"]["value"]
+    assert run.offset == 0.0 and run.offset_from.startswith("none")
+    assert run.pressure_measured and math.isnan(run.pressure)  # the rig sets no pressure
+    points = extract_campaign(folder, workers=1).points
+    assert run.strokes == len(points) == 2
+    np.testing.assert_allclose(run.windows["pressure [Pa]"], points["pressure [Pa]"], rtol=1e-12)

@@ -129,10 +129,14 @@ def _runs_table(found: Inspection) -> Table:
     ):
         table.add_column(terminal(title))
     for run in found.runs:
+        source = run.source.get("pressure", "none")
+        if run.pressure_measured and run.windows is not None and len(run.windows):
+            median = float(run.windows["pressure [Pa]"].median())
+            source += f"; points: measured column (median {median / 1e5:.4g} bar)"
         table.add_row(
             terminal(run.name),
             _value(run.pressure, 1e5, ""),
-            terminal(run.source.get("pressure", "-")),
+            terminal(source),
             _value(run.velocity, 1e-3, ""),
             terminal(run.source.get("velocity", "-")),
             str(run.strokes),
@@ -152,6 +156,18 @@ def _print(found: Inspection, single: bool) -> None:
         first = readable[0]
         print_table(_columns_table(first))
         print_table(_balance_table(first))
+        layout = [(c.name, c.unit) for c in first.columns]
+        other = [run.name for run in readable if [(c.name, c.unit) for c in run.columns] != layout]
+        if other:
+            shown = ", ".join(other[:5]) + (" ..." if len(other) > 5 else "")
+            console.print(
+                terminal(
+                    f"{len(other)} run(s) have other columns or units than {first.name}: "
+                    f"{shown} (cylfric inspect FILE shows a file's own)",
+                    markup=False,
+                ),
+                markup=False,
+            )
     if single:
         run = found.runs[0]
         if run.columns:

@@ -157,7 +157,7 @@ def figure_run(
         for row in rows:
             start, end, level = row["window_start [s]"], row["window_end [s]"], row["force [N]"]
             if math.isfinite(start) and math.isfinite(end) and math.isfinite(level):
-                ax_f.plot([start, end], [level, level], color="black", lw=1.0)
+                ax_f.plot([start, end], [level, level], color="black", lw=1.0, zorder=4)
         if math.isfinite(offset):
             ax_f.axhline(offset, color="tab:purple", lw=0.8, ls="--")
         ax_f.set_ylabel("force balance [N]")
