@@ -32,6 +32,9 @@ from . import bench  # noqa: F401
 from . import catalog, control, drift, export, many, motion, plan
 from .fit import run_fit
 
+# isort: split
+from . import inspect  # noqa: F401  (adds cylfric inspect)
+
 for _module in (drift, export, catalog, many, motion, plan, control):
     _module.register(app)
 
