@@ -1150,7 +1150,9 @@ def truth_check(model: FrictionModel, settings: BenchSettings, level: float = 0.
     mean_scale = [scale[pressure == p].mean() for p in levels]
     campaign = {}
     for name in ("F_c", "F_s", "sigma_2"):
-        values = np.array([law.params_at(p)[name] * k for p, k in zip(levels, mean_scale)])
+        values = np.array(
+            [law.params_at(p)[name] * k for p, k in zip(levels, mean_scale, strict=True)]
+        )
         line = np.polyfit(levels, values, 1) if len(levels) > 1 else (0.0, values[0])
         campaign[name] = (float(line[1]), float(line[0]))
     coefficients = law.coefficients()
