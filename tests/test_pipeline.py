@@ -10,6 +10,8 @@ the datasheets byte for byte.
 
 from __future__ import annotations
 
+import json
+import math
 import shutil
 from pathlib import Path
 
@@ -121,3 +123,69 @@ def test_fit_result_write_refuses_an_out_inside_the_campaign(tmp_path):
     with pytest.raises(ValueError, match="inside the campaign folder"):
         result.write(folder / "fit")
     assert "points" in repr(result) and result.notes == list(result.identification.notes)
+
+
+def test_the_datasheet_names_its_cylinder_and_the_catalogue_takes_the_bore(shared_data, tmp_path):
+    """Issue 39.11: the bore is in the datasheet (catalog add asked for it again), and
+    ``fit --json`` names the seal as ``show`` does (it printed "name": null)."""
+    from cylfric.catalog import Catalog
+    from cylfric.catalog.store import CatalogError
+
+    folder = tmp_path / "zillen"
+    shutil.copytree(shared_data / "zillen2021-pneumatic-seals", folder)
+    shutil.copy(EXAMPLES / "zillen2021" / "campaign.toml", folder / "campaign.toml")
+    out = tmp_path / "fit"
+    done = runner.invoke(
+        app, ["fit", str(folder), "--seal", "PK", "--out", str(out), "--no-report", "--json"]
+    )
+    assert done.exit_code == 0, done.output
+    document = json.loads(done.stdout)
+    assert document["name"] == "zillen: PK"
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert sheet["cylinder"] == {
+        "kind": "single-acting",
+        "bore": 0.025,  # examples/zillen2021/campaign.toml: bore = "25 mm"
+        "rod": None,
+        "area_a": pytest.approx(math.pi / 4 * 0.025**2),
+        "area_b": 0.0,
+    }
+    catalog = Catalog(tmp_path / "seals.sqlite")
+    catalog.add(out, "PK 25")
+    assert catalog.list().loc[0, "bore [m]"] == pytest.approx(0.025)
+    with pytest.raises(CatalogError, match="--bore 40 mm contradicts the datasheet's cylinder"):
+        catalog.add(out, "PK 40", bore=0.040)
+
+
+def test_print_model_shows_the_laws_and_parameters_show_engineering_units(tmp_path):
+    folder = tmp_path / "bench"
+    generate_campaign(
+        folder,
+        BenchSettings(pressures_bar=(10, 159), speeds_mm_s=(2, 5, 10, 20, 50, 100), seed=1),
+    )
+    model = cylfric.fit(folder).model
+    text = str(model)
+    assert "F_c(p) = (" in text and "N/bar * p" in text and "sigma_0 = 1000 N/mm (assumed" in text
+    slope = model.parameters["F_c.slope"]
+    value, _, unit = slope.engineering()
+    assert unit == "N/bar" and f"[{value:.6g} N/bar]" in repr(slope)
+    assert f"value={slope.value:.6g} N/Pa" in repr(slope)
+
+
+def test_the_report_says_what_its_degrees_of_freedom_and_scatter_components_are(tmp_path):
+    """Issue 39.11: "degrees of freedom = 262" for 534 points and "repeatability 0.00089 %"
+    were printed without a word of what they measure."""
+    from cylfric.report.html import scatter_html
+
+    folder = tmp_path / "bench"
+    generate_campaign(
+        folder,
+        BenchSettings(pressures_bar=(10, 159), speeds_mm_s=(2, 5, 10, 20, 50, 100), seed=1),
+    )
+    model = cylfric.fit(folder).model
+    stats = model.statistics
+    line = next(x for x in model.fit_report(min_correlation=1).splitlines() if "degrees" in x)
+    runs = stats["dof"] + stats["n_variables"]
+    assert stats["dof"] < stats["n_points"] - stats["n_variables"]  # clustered by run
+    assert f"runs - variables = {runs} - {stats['n_variables']}" in line
+    page = scatter_html(model.record["fit"]["scatter"], None)
+    assert "what it measures" in page and "stroke to stroke in one file" in page

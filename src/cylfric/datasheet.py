@@ -90,6 +90,7 @@ def datasheet_model(
     pressure_reference: str | None = None,
     pressure_reference_basis: Mapping[str, Any] | None = None,
     recipe: str | None = None,
+    cylinder: Mapping[str, Any] | None = None,
 ) -> FrictionModel:
     """The identified model with the campaign's record: what the datasheet holds.
 
@@ -114,6 +115,9 @@ def datasheet_model(
         Why (``kind``, ``rule``, ``chamber``, ``stated_by``;
         :func:`cylfric.friction.pressure.pressure_reference_basis`); its ``rule`` is the
         reference when ``pressure_reference`` is not given. Default: the model's.
+    cylinder : mapping, optional
+        The cylinder as campaign.toml states it (``kind``, ``bore`` [m], ``rod`` [m]) and
+        its chamber areas (``area_a``, ``area_b`` [m^2]): the datasheet's ``cylinder``.
     """
     ident = identification
     model = ident.model
@@ -155,6 +159,8 @@ def datasheet_model(
         "notes": list(ident.notes),
         "fit": fit_record,
     }
+    if cylinder is not None:
+        record["cylinder"] = dict(cylinder)
     earlier = dict(model.record)  # what the identification recorded: scatter, lack of fit
     if "scatter" in earlier.get("fit", {}):
         fit_record = cast("dict[str, Any]", record["fit"])

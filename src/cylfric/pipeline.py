@@ -75,6 +75,15 @@ class FitOutputs:
     dynamic: DynamicIdentification | None = None
     result: FitResult | None = None
 
+    @property
+    def model(self) -> FrictionModel:
+        """The datasheet's model (its name, pressure reference, dynamic parameters, record)."""
+        if self.result is not None:
+            return self.result.model
+        from .model import FrictionModel
+
+        return FrictionModel.from_datasheet(self.datasheet)
+
 
 @dataclass
 class FitResult:
@@ -558,6 +567,7 @@ def _datasheet(campaign, options, ident, extraction, correction, dynamic):
         campaign=str(folder),
         name=options.name,
         recipe=_recipe(config, folder),
+        cylinder=_cylinder(config),
     )
     sheet, record = model.to_datasheet(), dict(model.record)
     if correction.record is not None:
@@ -568,6 +578,14 @@ def _datasheet(campaign, options, ident, extraction, correction, dynamic):
 
         sheet["dynamic_fit"] = record["dynamic_fit"] = clean(dynamic.summary())
     return sheet, model.replace(record=record)  # the datasheet's model, for the exports
+
+
+def _cylinder(config) -> dict | None:
+    """The datasheet's ``cylinder``: campaign.toml's [cylinder] (kind, bore and rod [m]) and
+    the chamber areas [m^2] the force balance used; None when campaign.toml gives none."""
+    if config.cylinder is None:
+        return None
+    return {**config.cylinder, "area_a": config.area_a, "area_b": config.area_b}
 
 
 def _start_csv(path: Path, frame: pd.DataFrame, workers: int | None):

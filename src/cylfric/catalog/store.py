@@ -288,12 +288,16 @@ class Catalog:
             Seal type or designation, maker, working fluid (text).
         bore, rod : float, optional
             Bore and rod diameters of the tested cylinder [m]; :meth:`predict` needs them.
+            Default: the datasheet's ``cylinder`` (campaign.toml's [cylinder]); a value that
+            contradicts it by more than 1 % is refused.
         temperature : float, optional
             Oil or seal temperature of the test [K].
         replace : bool
             Replace an entry of the same name instead of refusing.
         """
         name = _check_name(name)
+        sheet = _load_datasheet(datasheet, where=f"datasheet of {name!r}")
+        bore, rod = _stated_geometry(sheet, name, bore=bore, rod=rod)
         metadata = _check_metadata(
             {
                 "seal": seal,
@@ -304,7 +308,6 @@ class Catalog:
                 "temperature": temperature,
             }
         )
-        sheet = _load_datasheet(datasheet, where=f"datasheet of {name!r}")
         self._insert([(name, sheet, metadata, _now())], replace=replace)
 
     def _insert(self, rows, *, replace) -> None:
@@ -599,3 +602,29 @@ class Catalog:
             rows.append((name, sheet, metadata, entry.get("added") or _now()))
         self._insert(rows, replace=replace)
         return len(rows)
+
+
+def _stated_geometry(
+    sheet: Mapping[str, Any], name: str, *, bore: float | None, rod: float | None
+) -> tuple[float | None, float | None]:
+    """(bore, rod) [m]: those given, else the datasheet's ``cylinder`` record; a given value
+    that contradicts the record by more than 1 % is a CatalogError naming both."""
+    from collections.abc import Mapping
+
+    cylinder = sheet.get("cylinder")
+    if not isinstance(cylinder, Mapping):
+        return bore, rod
+    chosen = []
+    for key, given in (("bore", bore), ("rod", rod)):
+        recorded = cylinder.get(key)
+        if not isinstance(recorded, int | float) or isinstance(recorded, bool):
+            chosen.append(given)
+            continue
+        if given is not None and abs(given - recorded) > 0.01 * max(abs(recorded), 1e-9):
+            raise CatalogError(
+                f"{name!r}: --{key} {given * 1e3:g} mm contradicts the datasheet's cylinder "
+                f"({key} {recorded * 1e3:g} mm, from its campaign.toml); leave --{key} out "
+                "to take the datasheet's"
+            )
+        chosen.append(recorded if given is None else given)
+    return chosen[0], chosen[1]

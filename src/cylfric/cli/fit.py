@@ -300,7 +300,7 @@ def fit(
             {
                 "out": out,
                 "datasheet": out / "datasheet.json",
-                **model_document(result.identification.model),
+                **model_document(result.model),
                 "skipped": list(result.extraction.skipped),
                 "excluded": [] if excluded is None else excluded.to_dict("records"),
                 "notes": list(result.identification.notes),
@@ -320,7 +320,7 @@ def _seals_document(out: Path, seals: SealOutputs) -> dict:
             "out": result.out,
             "datasheet": result.out / "datasheet.json",
             "summary": row,
-            **model_document(result.identification.model),
+            **model_document(result.model),
             "skipped": list(result.extraction.skipped),
             "excluded": [] if excluded is None else excluded.to_dict("records"),
             "notes": list(result.identification.notes),

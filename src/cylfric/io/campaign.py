@@ -117,6 +117,9 @@ class CampaignConfig:
         As for :func:`cylfric.io.read_bench_text`.
     area_a, area_b : float
         Piston areas seen by chambers A and B [m^2] (from bore/rod diameters and ``kind``).
+    cylinder : dict or None
+        ``[cylinder]`` as stated: ``kind``, ``bore`` [m], ``rod`` [m] (None when not stated);
+        None without the table; recorded in the datasheet.
     load_cell_sign : float
         +1 if the load cell reads positive when it pushes the rod towards extension.
     position_sign : float
@@ -157,6 +160,7 @@ class CampaignConfig:
     roles: dict = field(default_factory=dict)
     oil: OilSettings | None = None
     pressure_basis: dict = field(default_factory=lambda: pressure_reference_basis(None))
+    cylinder: dict | None = None
 
     @property
     def pressure_reference(self) -> str:
@@ -497,6 +501,7 @@ def load_config(folder, file=None) -> CampaignConfig:
     files, cols = doc.get("files", {}), doc.get("columns", {})
     cyl, fb = doc.get("cylinder", {}), doc.get("force_balance", {})
     area_a = area_b = 0.0
+    cylinder = None
     try:
         pressure_basis = pressure_reference_basis(
             cyl.get("kind"), cyl.get("pressure_reference"), where=CONFIG_NAME
@@ -546,6 +551,7 @@ def load_config(folder, file=None) -> CampaignConfig:
                 line=_line_of(path, "rod"),
             )
         area_a, area_b = kinds[kind]
+        cylinder = {"kind": kind, "bore": bore, "rod": rod if "rod" in cyl else None}
     names, units = cols.get("names"), cols.get("units")
     if (names is None) != (units is None) or (names and len(names) != len(units)):
         raise BenchFileError(path, "[columns] needs `names` and `units` of the same length")
@@ -586,6 +592,7 @@ def load_config(folder, file=None) -> CampaignConfig:
         roles={k: v for k, v in cols.items() if k in ROLES},
         oil=_oil(doc["oil"], path) if "oil" in doc else None,
         pressure_basis=pressure_basis,
+        cylinder=cylinder,
     )
 
 

@@ -127,6 +127,25 @@ class Parameter:
         stderr = None if self.stderr is None else self.stderr * k
         return value, stderr, unit
 
+    def __repr__(self) -> str:
+        """SI value and unit, and the engineering value the report prints beside them:
+        ``Parameter('F_c.slope', value=5e-06 N/Pa [0.5 N/bar], stderr=...)``."""
+        if self.value is None:
+            return f"Parameter({self.name!r}, not identified, unit={self.unit!r})"
+        value, stderr, unit = self.engineering()
+
+        def both(si: float | None, eng: float | None) -> str:
+            if si is None:
+                return "None"
+            shown = f"{si:.6g} {self.unit}"
+            return shown if unit == self.unit else f"{shown} [{eng:.6g} {unit}]"
+
+        fixed = "" if self.vary else ", fixed"
+        return (
+            f"Parameter({self.name!r}, value={both(self.value, value)}, "
+            f"stderr={both(self.stderr, stderr)}{fixed})"
+        )
+
 
 def _spec_items(spec, default_law):
     """(law, {coefficient: value}) of one parameter's entry in a coefficient set."""
@@ -540,6 +559,24 @@ class FrictionModel:
             f"FrictionModel({self.friction_law}, pressure laws {{{laws}}}, "
             f"reference={self.reference!r})"
         )
+
+    def __str__(self) -> str:
+        """The laws in engineering units with their standard errors (``print(model)``)."""
+        from .text import law_lines
+
+        name = self.record.get("name") if isinstance(self.record, Mapping) else None
+        head = f"FrictionModel {name!r}" if name else "FrictionModel"
+        lines = [
+            f"{head}: {self.friction_law} law; pressure laws on the {self.reference!r} "
+            "chamber pressure (p in bar)"
+        ]
+        lines += [f"  {line}" for line in law_lines(self)]
+        for key in ("sigma_0", "sigma_1"):
+            value, _, unit = self.parameters[key].engineering()
+            status, why = self.dynamic_status.get(key, ("assumed", ""))
+            shown = "not set" if value is None else f"{value:.4g} {unit}"
+            lines.append(f"  {key} = {shown} ({status}{': ' + why if why else ''})")
+        return "\n".join(lines)
 
     def __getstate__(self) -> dict[str, Any]:
         """The model's attributes for pickle (a forked or Dask worker sends models back):

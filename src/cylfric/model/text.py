@@ -142,8 +142,24 @@ def _statistics_lines(stats: Mapping[str, Any]) -> list[str]:
         if stats.get(key) is not None:
             value = stats[key]
             text = f"{value:d}" if isinstance(value, int) else f"{value:.5g}"
+            if key == "dof":
+                unit = _dof_meaning(stats)
             lines.append(f"    {label:20s} = {text}{unit}")
     return lines
+
+
+def _dof_meaning(stats: Mapping[str, Any]) -> str:
+    """What the degrees of freedom count: points - variables, or (standard errors clustered
+    by run, CR2) runs - variables."""
+    n, k, dof = stats.get("n_points"), stats.get("n_variables"), stats.get("dof")
+    if n is None or k is None or dof is None:
+        return ""
+    if dof == n - k:
+        return " (data points - variables)"
+    return (
+        f" (runs - variables = {dof + k} - {k}: the standard errors are clustered by run, "
+        "whose points share its level)"
+    )
 
 
 def _variable_line(model: FrictionModel, p: Parameter, width: int) -> str:

@@ -70,6 +70,24 @@ def _number(value, digits=3) -> str:
     return f"{value:.{digits}g}"
 
 
+COMPONENT_MEANING = {
+    "repeatability": (
+        "points of one run about that run's own level (stroke to stroke in one file, the "
+        "same conditions): near 0 when each run gives one point per direction, which says "
+        "nothing of a re-run"
+    ),
+    "run": "a run's level about its pressure block's: a file re-run on the same mount",
+    "session": (
+        "a session's level about the others': the seal remounted, another day (with few "
+        "sessions, pooled with the stated prior)"
+    ),
+    "reproducibility": (
+        "all three together: the scatter of one new run in a new session about the law"
+    ),
+}
+"""What each scatter component of ``fit.scatter`` measures, for the report's table."""
+
+
 def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, Any] | None) -> str:
     """HTML: the scatter components (``fit.scatter``) and the lack-of-fit test
     (``quality.lack_of_fit``) of a datasheet; '' when neither was computed.
@@ -93,6 +111,7 @@ def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, An
             rows.append(
                 {
                     "component": name,
+                    "what it measures": COMPONENT_MEANING.get(name, ""),
                     "std [%]": _number(part.get("std_percent")),
                     "std [N]": _number(part.get("std_N")),
                     "source": str(part.get("source", "")),
@@ -104,6 +123,7 @@ def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, An
             rows.append(
                 {
                     "component": "reproducibility (ISO 5725-2 s_R)",
+                    "what it measures": COMPONENT_MEANING["reproducibility"],
                     "std [%]": _number(total.get("std_percent")),
                     "std [N]": _number(total.get("std_N")),
                     "source": "combined",
