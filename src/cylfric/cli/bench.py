@@ -9,9 +9,9 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
-from ..escape import terminal
+from ..escape import plot_text, terminal
 from ..units import parse_quantity
-from .common import BadInput, _numbers, _progress, app, console, guarded
+from .common import BadInput, _numbers, _progress, app, console, err_console, guarded
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -236,13 +236,38 @@ def simulate(
             raise BadInput(str(exc) if named else f"{model}: {exc}") from None
     for note in dict.fromkeys(str(w.message) for w in caught):
         console.print(f"[yellow]note:[/yellow] {terminal(note)}")
+    assumed = friction.assumptions()
+    for line in assumed:
+        err_console.print(f"[yellow]note:[/yellow] {terminal(line)}", highlight=False)
     make_folder(out)
     atomic_write_chunks(out / "simulation.csv", _csv_blocks(result))
+    import json
+
+    from .._atomic import atomic_write_text
+
+    atomic_write_text(
+        out / "simulation.json",
+        json.dumps(
+            {
+                "model": model,
+                "drive": drive,
+                "pressure [bar]": p / 1e5,
+                "duration [s]": t_end,
+                "mass [kg]": m,
+                "assumptions": assumed,
+            },
+            indent=2,
+        )
+        + "\n",
+    )
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), constrained_layout=True)
     result.plot(ax=axes)
-    fig.suptitle(f"{drive} at {p / 1e5:g} bar ({model})")
+    fig.suptitle(plot_text(f"{drive} at {p / 1e5:g} bar ({model})"))
+    if assumed:
+        footnote = "sigma_0, sigma_1 assumed, not identified (simulation.json)"
+        fig.text(0.01, 0.0, footnote, fontsize=7)
     save_figure(fig, out, "simulation")
     f = result.outputs["friction_force"]
     console.print(

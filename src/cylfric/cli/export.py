@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ..escape import terminal
-from .common import JSON_HELP, BadInput, console, guarded, print_json
+from .common import JSON_HELP, BadInput, console, err_console, guarded, print_json
 
 TARGET_NAMES = ("fmu", "modelica", "simscape", "hopsan", "matlab")
 
@@ -62,6 +62,11 @@ def register(app) -> None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = export(datasheet, target, out, **options)
+        from ..model import FrictionModel
+
+        assumed = FrictionModel.from_datasheet(datasheet).assumptions()
+        for line in assumed:  # on stderr, whatever is printed on stdout
+            err_console.print(f"[yellow]note:[/yellow] {terminal(line)}", highlight=False)
         notes = list(dict.fromkeys(str(w.message) for w in caught))
         if json_output:
             losses = [
@@ -75,6 +80,7 @@ def register(app) -> None:
                     "lossless": result.loss is None,
                     "loss": losses,
                     "notes": notes,
+                    "assumptions": assumed,
                 }
             )
             return

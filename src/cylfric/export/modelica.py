@@ -191,6 +191,10 @@ def modelica_package(model: FrictionModel, *, name: str | None = None) -> tuple[
     for parameter, law, spec in _specs(model):
         kind = _TYPES[parameter][0]
         comment = _COMMENTS[parameter]
+        status = model.dynamic_status.get(parameter)
+        if status is not None and status[0] == "assumed":  # said where it is used
+            why = modelica_string(status[1], quotes=False)
+            comment += f", ASSUMED, not identified: {why}; see docs/dynamic_parameters.md"
         if law == "same":
             variables.append(f'    {kind} {parameter} "{comment} (= {spec}: not identified)";')
             laws.append(f"    {parameter} = {spec};")

@@ -229,7 +229,7 @@ def summary_lines(model: FrictionModel, user: Callable[[str], str] = str) -> lis
     texts = scatter_texts(model)
     if texts is not None:
         texts = {key: user(value) for key, value in texts.items()}
-    lines = []
+    lines = [user(line) for line in model.assumptions()]  # the dynamic parameters' status
     if numbers is None or texts is None:
         lines.append("Scatter components: " + NOT_COMPUTED.format(key="fit.scatter") + ".")
     else:

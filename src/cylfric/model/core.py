@@ -560,6 +560,28 @@ class FrictionModel:
             f"reference={self.reference!r})"
         )
 
+    def assumptions(self) -> list[str]:
+        """What this model holds that was assumed rather than identified, one line each with
+        how to identify it: ``sigma_0``/``sigma_1`` while their status is ``"assumed"`` (a
+        steady-state campaign cannot give them). Empty when everything it holds was
+        identified. Every command that uses them (``control``, ``simulate``, ``export``)
+        says these lines on stderr and writes them into its outputs."""
+        assumed = []
+        for key in ("sigma_0", "sigma_1"):
+            status, why = self.dynamic_status.get(key, ("assumed", ""))
+            shown = self._dynamic_text(key)
+            if status == "assumed" and shown is not None:
+                assumed.append(f"{shown} ({why})" if why else shown)
+        if not assumed:
+            return []
+        return [
+            f"assumed, not identified: {'; '.join(assumed)}. They set the presliding "
+            "stiffness and damping: what a LuGre compensator, a friction observer or a "
+            "simulation does at reversals, in stick-slip and at breakaway depends on them. "
+            "Identify them from presliding tests (cylfric fit with presliding runs) or from "
+            "a short logged motion of the axis itself: docs/dynamic_parameters.md"
+        ]
+
     def __str__(self) -> str:
         """The laws in engineering units with their standard errors (``print(model)``)."""
         from .text import law_lines
@@ -572,11 +594,21 @@ class FrictionModel:
         ]
         lines += [f"  {line}" for line in law_lines(self)]
         for key in ("sigma_0", "sigma_1"):
-            value, _, unit = self.parameters[key].engineering()
             status, why = self.dynamic_status.get(key, ("assumed", ""))
-            shown = "not set" if value is None else f"{value:.4g} {unit}"
-            lines.append(f"  {key} = {shown} ({status}{': ' + why if why else ''})")
+            shown = self._dynamic_text(key) or f"{key}: not set"
+            lines.append(f"  {shown} ({status}{': ' + why if why else ''})")
         return "\n".join(lines)
+
+    def _dynamic_text(self, key: str) -> str | None:
+        """``sigma_0 = 1000 N/mm`` (a constant) or ``sigma_0: linear pressure law``; None
+        when the model does not hold it."""
+        law = self.laws.get(key)
+        if law is None:
+            return None
+        if law != "constant":
+            return f"{key}: {law} pressure law"
+        value, _, unit = self.parameters[key].engineering()
+        return None if value is None else f"{key} = {value:.4g} {unit}"
 
     def __getstate__(self) -> dict[str, Any]:
         """The model's attributes for pickle (a forked or Dask worker sends models back):
