@@ -1,21 +1,30 @@
 # cylfric: two-command set-up on a machine with only python3.
-#   make demo   creates .venv, installs cylfric, runs `cylfric demo`
+#   make demo   creates .venv, installs cylfric (the runtime only), runs `cylfric demo`
 #   make test   creates .venv, installs cylfric[test], runs the test suite
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
+RUNTIME := $(VENV)/.runtime
 STAMP  := $(VENV)/.installed
 
 .PHONY: demo test bench lint clean
 
-$(STAMP): pyproject.toml
+$(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+
+# cylfric and what it needs to run (make demo): no test or lint tool
+$(RUNTIME): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet -e .
 	$(PY) -m compileall -q src  # byte code once: PYTHONDONTWRITEBYTECODE machines would compile cylfric in every process
+	touch $(RUNTIME)
+
+# the test and lint tools on top (make test, make lint)
+$(STAMP): pyproject.toml $(RUNTIME)
+	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-demo: $(STAMP)
+demo: $(RUNTIME)
 	$(VENV)/bin/cylfric demo --out demo-out
 
 test: $(STAMP)
