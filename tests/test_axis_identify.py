@@ -70,7 +70,8 @@ def test_sigma_0_from_ten_seconds_of_the_virtual_axis_within_20_percent(plant, d
     assert fit.params["sigma_0"] == pytest.approx(SIGMA_0, rel=0.20)
     # and within a few of its standard errors (1 % here)
     assert abs(fit.params["sigma_0"] - SIGMA_0) < 4 * fit.stderr["sigma_0"] + 0.02 * SIGMA_0
-    assert fit.params["sigma_1"] == pytest.approx(SIGMA_1, rel=0.35)
+    # sigma_1 is weaker (-5.7 % mean, 4.9 % scatter over 8 seeds: docs/dynamic_parameters.md)
+    assert fit.params["sigma_1"] == pytest.approx(SIGMA_1, rel=0.25)
     assert fit.params["friction_level"] == pytest.approx(1.0, abs=0.02)
     status = fit.model.dynamic_status
     assert status["sigma_0"][0] == status["sigma_1"][0] == "identified"
@@ -181,6 +182,7 @@ def test_sigma_0_from_an_independently_simulated_axis(datasheet):
     log = _independent_log(seed=5)
     fit = fit_axis_lugre(log, datasheet, AXIS)
     assert fit.params["sigma_0"] == pytest.approx(SIGMA_0, rel=0.05)  # 0.0-0.3 % in trials
+    assert fit.params["sigma_1"] == pytest.approx(SIGMA_1, rel=0.30)  # -3 to -15 % in trials
     assert fit.params["friction_level"] == pytest.approx(1.0, abs=0.02)
 
 
