@@ -564,7 +564,7 @@ def fit_axis_lugre(
     if abs(level - 1) > 3 * stderr["friction_level"] and abs(level - 1) > 0.1:
         notes.append(
             f"the axis's sliding friction is {level:.2f} x the datasheet's (+- "
-            f"{stderr['friction_level']:.2f}); the datasheet's steady-state law is kept"
+            f"{stderr['friction_level']:.2g}); the datasheet's steady-state law is kept"
         )
     if stderr["sigma_1"] > SIGMA_1_NOTE * s1:
         notes.append(
