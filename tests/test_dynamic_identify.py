@@ -268,3 +268,18 @@ def test_a_ramp_too_short_to_break_away_says_how_long_it_must_be():
     assert 0.28 < reached < 0.32 and f"travelled {reached:.3g} mm of the 0.5 mm" in note
     assert f"{needed:.3g} s into the ramp" in note
     assert f"at least {1.5 * needed:.3g} s at this rate" in note
+
+
+def test_virtual_bench_ramps_run_until_the_rod_breaks_away():
+    """A strongly viscous seal (sigma_2 = 1e5 N*s/m): at 1000 N/s the first ramp (1.5 x F_s)
+    ends with the rod 0.16 mm out; the bench runs it longer until the machine's 1 mm stop,
+    so the breakaway travel (0.5 mm) is inside the record (on main it ended at 0.16 mm)."""
+    from cylfric.simulate.bench import run_dynamic_test
+
+    coefficients = FrictionModel().coefficients(include_dynamic=False)
+    viscous = FrictionModel(dict(coefficients, sigma_2={"intercept": 1e5, "slope": 0.0}))
+    settings = BenchSettings.clean(friction=viscous, pressures_bar=(60.0,), seed=2)
+    run = run_dynamic_test("breakaway", 60.0, settings, force_rate=1000.0)
+    assert 1e-3 < run.displacement[-1] < 1.01e-3  # stopped at 1 mm, as the machine does
+    assert run.time.size <= 10_001  # the sample budget
+    assert math.isfinite(breakaway_force(run.time, run.applied, run.displacement))
