@@ -574,8 +574,21 @@ travel) still gets its breakaway force."""
 def _simulated_breakaway(
     model: FrictionModel, record: DynamicRecord, rate: float, start: float, travel: float
 ) -> float:
-    """Breakaway force [N] of ``model`` on the ramp ``rate (t - start)``, simulated past the
-    record's end when the model needs more force than the record reached."""
+    """Breakaway force [N] of ``model`` on the ramp ``rate (t - start)``: over the record,
+    and when the model has not broken away by its end, over a ramp continued to
+    :data:`BREAKAWAY_SEARCH` times the model's breakaway level (the rod then slides far
+    beyond the model's validity speeds; only the first crossing of ``travel`` is read, so
+    that part's validity warnings are not passed on)."""
+    import warnings
+
+    from ..model import ValidityWarning
+
+    ramp = rate * np.clip(record.time - start, 0.0, None)
+    simulated = breakaway_force(
+        record.time, ramp, simulate_record(model, replace(record, force=ramp)), travel=travel
+    )
+    if math.isfinite(simulated):
+        return simulated
     params = model.params_at(record.pressure)
     level = max(float(params["F_s"]), float(params["F_c"]))
     end = max(float(record.time[-1]), start + BREAKAWAY_SEARCH * level / rate)
@@ -583,7 +596,10 @@ def _simulated_breakaway(
     time = np.arange(int(math.ceil(end / h - 1e-9)) + 1) * h
     ramp = rate * np.clip(time - start, 0.0, None)
     longer = replace(record, time=time, force=ramp, displacement=np.zeros_like(time))
-    return breakaway_force(time, ramp, simulate_record(model, longer), travel=travel)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ValidityWarning)
+        displacement = simulate_record(model, longer)
+    return breakaway_force(time, ramp, displacement, travel=travel)
 
 
 def validate_breakaway(
