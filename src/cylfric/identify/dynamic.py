@@ -59,6 +59,7 @@ __all__ = [
     "breakaway_force",
     "ramp_fit",
     "validate_breakaway",
+    "breakaway_notes",
     "identify_dynamic",
 ]
 
@@ -563,6 +564,44 @@ def ramp_fit(record: DynamicRecord, *, travel: float = BREAKAWAY_TRAVEL) -> tupl
     return float(rate), float(-intercept / rate)
 
 
+BREAKAWAY_SEARCH = 3.0
+"""The model's ramp is simulated until its force reaches this many times the model's
+breakaway level max(F_s, F_c) at the record's pressure [-] (or the record's end, if later):
+a model that breaks away after the measured rod (a record the machine stopped at 1 mm of
+travel) still gets its breakaway force."""
+
+
+def _simulated_breakaway(
+    model: FrictionModel, record: DynamicRecord, rate: float, start: float, travel: float
+) -> float:
+    """Breakaway force [N] of ``model`` on the ramp ``rate (t - start)``: over the record,
+    and when the model has not broken away by its end, over a ramp continued to
+    :data:`BREAKAWAY_SEARCH` times the model's breakaway level (the rod then slides far
+    beyond the model's validity speeds; only the first crossing of ``travel`` is read, so
+    that part's validity warnings are not passed on)."""
+    import warnings
+
+    from ..model import ValidityWarning
+
+    ramp = rate * np.clip(record.time - start, 0.0, None)
+    simulated = breakaway_force(
+        record.time, ramp, simulate_record(model, replace(record, force=ramp)), travel=travel
+    )
+    if math.isfinite(simulated):
+        return simulated
+    params = model.params_at(record.pressure)
+    level = max(float(params["F_s"]), float(params["F_c"]))
+    end = max(float(record.time[-1]), start + BREAKAWAY_SEARCH * level / rate)
+    h = record.interval
+    time = np.arange(int(math.ceil(end / h - 1e-9)) + 1) * h
+    ramp = rate * np.clip(time - start, 0.0, None)
+    longer = replace(record, time=time, force=ramp, displacement=np.zeros_like(time))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ValidityWarning)
+        displacement = simulate_record(model, longer)
+    return breakaway_force(time, ramp, displacement, travel=travel)
+
+
 def validate_breakaway(
     model: FrictionModel,
     records: Iterable[DynamicRecord],
@@ -573,22 +612,24 @@ def validate_breakaway(
     """Breakaway forces of the ramp tests, measured and simulated with ``model``.
 
     Each breakaway record's ramp (:func:`ramp_fit`: the straight line the machine followed,
-    free of load-cell noise) drives the model (:func:`simulate_record`); both displacements
-    go through :func:`breakaway_force`. Columns: ``file``, ``pressure [Pa]``,
-    ``force_rate [N/s]`` (fitted), ``measured [N]``, ``simulated [N]``, ``error [N]``,
-    ``relative_error [-]``. ``progress`` is called with each ramp's file name once simulated.
+    free of load-cell noise) drives the model (:func:`simulate_record`), continued past the
+    record's end until the model breaks away (up to :data:`BREAKAWAY_SEARCH` times its
+    breakaway level); both displacements go through :func:`breakaway_force`. Columns:
+    ``file``, ``pressure [Pa]``, ``force_rate [N/s]`` (fitted), ``measured [N]``,
+    ``simulated [N]``, ``error [N]``, ``relative_error [-]``, ``ramp_length [s]`` (of the
+    record, from the ramp's start), ``travel_reached [m]`` (the record's largest
+    displacement) and ``ramp_needed [s]`` (ramp time the model needs to break away: the
+    simulated breakaway force over the rate, or F_s over the rate when the model does not
+    break away). ``progress`` is called with each ramp's file name once simulated.
     """
-    from dataclasses import replace
-
     rows = []
     for record in records:
         if record.test != "breakaway":
             continue
         measured = breakaway_force(record, travel=travel)
         rate, start = ramp_fit(record, travel=travel)
-        ramp = rate * np.clip(record.time - start, 0.0, None)
-        simulated_x = simulate_record(model, replace(record, force=ramp))
-        simulated = breakaway_force(record.time, ramp, simulated_x, travel=travel)
+        simulated = _simulated_breakaway(model, record, rate, start, travel)
+        level = float(model.params_at(record.pressure)["F_s"])
         rows.append(
             {
                 "file": record.file,
@@ -598,6 +639,9 @@ def validate_breakaway(
                 "simulated [N]": simulated,
                 "error [N]": simulated - measured,
                 "relative_error [-]": (simulated - measured) / measured,
+                "ramp_length [s]": float(record.time[-1]) - start,
+                "travel_reached [m]": float(np.max(record.displacement)),
+                "ramp_needed [s]": (simulated if math.isfinite(simulated) else level) / rate,
             }
         )
         if progress is not None:
@@ -610,8 +654,40 @@ def validate_breakaway(
         "simulated [N]",
         "error [N]",
         "relative_error [-]",
+        "ramp_length [s]",
+        "travel_reached [m]",
+        "ramp_needed [s]",
     ]
     return pd.DataFrame(rows, columns=columns)
+
+
+def breakaway_notes(table: pd.DataFrame, travel: float = BREAKAWAY_TRAVEL) -> list[str]:
+    """One note per ramp of :func:`validate_breakaway`'s ``table`` without a breakaway.
+
+    A record whose rod never travelled ``travel`` [m] says how far it got, how long its
+    ramp ran and how long it must run (the model's breakaway force over the force rate,
+    with half again for the travel); a model that never breaks away says so.
+    """
+    notes = []
+    for row in table.to_dict("records"):
+        rate, needed = row["force_rate [N/s]"], row["ramp_needed [s]"]
+        if not math.isfinite(row["measured [N]"]):
+            notes.append(
+                f"{row['file']}: no breakaway within the record: the rod travelled "
+                f"{row['travel_reached [m]'] * 1e3:.3g} mm of the {travel * 1e3:g} mm that "
+                f"mark breakaway in {row['ramp_length [s]']:.3g} s of ramp (up to "
+                f"{rate * row['ramp_length [s]']:.0f} N at {rate:.4g} N/s); the model breaks "
+                f"away at {rate * needed:.0f} N, {needed:.3g} s into the ramp: run ramps of "
+                f"at least {1.5 * needed:.3g} s at this rate (force rate x time above the "
+                f"breakaway force F_s), or let the machine stop at 1 mm of travel, not before"
+            )
+        elif not math.isfinite(row["simulated [N]"]):
+            notes.append(
+                f"{row['file']}: the identified model does not break away on this ramp "
+                f"within {BREAKAWAY_SEARCH:g} x its F_s ({rate * needed:.0f} N); check the "
+                "steady-state law at this pressure"
+            )
+    return notes
 
 
 @dataclass
@@ -801,7 +877,5 @@ def identify_dynamic(
         sigma_0=values["sigma_0"], sigma_1=values["sigma_1"], dynamic_status=status, stderr=stderr
     )
     breakaway = validate_breakaway(identified, records, travel=travel, progress=progress)
-    missing = breakaway["measured [N]"].isna() | breakaway["simulated [N]"].isna()
-    for file in breakaway.loc[missing, "file"]:
-        notes.append(f"{file}: no breakaway within the record ({travel * 1e3:g} mm travel)")
+    notes.extend(breakaway_notes(breakaway, travel))
     return DynamicIdentification(identified, fits, per_pressure, laws, breakaway, records, notes)
