@@ -50,6 +50,7 @@ import numpy as np
 import pandas as pd
 
 from ._runtable import RunTable, run_column
+from .friction.pressure import PRESSURE_REFERENCES
 from .levels import pressure_levels
 
 if TYPE_CHECKING:
@@ -74,10 +75,14 @@ class QualityReport:
         The points table with the flags of excluded runs set to ``"excluded: <check>"``.
     excluded : pandas.DataFrame
         One row per excluded run or unlisted file: ``file``, ``run``, ``check``, ``reason``.
+    notes : tuple of str
+        What the physical checks found and were told to accept (``accept_force_balance``),
+        for the datasheet's notes.
     """
 
     points: pd.DataFrame
     excluded: pd.DataFrame
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> str:
         """One line: how many runs each check excluded."""
@@ -230,7 +235,7 @@ def _conflicts(info, tolerance, floors):
     return "; ".join(texts)
 
 
-def _measured_conflict(info, measured, tolerance, floor):
+def _measured_conflict(info, measured, tolerance, floor, reference="mean"):
     """Text naming a run's measured pressure and the nominal values it contradicts, or ''.
 
     ``measured`` is the median over the run's windows of the pressure column [Pa]. A
@@ -238,22 +243,34 @@ def _measured_conflict(info, measured, tolerance, floor):
     the limit is looser than between nominal sources: ``tolerance`` of the larger and at
     least ``floor`` [Pa]. A column in psi or MPa labelled bar reads 14.5 or 0.1 times the
     nominal and is far outside.
+
+    A nominal value is a chamber pressure (both chambers, or the working one); the measured
+    one is the chambers' pressures combined by the campaign's ``reference``
+    (:data:`~cylfric.friction.pressure.PRESSURE_REFERENCES`), so the nominal value is
+    combined the same way before they are compared (the ``"sum"`` of two chambers at 10 bar
+    is 20 bar), as the extraction does for a run without a pressure column.
     """
     values = info.get("nominal", {}).get("pressure", {})
     if not math.isfinite(measured):
         return ""
+    combine = PRESSURE_REFERENCES[reference]
     off = [
-        (source, value, where)
+        (source, value, where, float(combine(np.float64(value), np.float64(value))))
         for source, (value, where) in values.items()
         if not math.isfinite(value)
-        or abs(measured - value) > max(tolerance * max(abs(measured), abs(value)), floor)
+        or abs(measured - (seen := float(combine(np.float64(value), np.float64(value)))))
+        > max(tolerance * max(abs(measured), abs(seen)), floor)
     ]
     if not off:
         return ""
-    said = " and ".join(_said("pressure", *item) for item in off)
+    said = " and ".join(_said("pressure", *item[:3]) for item in off)
+    what = "the pressure column"
+    if off[0][3] != off[0][1]:  # "sum": the nominal chamber pressure counted twice
+        what = f'the pressure columns, pressure_reference = "{reference}"'
+        said += f" (both chambers at it: {off[0][3] / 1e5:.4g} bar)"
     return (
-        f"measured pressure {measured / 1e5:.4g} bar (the pressure column, the value used) "
-        f"but {said} ({_pressure_cause(measured, off[0][1])})"
+        f"measured pressure {measured / 1e5:.4g} bar ({what}, the value used) but {said} "
+        f"({_pressure_cause(measured, off[0][3])})"
     )
 
 
@@ -441,6 +458,7 @@ def assess(
     max_scale_fraction: float = 0.25,
     max_excluded_fraction: float = 0.5,
     duplicates: Iterable[Duplicate] = (),
+    accept_force_balance: bool = False,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -498,6 +516,11 @@ def assess(
         (:attr:`cylfric.io.campaign.Campaign.duplicates`): listed with the check
         ``duplicate`` and the file they repeat (they are not runs: never counted against
         ``max_excluded_fraction``).
+    accept_force_balance : bool
+        Fit even when the physical checks of :mod:`cylfric.plausibility` find the force
+        balance or the units contradicted (a sign of campaign.toml, a friction above the
+        cylinder's pressure force): their findings become :attr:`QualityReport.notes`
+        instead of an error.
 
     Returns
     -------
@@ -507,8 +530,15 @@ def assess(
     ------
     QualityError
         When the gate would exclude more than ``max_excluded_fraction`` of the runs, or the
-        ``scale`` check more than ``max_scale_fraction``.
+        ``scale`` check more than ``max_scale_fraction``; its subclasses
+        :class:`~cylfric.plausibility.ForceBalanceError` (the offset or the friction
+        follows the balance's pressure force, or is below 0: a sign of campaign.toml) and
+        :class:`~cylfric.plausibility.ImplausibleDataError` (a friction above the pressure
+        force the cylinder could make: a unit slip), unless ``accept_force_balance``.
     """
+    from .plausibility import check_force_balance, check_plausibility
+
+    notes = check_force_balance(extraction, accept=accept_force_balance)
     table = _runs_table(extraction)
     excluded = []
 
@@ -516,6 +546,8 @@ def assess(
         excluded.append({"file": row["file"], "run": row["run"], "check": check, "reason": reason})
 
     floors = {"pressure": pressure_floor, "velocity": speed_floor}
+    config = getattr(extraction, "config", None)
+    reference = config.pressure_reference if config is not None else "mean"
     points = extraction.points
     windows = points[points["n [-]"] > 0] if "n [-]" in points else points
     measured = windows.groupby("run")["pressure [Pa]"].median()
@@ -542,6 +574,7 @@ def assess(
                     float(measured.get(info.get("run"), math.nan)),
                     measured_tolerance,
                     measured_floor,
+                    reference,
                 )
             )
         elif info.get("run") in nonpositive and not texts[0].startswith("pressure"):
@@ -647,10 +680,12 @@ def assess(
         )
     frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
     _refuse_most(frame, len(extraction.runs), max_excluded_fraction, extraction)
+    kept = table[~table["run"].isin(set(frame["run"]))].dropna(subset=["friction"])
+    notes += check_plausibility(extraction, kept, accept=accept_force_balance)
     runs = frame[frame["run"] >= 0]
     if len(runs):
         checks = dict(zip(runs["run"], runs["check"], strict=True))
         mask = points["run"].isin(checks) & points["flag"].eq("ok")
         points = points.copy()
         points.loc[mask, "flag"] = "excluded: " + points.loc[mask, "run"].map(checks)
-    return QualityReport(points, frame)
+    return QualityReport(points, frame, tuple(notes))
