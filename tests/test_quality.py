@@ -177,7 +177,7 @@ def test_nominal_sources_are_compared(clean, tmp_path, edit, check, expected):
             "0",
             "metadata conflict: measured pressure 20 bar (the pressure column, the value used) "
             "but 0 bar in manifest.csv line 2 (check the pressure column's unit and the run's "
-            "nominal pressure)",
+            "nominal pressure; the unit the file states: bar)",
         ),
     ],
 )

@@ -147,6 +147,7 @@ def check_force_balance(
     t_limit: float = 5.0,
     min_runs: int = 3,
     min_span: float = 0.05,
+    scale_factor: float = 30.0,
 ) -> list[str]:
     """Refuse points whose offset or friction follows the pressure force of the balance.
 
@@ -170,6 +171,9 @@ def check_force_balance(
         fraction of the larger area times the runs' pressure range for a slope [-]: on a
         rig whose chambers cancel (equal areas, equal pressures) it changes only by the
         sensors' noise.
+    scale_factor : float
+        Runs whose friction is more than this factor off the median run's are left out
+        (a file in another force unit: the gate's ``scale`` check lists it) [-].
 
     Returns
     -------
@@ -186,6 +190,10 @@ def check_force_balance(
     if config is None:
         return []
     runs = _runs(extraction)
+    if not runs.empty:  # a run in another force unit (the scale check's) is no evidence
+        level = float(np.median(np.abs(runs["friction"])))
+        ratio = np.abs(runs["friction"]) / level if level > 0 else np.ones(len(runs))
+        runs = runs[(ratio < scale_factor) & (ratio > 1 / scale_factor)]
     if runs.empty:
         return []
     recipe = _recipe(extraction)
@@ -332,6 +340,7 @@ def check_plausibility(
     *,
     accept: bool = False,
     margin: float = 1.0,
+    min_fraction: float = 0.0,
 ) -> list[str]:
     """Refuse a friction level above the pressure force the cylinder could make.
 
@@ -352,6 +361,10 @@ def check_plausibility(
         Return the finding as a note instead of raising.
     margin : float
         Fraction of the largest pressure force a friction may reach [-].
+    min_fraction : float
+        Refuse only when more than this fraction of the runs is above it [-] (0: any run;
+        the gate first asks for a majority, before its ``scale`` check lists single runs
+        in another unit, then for any of the runs it keeps).
 
     Raises
     ------
@@ -374,17 +387,17 @@ def check_plausibility(
         return []
     capacity = area * p_max
     high = table[table["friction"].abs() > margin * capacity]
-    if high.empty:
+    if high.empty or len(high) <= min_fraction * len(table):
         return []
     units = dict(
         zip(
             run_column(extraction.runs, "run"),
-            run_column(extraction.runs, "units", default={}),
+            run_column(extraction.runs, "units", "force", default=None),
             strict=True,
         )
     )
     first = high.iloc[0]
-    unit = (units.get(first["run"]) or {}).get("force")
+    unit = units.get(first["run"])
     ratio = float(abs(first["friction"]) / capacity)
     files = ", ".join(str(f) for f in high["file"].head(3)) + (", ..." if len(high) > 3 else "")
     text = (

@@ -268,9 +268,12 @@ def _measured_conflict(info, measured, tolerance, floor, reference="mean"):
     if off[0][3] != off[0][1]:  # "sum": the nominal chamber pressure counted twice
         what = f'the pressure columns, pressure_reference = "{reference}"'
         said += f" (both chambers at it: {off[0][3] / 1e5:.4g} bar)"
+    units = info.get("units") or {}  # (a summary's dict: info is one run's, in full)
+    seen = [units[k] for k in ("pressure", "pressure_a", "pressure_b") if units.get(k)]
+    unit = f"; the unit the file states: {seen[0]}" if seen else ""
     return (
         f"measured pressure {measured / 1e5:.4g} bar ({what}, the value used) but {said} "
-        f"({_pressure_cause(measured, off[0][3])})"
+        f"({_pressure_cause(measured, off[0][3])}{unit})"
     )
 
 
@@ -538,7 +541,10 @@ def assess(
     """
     from .plausibility import check_force_balance, check_plausibility
 
-    notes = check_force_balance(extraction, accept=accept_force_balance)
+    # a whole campaign in another force unit first (no majority for the scale check), then
+    # the force balance on the runs in one unit
+    notes = check_plausibility(extraction, accept=accept_force_balance, min_fraction=0.5)
+    notes += check_force_balance(extraction, accept=accept_force_balance)
     table = _runs_table(extraction)
     excluded = []
 
@@ -681,7 +687,8 @@ def assess(
     frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
     _refuse_most(frame, len(extraction.runs), max_excluded_fraction, extraction)
     kept = table[~table["run"].isin(set(frame["run"]))].dropna(subset=["friction"])
-    notes += check_plausibility(extraction, kept, accept=accept_force_balance)
+    if not notes:  # any run the gate keeps
+        notes += check_plausibility(extraction, kept, accept=accept_force_balance)
     runs = frame[frame["run"] >= 0]
     if len(runs):
         checks = dict(zip(runs["run"], runs["check"], strict=True))
