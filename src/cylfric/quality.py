@@ -61,7 +61,16 @@ if TYPE_CHECKING:
 
 __all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
-CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted", "duplicate")
+CHECKS = (
+    "metadata",
+    "speed",
+    "scale",
+    "outlier",
+    "motion",
+    "transient",
+    "unlisted",
+    "duplicate",
+)
 """Names of the checks, as they appear in ``excluded.csv``."""
 
 
@@ -379,6 +388,66 @@ def _outliers(groups, outlier_sigma, min_speeds, floor):
     return out
 
 
+def _transients(
+    points, runs, skip, transient_sigma, noise_floor, min_points, short_window=0.25, short_sigma=3.0
+):
+    """Rows of ``points`` (ok windows of runs not in ``skip``) whose friction disagrees with
+    the other strokes of the same setting: (row index, cell median [N], robust sigma [N]).
+
+    A setting is a run's nominal pressure and speed (NaN when the metadata give none), its
+    labels (the points' text columns: a valve voltage, a seal) and the stroke's direction;
+    its strokes are the windows of every run with that setting. A stroke further than
+    ``transient_sigma`` robust sigmas (1.4826 MAD of the cell, at least ``noise_floor`` of
+    the cell's median) from the cell's median is left out, the worst first, while the cell
+    keeps ``min_points``; so is one further than ``short_sigma`` whose window lasts less
+    than ``short_window`` of the cell's median window (a step that ended while its
+    pressures still settled: on the virtual valve rig a 0.35 s step leaves 10-20 ms windows
+    against 1.2 s).
+    """
+    ok = points[points["flag"].eq("ok") & ~points["run"].isin(skip)]
+    if ok.empty:
+        return []
+    nominal = pd.DataFrame(
+        {
+            "run": run_column(runs, "run"),
+            "_p": np.round(np.array(run_column(runs, "pressure [Pa]", default=math.nan), float)),
+            "_v": np.round(
+                np.abs(np.array(run_column(runs, "velocity [m/s]", default=math.nan), float)), 9
+            ),
+        }
+    ).set_index("run")
+    cells = ok.join(nominal, on="run")
+    labels = [
+        c
+        for c in points.columns
+        if c not in _POINT_NAMES and c != "session" and not pd.api.types.is_numeric_dtype(points[c])
+    ]
+    keys = ["_p", "_v", "direction [-]", *labels]
+    cells = cells.assign(**{k: cells[k].astype(str) for k in keys})
+    found = []
+    for _, cell in cells.groupby(keys, dropna=False):
+        friction = cell["friction [N]"].to_numpy(float)
+        duration = (cell["window_end [s]"] - cell["window_start [s]"]).to_numpy(float)
+        index = cell.index.to_numpy()
+        keep = np.isfinite(friction)
+        while keep.sum() >= min_points:
+            values = friction[keep]
+            median = float(np.median(values))
+            mad = float(np.median(np.abs(values - median)))
+            sigma = max(1.4826 * mad, noise_floor * abs(median), 1e-9)
+            distance = np.where(keep, np.abs(friction - median) / sigma, 0.0)
+            # a window much shorter than its setting's others: the stroke ended (or the
+            # force settled) late, so a smaller disagreement already marks a transient
+            short = duration < short_window * float(np.median(duration[keep]))
+            limit = np.where(short, short_sigma, transient_sigma)
+            worst = int(np.argmax(distance / limit))
+            if distance[worst] <= limit[worst]:
+                break
+            found.append((index[worst], median, sigma))
+            keep[worst] = False
+    return found
+
+
 class QualityError(ValueError):
     """The data contradict each other too much for the gate to pick the runs to keep."""
 
@@ -462,6 +531,8 @@ def assess(
     max_excluded_fraction: float = 0.5,
     duplicates: Iterable[Duplicate] = (),
     accept_force_balance: bool = False,
+    transient_sigma: float = 8.0,
+    transient_points: int = 3,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -519,6 +590,14 @@ def assess(
         (:attr:`cylfric.io.campaign.Campaign.duplicates`): listed with the check
         ``duplicate`` and the file they repeat (they are not runs: never counted against
         ``max_excluded_fraction``).
+    transient_sigma : float
+        A stroke's window further than this many robust sigmas from the median of the other
+        strokes of its setting (1.4826 MAD of the cell, at least ``noise_floor`` of its
+        median) is a start transient and left out by itself (``transient``: the window,
+        not the run) [-].
+    transient_points : int
+        Fewest strokes of a setting (run nominal pressure and speed, labels, direction) for
+        the ``transient`` check [-].
     accept_force_balance : bool
         Fit even when the physical checks of :mod:`cylfric.plausibility` find the force
         balance or the units contradicted (a sign of campaign.toml, a friction above the
@@ -671,6 +750,29 @@ def assess(
                 f"({abs(residual) / sigma:.0f} robust sigmas) from its neighbours in speed at "
                 f"{row['pressure'] / 1e5:.3g} bar (pressure metadata wrong?)",
             )
+    flagged = {e["run"] for e in excluded}
+    strokes = []  # single windows left out, not whole runs
+    for row, median, sigma in _transients(
+        points, extraction.runs, flagged, transient_sigma, noise_floor, transient_points
+    ):
+        point = points.loc[row]
+        direction = "extension" if point["direction [-]"] > 0 else "retraction"
+        distance = abs(point["friction [N]"] - median) / sigma
+        strokes.append(
+            {
+                "row": row,
+                "file": _relative(point["file"], extraction),
+                "run": point["run"],
+                "check": "transient",
+                "reason": (
+                    f"stroke {point['stroke']} ({direction}, window "
+                    f"{point['window_start [s]']:.3g}-{point['window_end [s]']:.3g} s): friction "
+                    f"{point['friction [N]']:.4g} N against {median:.4g} N for the other "
+                    f"strokes of the same setting ({distance:.0f} robust sigmas): a start "
+                    "transient, not a steady level"
+                ),
+            }
+        )
     for name in getattr(extraction, "unlisted", []):
         excluded.append(
             {
@@ -695,4 +797,9 @@ def assess(
         mask = points["run"].isin(checks) & points["flag"].eq("ok")
         points = points.copy()
         points.loc[mask, "flag"] = "excluded: " + points.loc[mask, "run"].map(checks)
+    if strokes:
+        points = points.copy()
+        points.loc[[s["row"] for s in strokes], "flag"] = "excluded: transient"
+        rows = pd.DataFrame([{k: v for k, v in s.items() if k != "row"} for s in strokes])
+        frame = pd.concat([frame, rows], ignore_index=True)
     return QualityReport(points, frame, tuple(notes))
