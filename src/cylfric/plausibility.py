@@ -372,7 +372,9 @@ def check_plausibility(
         Naming the runs, the force unit their files state and the likely slip.
     """
     config = extraction.config
-    area = max(getattr(config, "area_a", 0.0), getattr(config, "area_b", 0.0)) if config else 0.0
+    if config is None:
+        return []
+    area = max(config.area_a, config.area_b)
     if not area > 0:
         return []
     table = _runs(extraction) if runs is None else runs

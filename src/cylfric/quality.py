@@ -262,13 +262,16 @@ def _measured_conflict(info, measured, tolerance, floor, reference="mean"):
     values = info.get("nominal", {}).get("pressure", {})
     if not math.isfinite(measured):
         return ""
-    combine = PRESSURE_REFERENCES[reference]
+    combined = {
+        source: float(PRESSURE_REFERENCES[reference](np.asarray(value), np.asarray(value)))
+        for source, (value, _) in values.items()
+    }
     off = [
-        (source, value, where, float(combine(np.float64(value), np.float64(value))))
+        (source, value, where, combined[source])
         for source, (value, where) in values.items()
         if not math.isfinite(value)
-        or abs(measured - (seen := float(combine(np.float64(value), np.float64(value)))))
-        > max(tolerance * max(abs(measured), abs(seen)), floor)
+        or abs(measured - combined[source])
+        > max(tolerance * max(abs(measured), abs(combined[source])), floor)
     ]
     if not off:
         return ""
@@ -278,8 +281,8 @@ def _measured_conflict(info, measured, tolerance, floor, reference="mean"):
         what = f'the pressure columns, pressure_reference = "{reference}"'
         said += f" (both chambers at it: {off[0][3] / 1e5:.4g} bar)"
     units = info.get("units") or {}  # (a summary's dict: info is one run's, in full)
-    seen = [units[k] for k in ("pressure", "pressure_a", "pressure_b") if units.get(k)]
-    unit = f"; the unit the file states: {seen[0]}" if seen else ""
+    stated = [units[k] for k in ("pressure", "pressure_a", "pressure_b") if units.get(k)]
+    unit = f"; the unit the file states: {stated[0]}" if stated else ""
     return (
         f"measured pressure {measured / 1e5:.4g} bar ({what}, the value used) but {said} "
         f"({_pressure_cause(measured, off[0][3])}{unit})"

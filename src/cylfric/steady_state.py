@@ -493,8 +493,8 @@ def _point_rows(data, metadata, config, run, options, balance=None):
         if n:
             f_mean, f_std = _mean_std(f)
             v_std = _mean_std(v)[1]
-        if balance is not None:
-            term = nan
+        if balance is not None:  # 0 N: the balance adds no pressure term
+            term = 0.0 if n else nan
             if pressure_force is not None and n:
                 window = pressure_force[w.start : w.stop]
                 term = _mean(window[keep] if n < window.size else window)
@@ -539,8 +539,9 @@ def _pressure_force(data, config: CampaignConfig) -> np.ndarray | None:
 
 def _run_balance(rows, terms) -> float:
     """The run's pressure term of the force balance as its offset sees it [N]: the mean of
-    the ok windows' terms of each direction, averaged over the directions it has (NaN
-    without an ok window)."""
+    the ok windows' terms of each direction, averaged over the directions it has (0 N
+    without an ok window or without a pressure term; a number, so that summaries compare
+    equal)."""
     means = []
     for direction in (1, -1):
         values = [
@@ -552,7 +553,7 @@ def _run_balance(rows, terms) -> float:
         ]
         if values:
             means.append(float(np.mean(values)))
-    return float(np.mean(means)) if means else math.nan
+    return float(np.mean(means)) if means else 0.0  # (no window: nothing to balance)
 
 
 def _offset_rows(rows, campaign_offset=None, config=None):
@@ -1056,7 +1057,7 @@ def _extraction(campaign, points, skipped, offset, offset_std, runs, total) -> E
         total,
         list(campaign.unlisted),
         str(campaign.folder),
-        campaign.config,
+        getattr(campaign, "config", None),
     )
 
 
