@@ -351,3 +351,33 @@ def test_the_gate_compares_nominal_pressures_in_the_campaigns_reference(rule, tm
     assert "7 bar in manifest.csv line 7" in reason
     if rule == "sum":
         assert "both chambers at it: 14 bar" in reason
+
+
+@pytest.mark.parametrize(
+    ("rule", "nominal", "columns"),
+    [
+        ("a", 10e5, 10e5),
+        ("b", 10e5, 4e5),
+        ("sum", 20e5, 14e5),
+        ("mean", 10e5, 7e5),
+        ("max", 10e5, 10e5),
+    ],
+)
+def test_presliding_records_see_the_pressure_the_points_see(rule, nominal, columns):
+    """A presliding record's pressure is the chambers combined by the campaign's reference,
+    as the steady-state points' (issue 39, item 3): a nominal 10 bar is both chambers' (the
+    "sum" is 20 bar), and chambers measured at 10 and 4 bar give the rule's value. Before,
+    a record took the mean of the pressure columns whatever the reference (7 bar)."""
+    from cylfric.identify.dynamic import dynamic_record
+
+    time = np.arange(400) * 1e-3
+    data = {"time [s]": time, "position [m]": np.zeros(400), "force [N]": np.zeros(400)}
+    meta = {
+        "path": "run.txt",
+        "pressure": 10e5,
+        "extra": {"test": "presliding"},
+        "header": {"Moving mass": "2.5 kg"},
+    }
+    assert dynamic_record(data, meta, reference=rule).pressure == pytest.approx(nominal)
+    data |= {"pressure_a [Pa]": np.full(400, 10e5), "pressure_b [Pa]": np.full(400, 4e5)}
+    assert dynamic_record(data, meta, reference=rule).pressure == pytest.approx(columns)
