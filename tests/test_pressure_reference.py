@@ -314,3 +314,70 @@ def test_a_rule_needing_an_unmeasured_chamber_is_refused_naming_the_file(tmp_pat
         operating_pressure_signal(data, config, "run_7.txt")
     _campaign(tmp_path, 'bore = "25 mm"\nkind = "single-acting"\n')
     assert_allclose(operating_pressure_signal(data, load_config(tmp_path), "run_7.txt"), 10e5)
+
+
+# ------------------------------------------------------------ the gate agrees (issue 39, item 3)
+@pytest.mark.parametrize("rule", ["a", "b", "sum", "mean", "max"])
+def test_the_gate_compares_nominal_pressures_in_the_campaigns_reference(rule, tmp_path):
+    """Both chambers held at the manifest's pressure (a double-rod rig, tests/synthetic_rig.py):
+    the points see the chambers combined by the rule (the sum of two 3 bar chambers is 6 bar)
+    and the gate compares the manifest's chamber pressure combined the same way: no run is
+    excluded, while a manifest row typed 7 instead of 3 bar is still found. On main the gate
+    compared the measured sum with one chamber's value and refused every run ("sum")."""
+    from synthetic_rig import write_campaign
+
+    from cylfric.friction.pressure import PRESSURE_REFERENCES
+    from cylfric.quality import assess
+    from cylfric.steady_state import extract_campaign
+
+    folder = write_campaign(
+        tmp_path / "c",
+        kind="double-rod",
+        rod_mm=10,
+        both_chambers=True,
+        reference=rule,
+        direction_drop_bar=0.0,
+        manifest={5: 7.0},  # run_05 is at 3 bar
+    )
+    extraction = extract_campaign(folder, workers=1)
+    ok = extraction.points[extraction.points["flag"].eq("ok")]
+    measured = ok.groupby("run")["pressure [Pa]"].median()
+    nominal = np.array([1, 3, 5, 7, 1, 3, 5, 7], dtype=float) * 1e5
+    combined = PRESSURE_REFERENCES[rule](nominal, nominal)
+    assert_allclose(measured.to_numpy(), combined, rtol=0.01)
+    excluded = assess(extraction).excluded
+    assert excluded["file"].tolist() == ["run_05_p3bar.txt"]
+    reason = excluded["reason"].iloc[0]
+    assert "7 bar in manifest.csv line 7" in reason
+    if rule == "sum":
+        assert "both chambers at it: 14 bar" in reason
+
+
+@pytest.mark.parametrize(
+    ("rule", "nominal", "columns"),
+    [
+        ("a", 10e5, 10e5),
+        ("b", 10e5, 4e5),
+        ("sum", 20e5, 14e5),
+        ("mean", 10e5, 7e5),
+        ("max", 10e5, 10e5),
+    ],
+)
+def test_presliding_records_see_the_pressure_the_points_see(rule, nominal, columns):
+    """A presliding record's pressure is the chambers combined by the campaign's reference,
+    as the steady-state points' (issue 39, item 3): a nominal 10 bar is both chambers' (the
+    "sum" is 20 bar), and chambers measured at 10 and 4 bar give the rule's value. Before,
+    a record took the mean of the pressure columns whatever the reference (7 bar)."""
+    from cylfric.identify.dynamic import dynamic_record
+
+    time = np.arange(400) * 1e-3
+    data = {"time [s]": time, "position [m]": np.zeros(400), "force [N]": np.zeros(400)}
+    meta = {
+        "path": "run.txt",
+        "pressure": 10e5,
+        "extra": {"test": "presliding"},
+        "header": {"Moving mass": "2.5 kg"},
+    }
+    assert dynamic_record(data, meta, reference=rule).pressure == pytest.approx(nominal)
+    data |= {"pressure_a [Pa]": np.full(400, 10e5), "pressure_b [Pa]": np.full(400, 4e5)}
+    assert dynamic_record(data, meta, reference=rule).pressure == pytest.approx(columns)

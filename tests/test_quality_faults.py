@@ -227,7 +227,7 @@ def test_a_pressure_column_in_psi_or_mpa_labelled_bar_isexcluded_table(
     assert reason.endswith(
         " bar (the pressure column, the value used) but 55 bar in manifest.csv line 12 and 55 "
         "bar in the file header (Pressure: 55 bar) and 55 bar in the file name (p55bar) "
-        f"({cause})"
+        f"({cause}; the unit the file states: bar)"
     ), reason
     sheet = _within_tolerance(out)
     assert sheet["validity"]["pressure_max"] < 170e5  # was 798 bar

@@ -67,6 +67,12 @@ class FitOptions:
         :func:`cylfric.drift.correct_campaign`). None: when both ``[oil]`` and temperatures
         are there (a note says which is missing otherwise); True: required (ValueError
         without them); False: never.
+    accept_force_balance : bool
+        Fit even when the gate's physical checks (:mod:`cylfric.plausibility`) find the
+        force balance contradicted (the offset or the friction following the pressure
+        force: a ``load_cell_sign`` / ``position_sign`` of campaign.toml) or a friction
+        above the pressure force the cylinder could make (a unit slip); the findings become
+        notes. By default they stop the fit (exit 2).
 
     Every value is checked on construction; a wrong one raises ValueError naming the option
     and the valid values.
@@ -92,6 +98,7 @@ class FitOptions:
     workers: int | None = None
     viscosity_correction: bool | None = None
     scheduler: str | None = None
+    accept_force_balance: bool = False
 
     def __post_init__(self) -> None:
         fixed = {} if self.fixed is None else self.fixed
@@ -106,7 +113,7 @@ class FitOptions:
                 f"unknown pressure law {self.pressure_law!r} (pressure_law); "
                 f"valid: {list(FITTED_PRESSURE_LAWS)}"
             )
-        for name in ("per_direction", "skip_bad", "report", "strict"):
+        for name in ("per_direction", "skip_bad", "report", "strict", "accept_force_balance"):
             _check_choice(name, getattr(self, name), (True, False))
             object.__setattr__(self, name, bool(getattr(self, name)))
         _check_choice("viscosity_correction", self.viscosity_correction, (None, True, False))

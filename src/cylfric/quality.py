@@ -50,6 +50,7 @@ import numpy as np
 import pandas as pd
 
 from ._runtable import RunTable, run_column
+from .friction.pressure import PRESSURE_REFERENCES
 from .levels import pressure_levels
 
 if TYPE_CHECKING:
@@ -60,7 +61,16 @@ if TYPE_CHECKING:
 
 __all__ = ["assess", "QualityReport", "QualityError", "CHECKS"]
 
-CHECKS = ("metadata", "speed", "scale", "outlier", "motion", "unlisted", "duplicate")
+CHECKS = (
+    "metadata",
+    "speed",
+    "scale",
+    "outlier",
+    "motion",
+    "transient",
+    "unlisted",
+    "duplicate",
+)
 """Names of the checks, as they appear in ``excluded.csv``."""
 
 
@@ -74,10 +84,14 @@ class QualityReport:
         The points table with the flags of excluded runs set to ``"excluded: <check>"``.
     excluded : pandas.DataFrame
         One row per excluded run or unlisted file: ``file``, ``run``, ``check``, ``reason``.
+    notes : tuple of str
+        What the physical checks found and were told to accept (``accept_force_balance``),
+        for the datasheet's notes.
     """
 
     points: pd.DataFrame
     excluded: pd.DataFrame
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> str:
         """One line: how many runs each check excluded."""
@@ -230,7 +244,7 @@ def _conflicts(info, tolerance, floors):
     return "; ".join(texts)
 
 
-def _measured_conflict(info, measured, tolerance, floor):
+def _measured_conflict(info, measured, tolerance, floor, reference="mean"):
     """Text naming a run's measured pressure and the nominal values it contradicts, or ''.
 
     ``measured`` is the median over the run's windows of the pressure column [Pa]. A
@@ -238,22 +252,40 @@ def _measured_conflict(info, measured, tolerance, floor):
     the limit is looser than between nominal sources: ``tolerance`` of the larger and at
     least ``floor`` [Pa]. A column in psi or MPa labelled bar reads 14.5 or 0.1 times the
     nominal and is far outside.
+
+    A nominal value is a chamber pressure (both chambers, or the working one); the measured
+    one is the chambers' pressures combined by the campaign's ``reference``
+    (:data:`~cylfric.friction.pressure.PRESSURE_REFERENCES`), so the nominal value is
+    combined the same way before they are compared (the ``"sum"`` of two chambers at 10 bar
+    is 20 bar), as the extraction does for a run without a pressure column.
     """
     values = info.get("nominal", {}).get("pressure", {})
     if not math.isfinite(measured):
         return ""
+    combined = {
+        source: float(PRESSURE_REFERENCES[reference](np.asarray(value), np.asarray(value)))
+        for source, (value, _) in values.items()
+    }
     off = [
-        (source, value, where)
+        (source, value, where, combined[source])
         for source, (value, where) in values.items()
         if not math.isfinite(value)
-        or abs(measured - value) > max(tolerance * max(abs(measured), abs(value)), floor)
+        or abs(measured - combined[source])
+        > max(tolerance * max(abs(measured), abs(combined[source])), floor)
     ]
     if not off:
         return ""
-    said = " and ".join(_said("pressure", *item) for item in off)
+    said = " and ".join(_said("pressure", *item[:3]) for item in off)
+    what = "the pressure column"
+    if off[0][3] != off[0][1]:  # "sum": the nominal chamber pressure counted twice
+        what = f'the pressure columns, pressure_reference = "{reference}"'
+        said += f" (both chambers at it: {off[0][3] / 1e5:.4g} bar)"
+    units = info.get("units") or {}  # (a summary's dict: info is one run's, in full)
+    stated = [units[k] for k in ("pressure", "pressure_a", "pressure_b") if units.get(k)]
+    unit = f"; the unit the file states: {stated[0]}" if stated else ""
     return (
-        f"measured pressure {measured / 1e5:.4g} bar (the pressure column, the value used) "
-        f"but {said} ({_pressure_cause(measured, off[0][1])})"
+        f"measured pressure {measured / 1e5:.4g} bar ({what}, the value used) but {said} "
+        f"({_pressure_cause(measured, off[0][3])}{unit})"
     )
 
 
@@ -359,6 +391,66 @@ def _outliers(groups, outlier_sigma, min_speeds, floor):
     return out
 
 
+def _transients(
+    points, runs, skip, transient_sigma, noise_floor, min_points, short_window=0.25, short_sigma=3.0
+):
+    """Rows of ``points`` (ok windows of runs not in ``skip``) whose friction disagrees with
+    the other strokes of the same setting: (row index, cell median [N], robust sigma [N]).
+
+    A setting is a run's nominal pressure and speed (NaN when the metadata give none), its
+    labels (the points' text columns: a valve voltage, a seal) and the stroke's direction;
+    its strokes are the windows of every run with that setting. A stroke further than
+    ``transient_sigma`` robust sigmas (1.4826 MAD of the cell, at least ``noise_floor`` of
+    the cell's median) from the cell's median is left out, the worst first, while the cell
+    keeps ``min_points``; so is one further than ``short_sigma`` whose window lasts less
+    than ``short_window`` of the cell's median window (a step that ended while its
+    pressures still settled: on the virtual valve rig a 0.35 s step leaves 10-20 ms windows
+    against 1.2 s).
+    """
+    ok = points[points["flag"].eq("ok") & ~points["run"].isin(skip)]
+    if ok.empty:
+        return []
+    nominal = pd.DataFrame(
+        {
+            "run": run_column(runs, "run"),
+            "_p": np.round(np.array(run_column(runs, "pressure [Pa]", default=math.nan), float)),
+            "_v": np.round(
+                np.abs(np.array(run_column(runs, "velocity [m/s]", default=math.nan), float)), 9
+            ),
+        }
+    ).set_index("run")
+    cells = ok.join(nominal, on="run")
+    labels = [
+        c
+        for c in points.columns
+        if c not in _POINT_NAMES and c != "session" and not pd.api.types.is_numeric_dtype(points[c])
+    ]
+    keys = ["_p", "_v", "direction [-]", *labels]
+    cells = cells.assign(**{k: cells[k].astype(str) for k in keys})
+    found = []
+    for _, cell in cells.groupby(keys, dropna=False):
+        friction = cell["friction [N]"].to_numpy(float)
+        duration = (cell["window_end [s]"] - cell["window_start [s]"]).to_numpy(float)
+        index = cell.index.to_numpy()
+        keep = np.isfinite(friction)
+        while keep.sum() >= min_points:
+            values = friction[keep]
+            median = float(np.median(values))
+            mad = float(np.median(np.abs(values - median)))
+            sigma = max(1.4826 * mad, noise_floor * abs(median), 1e-9)
+            distance = np.where(keep, np.abs(friction - median) / sigma, 0.0)
+            # a window much shorter than its setting's others: the stroke ended (or the
+            # force settled) late, so a smaller disagreement already marks a transient
+            short = duration < short_window * float(np.median(duration[keep]))
+            limit = np.where(short, short_sigma, transient_sigma)
+            worst = int(np.argmax(distance / limit))
+            if distance[worst] <= limit[worst]:
+                break
+            found.append((index[worst], median, sigma))
+            keep[worst] = False
+    return found
+
+
 class QualityError(ValueError):
     """The data contradict each other too much for the gate to pick the runs to keep."""
 
@@ -441,6 +533,9 @@ def assess(
     max_scale_fraction: float = 0.25,
     max_excluded_fraction: float = 0.5,
     duplicates: Iterable[Duplicate] = (),
+    accept_force_balance: bool = False,
+    transient_sigma: float = 8.0,
+    transient_points: int = 3,
 ) -> QualityReport:
     """Flag the runs that would mislead the fit; see the module docstring for the checks.
 
@@ -498,6 +593,19 @@ def assess(
         (:attr:`cylfric.io.campaign.Campaign.duplicates`): listed with the check
         ``duplicate`` and the file they repeat (they are not runs: never counted against
         ``max_excluded_fraction``).
+    transient_sigma : float
+        A stroke's window further than this many robust sigmas from the median of the other
+        strokes of its setting (1.4826 MAD of the cell, at least ``noise_floor`` of its
+        median) is a start transient and left out by itself (``transient``: the window,
+        not the run) [-].
+    transient_points : int
+        Fewest strokes of a setting (run nominal pressure and speed, labels, direction) for
+        the ``transient`` check [-].
+    accept_force_balance : bool
+        Fit even when the physical checks of :mod:`cylfric.plausibility` find the force
+        balance or the units contradicted (a sign of campaign.toml, a friction above the
+        cylinder's pressure force): their findings become :attr:`QualityReport.notes`
+        instead of an error.
 
     Returns
     -------
@@ -507,8 +615,18 @@ def assess(
     ------
     QualityError
         When the gate would exclude more than ``max_excluded_fraction`` of the runs, or the
-        ``scale`` check more than ``max_scale_fraction``.
+        ``scale`` check more than ``max_scale_fraction``; its subclasses
+        :class:`~cylfric.plausibility.ForceBalanceError` (the offset or the friction
+        follows the balance's pressure force, or is below 0: a sign of campaign.toml) and
+        :class:`~cylfric.plausibility.ImplausibleDataError` (a friction above the pressure
+        force the cylinder could make: a unit slip), unless ``accept_force_balance``.
     """
+    from .plausibility import check_force_balance, check_plausibility
+
+    # a whole campaign in another force unit first (no majority for the scale check), then
+    # the force balance on the runs in one unit
+    notes = check_plausibility(extraction, accept=accept_force_balance, min_fraction=0.5)
+    notes += check_force_balance(extraction, accept=accept_force_balance)
     table = _runs_table(extraction)
     excluded = []
 
@@ -516,6 +634,8 @@ def assess(
         excluded.append({"file": row["file"], "run": row["run"], "check": check, "reason": reason})
 
     floors = {"pressure": pressure_floor, "velocity": speed_floor}
+    config = getattr(extraction, "config", None)
+    reference = config.pressure_reference if config is not None else "mean"
     points = extraction.points
     windows = points[points["n [-]"] > 0] if "n [-]" in points else points
     measured = windows.groupby("run")["pressure [Pa]"].median()
@@ -542,6 +662,7 @@ def assess(
                     float(measured.get(info.get("run"), math.nan)),
                     measured_tolerance,
                     measured_floor,
+                    reference,
                 )
             )
         elif info.get("run") in nonpositive and not texts[0].startswith("pressure"):
@@ -632,6 +753,29 @@ def assess(
                 f"({abs(residual) / sigma:.0f} robust sigmas) from its neighbours in speed at "
                 f"{row['pressure'] / 1e5:.3g} bar (pressure metadata wrong?)",
             )
+    flagged = {e["run"] for e in excluded}
+    strokes = []  # single windows left out, not whole runs
+    for row, median, sigma in _transients(
+        points, extraction.runs, flagged, transient_sigma, noise_floor, transient_points
+    ):
+        point = points.loc[row]
+        direction = "extension" if point["direction [-]"] > 0 else "retraction"
+        distance = abs(point["friction [N]"] - median) / sigma
+        strokes.append(
+            {
+                "row": row,
+                "file": _relative(point["file"], extraction),
+                "run": point["run"],
+                "check": "transient",
+                "reason": (
+                    f"stroke {point['stroke']} ({direction}, window "
+                    f"{point['window_start [s]']:.3g}-{point['window_end [s]']:.3g} s): friction "
+                    f"{point['friction [N]']:.4g} N against {median:.4g} N for the other "
+                    f"strokes of the same setting ({distance:.0f} robust sigmas): a start "
+                    "transient, not a steady level"
+                ),
+            }
+        )
     for name in getattr(extraction, "unlisted", []):
         excluded.append(
             {
@@ -647,10 +791,18 @@ def assess(
         )
     frame = pd.DataFrame(excluded, columns=["file", "run", "check", "reason"])
     _refuse_most(frame, len(extraction.runs), max_excluded_fraction, extraction)
+    kept = table[~table["run"].isin(set(frame["run"]))].dropna(subset=["friction"])
+    if not notes:  # any run the gate keeps
+        notes += check_plausibility(extraction, kept, accept=accept_force_balance)
     runs = frame[frame["run"] >= 0]
     if len(runs):
         checks = dict(zip(runs["run"], runs["check"], strict=True))
         mask = points["run"].isin(checks) & points["flag"].eq("ok")
         points = points.copy()
         points.loc[mask, "flag"] = "excluded: " + points.loc[mask, "run"].map(checks)
-    return QualityReport(points, frame)
+    if strokes:
+        points = points.copy()
+        points.loc[[s["row"] for s in strokes], "flag"] = "excluded: transient"
+        rows = pd.DataFrame([{k: v for k, v in s.items() if k != "row"} for s in strokes])
+        frame = pd.concat([frame, rows], ignore_index=True)
+    return QualityReport(points, frame, tuple(notes))

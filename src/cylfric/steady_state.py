@@ -396,7 +396,9 @@ def _mean_std(x) -> tuple[float, float]:
     return float(mean), math.sqrt(_sum(deviation * deviation) / x.size)
 
 
-def _point_rows(data, metadata, config, run, options):
+def _point_rows(data, metadata, config, run, options, balance=None):
+    """Point rows of one run; ``balance``, when a list, gets per row the mean pressure term
+    of the force balance over its window, ``A_a p_a - A_b p_b`` [N] (NaN without one)."""
     options = dict(options)
     spike_sigma = options.pop("spike_sigma", 5.0)
     velocity_window = options.pop("velocity_window", 0.2)
@@ -446,6 +448,7 @@ def _point_rows(data, metadata, config, run, options):
         config.position_sign * np.asarray(data["position [m]"]) if "position [m]" in data else None
     )
     pressure = operating_pressure_signal(data, config, file)
+    pressure_force = _pressure_force(data, config) if balance is not None else None
     if math.isnan(metadata.get("pressure", math.nan)) and pressure is None:
         listed = metadata.get("manifest_line")
         manifest = (
@@ -490,6 +493,12 @@ def _point_rows(data, metadata, config, run, options):
         if n:
             f_mean, f_std = _mean_std(f)
             v_std = _mean_std(v)[1]
+        if balance is not None:  # 0 N: the balance adds no pressure term
+            term = 0.0 if n else nan
+            if pressure_force is not None and n:
+                window = pressure_force[w.start : w.stop]
+                term = _mean(window[keep] if n < window.size else window)
+            balance.append(term)
         rows.append(
             {
                 "run": run,
@@ -513,6 +522,38 @@ def _point_rows(data, metadata, config, run, options):
             }
         )
     return rows
+
+
+def _pressure_force(data, config: CampaignConfig) -> np.ndarray | None:
+    """The pressure term of the force balance (eq. 3.1), ``A_a p_a - A_b p_b`` [N], as
+    :func:`friction_signal` adds it; None when it adds none (no areas, no pressure column)."""
+    pa = data.get("pressure_a [Pa]", data.get("pressure [Pa]"))
+    pb = data.get("pressure_b [Pa]", data.get("pressure [Pa]"))
+    term = None
+    if config.area_a and pa is not None:
+        term = config.area_a * np.asarray(pa, dtype=float)
+    if config.area_b and pb is not None:
+        term = (0.0 if term is None else term) - config.area_b * np.asarray(pb, dtype=float)
+    return term
+
+
+def _run_balance(rows, terms) -> float:
+    """The run's pressure term of the force balance as its offset sees it [N]: the mean of
+    the ok windows' terms of each direction, averaged over the directions it has (0 N
+    without an ok window or without a pressure term; a number, so that summaries compare
+    equal)."""
+    means = []
+    for direction in (1, -1):
+        values = [
+            t
+            for r, t in zip(rows, terms, strict=True)
+            if r["flag"] in ("ok", "no_offset")
+            and r["direction [-]"] * direction > 0
+            and not math.isnan(t)
+        ]
+        if values:
+            means.append(float(np.mean(values)))
+    return float(np.mean(means)) if means else 0.0  # (no window: nothing to balance)
 
 
 def _offset_rows(rows, campaign_offset=None, config=None):
@@ -571,6 +612,10 @@ class Extraction:
         Size of the files read [bytes].
     folder : str or None
         The campaign folder (file names in excluded.csv are relative to it).
+    config : CampaignConfig or None
+        The campaign's configuration the points were extracted with (the force balance's
+        areas and signs, the pressure reference): the data-quality gate checks the points
+        against it (:mod:`cylfric.plausibility`). None: not known.
     """
 
     points: pd.DataFrame
@@ -581,6 +626,7 @@ class Extraction:
     bytes_read: int = 0
     unlisted: list = field(default_factory=list)
     folder: str | None = None
+    config: CampaignConfig | None = None
 
     @property
     def usable(self) -> pd.DataFrame:
@@ -740,11 +786,13 @@ def _read_one(info, index: int, config: CampaignConfig, options: dict) -> tuple:
     """(point rows, summary, None) of one run file, or (None, None, the BenchFileError)."""
     try:
         data, metadata = read_run(info, config)
+        terms: list[float] = []
         rows = _offset_rows(
-            _point_rows(data, metadata, config, index, dict(options)), config=config
+            _point_rows(data, metadata, config, index, dict(options), terms), config=config
         )
     except BenchFileError as exc:
         return None, None, exc
+    units = metadata.get("units", {})
     summary = {
         "file": str(info.path),
         "run": index,
@@ -757,6 +805,12 @@ def _read_one(info, index: int, config: CampaignConfig, options: dict) -> tuple:
         "pressure measured": "pressure [Pa]" in data or "pressure_a [Pa]" in data,
         "events": len(metadata.get("events", [])),
         "sha256": metadata.get("sha256"),
+        "pressure force [N]": _run_balance(rows, terms),
+        "units": {
+            quantity: str(unit)
+            for quantity, unit in units.items()
+            if quantity in ("force", "pressure", "pressure_a", "pressure_b", "position")
+        },
     }
     return rows, summary, None
 
@@ -1003,6 +1057,7 @@ def _extraction(campaign, points, skipped, offset, offset_std, runs, total) -> E
         total,
         list(campaign.unlisted),
         str(campaign.folder),
+        getattr(campaign, "config", None),
     )
 
 

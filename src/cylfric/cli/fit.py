@@ -228,6 +228,12 @@ def fit(
     strict: bool = typer.Option(
         False, "--strict", help="Stop (exit 2) instead of excluding runs the quality gate flags."
     ),
+    accept_force_balance: bool = typer.Option(
+        False,
+        "--accept-force-balance",
+        help="Fit even when the force balance or the units look contradicted (offset or "
+        "friction following the pressure force, friction above p*A): notes, not exit 2.",
+    ),
     export: str = typer.Option(
         None,
         "--export",
@@ -283,6 +289,7 @@ def fit(
         glob=glob,
         config=None if config is None else str(config),
         strict=strict,
+        accept_force_balance=accept_force_balance,
         export=tuple(targets),
         viscosity_correction=viscosity_correction,
         scheduler=scheduler,

@@ -216,6 +216,7 @@ def dynamic_record(
     force_sign: float = 1.0,
     hold: float = HOLD,
     cutoff: float | None = FORCE_CUTOFF,
+    reference: str | None = None,
 ) -> DynamicRecord:
     """A :class:`DynamicRecord` from a read run (``cylfric.io.campaign.read_run`` output).
 
@@ -238,6 +239,11 @@ def dynamic_record(
         Length of the initial rest [s] (force offset and position zero).
     cutoff : float or None
         Low-pass cut-off of the force [Hz] (:data:`FORCE_CUTOFF`; None: no filter).
+    reference : {"a", "b", "sum", "mean", "max"}, optional
+        The campaign's pressure reference (``CampaignConfig.pressure_reference``): the
+        record's pressure is the chambers combined by it, as the steady-state points' are
+        (a nominal value is both chambers' pressure: ``"sum"`` doubles it). None: the mean
+        of the pressure columns, or the nominal value (as before).
     """
     from ..units import UnitError, parse_quantity
 
@@ -281,7 +287,19 @@ def dynamic_record(
         raise DynamicDataError(f"{where}: NaN or inf in the position or force column")
     pressure = float(metadata.get("pressure", math.nan))
     measured = [np.asarray(data[c], dtype=float) for c in _PRESSURE_COLUMNS if c in data]
-    if measured:  # a measured pressure wins over the nominal one (as in the steady state)
+    if reference is not None:  # the chambers combined as the steady-state points' are
+        from ..friction.pressure import operating_pressure
+
+        common = data.get("pressure [Pa]")
+        pa = data.get("pressure_a [Pa]", common)
+        pb = data.get("pressure_b [Pa]", common)
+        if pa is None and pb is None:
+            pa = pb = np.asarray(pressure)
+        pa = pb if pa is None else pa
+        pb = pa if pb is None else pb
+        combined = operating_pressure(np.asarray(pa), np.asarray(pb), reference=reference)
+        pressure = float(np.median(combined))
+    elif measured:  # a measured pressure wins over the nominal one (as in the steady state)
         pressure = float(np.median(np.mean(measured, axis=0)))
     if not (math.isfinite(pressure) and pressure >= 0):
         raise DynamicDataError(

@@ -366,8 +366,10 @@ def offset_by_pressure(extraction: Extraction, t_limit: float = 4.0, smallest: f
         verdict = (
             f"The load-cell offset changes with pressure: {coef[1] * 1e5:+.3g} N/bar, "
             f"{change:+.3g} N over {p.min() / 1e5:.3g}-{p.max() / 1e5:.3g} bar (a pressure "
-            "force on the load cell, e.g. unequal piston areas). Each run's own offset is "
-            "removed, so the friction is not biased by it."
+            "force on the load cell that the force balance does not cancel, e.g. unequal "
+            "piston areas without both chamber pressures). Each run's own offset is removed; "
+            "that removes such a force only as far as the pressure is the same in both "
+            "directions of a run: check [cylinder] and [force_balance] in campaign.toml."
         )
     else:
         verdict = (
