@@ -139,11 +139,6 @@ def test_zillen_pk_with_the_sign_keys_passes_the_check(pk):
     assert isinstance(ForceBalanceError("x"), QualityError)  # a ValueError: exit 2
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="pipeline._fit must pass options.accept_force_balance to quality.assess and put "
-    "QualityReport.notes into the datasheet's notes (the lead's pipeline refactor)",
-)
 def test_zillen_pk_accepted_without_the_sign_keys_fits_with_a_note(pk, tmp_path):
     recipe = _recipe(tmp_path, (None, None))
     out = tmp_path / "out"

@@ -519,7 +519,11 @@ def _fit(
     del reading  # the workers' packed results (their points as arrays), now in extraction
 
     # the data as measured: the gate looks for data errors (and lists the duplicate files)
-    quality = assess(extraction, duplicates=campaign.duplicates)
+    quality = assess(
+        extraction,
+        duplicates=campaign.duplicates,
+        accept_force_balance=options.accept_force_balance,
+    )
     correction = _correct_viscosity(extraction, config, options.viscosity_correction)
     if correction.record is not None:  # the points the gate passed, at the reference temperature
         gated = _correct_viscosity(replace(extraction, points=quality.points), config, True)
@@ -540,6 +544,7 @@ def _fit(
         )
     except UnphysicalFrictionError as exc:
         raise UnphysicalFrictionError(f"{exc}{_sign_settings(folder, config)}") from None
+    ident.notes[0:0] = list(quality.notes)  # what the physical checks found, when accepted
     if not quality.excluded.empty:
         ident.notes.insert(0, quality.summary())
     if correction.note:
@@ -671,6 +676,7 @@ def _identify_dynamic(infos, config, model, step=None):
                 mass=config.moving_mass or None,
                 position_sign=config.position_sign,
                 force_sign=config.load_cell_sign,
+                reference=config.pressure_reference,
             )
         )
     if not any(record.test == "presliding" for record in records):
