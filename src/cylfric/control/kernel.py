@@ -96,11 +96,11 @@ def friction_table(
     table = np.zeros((len(FRICTION_ROWS), 4))
     defaults = {"F_s": coefficients.get("F_c"), "sigma_2": 0.0, "v_r": 1.0, "alpha": 1.0}
     for row, name in enumerate(FRICTION_ROWS):
-        spec = coefficients.get(name)
-        if spec is None:
-            spec = defaults[name]
+        spec, source = coefficients.get(name), name
+        if spec is None:  # not in the datasheet's law (Coulomb-only: F_s = F_c, sigma_2 = 0)
+            spec, source = defaults[name], "F_c"
         if isinstance(spec, dict):
-            law = spec.get("law", model.laws.get(name, model.pressure_law))
+            law = spec.get("law") or model.laws.get(source) or model.pressure_law
             keys = _LAW_KEYS[law]
             values = [float(spec[k]) for k in keys]
         else:
@@ -301,20 +301,22 @@ def closed_loop(
     s = 0.0
     sd = 0.0
     integ = 0.0
-    x_prev = x
+    x_prev = x if ax[17] <= 0.0 else round(x / ax[17]) * ax[17]
     cstate = np.zeros(COMPENSATOR_STATE_SIZE)
     z_hat = 0.0
     u = 0.0
     comp = 0.0
     friction = 0.0
+    quantum = ax[17]
     for k in range(n):
         # ---------------------------------------------------------- the controller
-        v_meas = (x - x_prev) / T if k > 0 else 0.0
-        x_prev = x
-        err = x_ref[k] - x
+        xm = x if quantum <= 0.0 else round(x / quantum) * quantum  # the measured position
+        v_meas = (xm - x_prev) / T if k > 0 else 0.0
+        x_prev = xm
+        err = x_ref[k] - xm
         vr = v_ref[k]
         comp, u_c = compensator_step(
-            compensator, model, model_ref, ctrl, ax, cstate, x, pa, pb, x_ref[k], vr, friction
+            compensator, model, model_ref, ctrl, ax, cstate, xm, pa, pb, x_ref[k], vr, friction
         )
         z_hat = cstate[1]
         ff = 0.0
