@@ -266,30 +266,28 @@ def rest_equilibrium(axis: ReferenceAxis, seal: ReferenceSeal) -> tuple[float, f
     """(p_A, p_B [Pa], spool opening [-]) of the axis at rest: the chambers' net flows zero
     and ``A_A p_A - A_B p_B = F_load`` (no friction at rest). Without null leakage the valve
     at null holds any pressures; then ``p_A + p_B = p_s + p_t``."""
-    from scipy.optimize import brentq
-
     p, fr = axis.vector(), seal.vector()
     aa, ab = axis.area_a, axis.area_b
     if axis.null_leakage == 0.0:
         pb = (aa * (axis.p_s + axis.p_t) - axis.load) / (aa + ab)
         return axis.p_s + axis.p_t - pb, pb, 0.0
+    from scipy.optimize import fsolve
+
     out = np.empty(7)
+    pb0 = (aa * (axis.p_s + axis.p_t) - axis.load) / (aa + ab)
+    scale = np.array([axis.p_s, axis.leak_opening])
 
-    def flows(s: float) -> tuple[float, float]:
-        # p_A from chamber A's balance at p_B of the force balance (leakage across the piston)
-        def net_a(pa: float) -> float:
-            pb = (aa * pa - axis.load) / ab
-            _rhs(np.array([axis.start, 0, pa, pb, s, 0, 0.0]), s, p, fr, out)
-            return out[2]
-
-        pa = brentq(net_a, axis.p_t + 1.0, axis.p_s - 1.0, xtol=1e-6)
+    def balance(unknown: np.ndarray) -> np.ndarray:
+        pa, s = unknown * scale
         pb = (aa * pa - axis.load) / ab
         _rhs(np.array([axis.start, 0, pa, pb, s, 0, 0.0]), s, p, fr, out)
-        return pa, out[3]
+        return np.array([out[2], out[3]]) / (axis.beta / axis.v0_a * axis.q_n * 1e-3)
 
-    bound = 4.0 * axis.leak_opening + 1e-9
-    s = brentq(lambda s: flows(s)[1], -bound, bound, xtol=1e-14)
-    pa = flows(s)[0]
+    start = np.array([axis.p_s + axis.p_t - pb0, 0.0]) / scale
+    solution, info, ok, message = fsolve(balance, start, full_output=True, xtol=1e-12)
+    if ok != 1:
+        raise ValueError(f"no rest equilibrium of the reference axis: {message}")
+    pa, s = solution * scale
     return pa, (aa * pa - axis.load) / ab, s
 
 
