@@ -205,20 +205,41 @@ def _axis_facts(k: _Constants) -> tuple[str, list[str], str]:
     return f"The valve command (output `command`) is computed for {which}", items, advice
 
 
+def _dynamic_note(k: _Constants) -> str:
+    """sigma_0 and sigma_1 with their status (identified or assumed) and, when assumed, how to
+    identify them. Numbers and fixed words only (no datasheet text)."""
+    from .study import IDENTIFY_ADVICE, dynamic_parameters
+
+    dynamic = dynamic_parameters(k.model)
+    parts = [
+        f"{name} = {d['value']:.6g} {d['unit']} "
+        f"({'identified' if d['status'] == 'identified' else 'ASSUMED, not identified'})"
+        for name, d in dynamic.items()
+    ]
+    text = "LuGre dynamic parameters of the datasheet: " + ", ".join(parts) + "."
+    if any(d["status"] != "identified" for d in dynamic.values()):
+        text += (
+            " The lugre kind's force depends on sigma_0 (an assumed value a factor 10 off can"
+            f" make it worthless; cylfric control's metrics.json 'sensitivity'): {IDENTIFY_ADVICE}."
+        )
+    return text
+
+
 def _axis_lines(k: _Constants, width: int = 86) -> list[str]:
-    """:func:`_axis_facts` as comment lines (no prefix)."""
+    """:func:`_axis_facts` and :func:`_dynamic_note` as comment lines (no prefix)."""
     heading, items, advice = _axis_facts(k)
     return [
         *textwrap.wrap(heading, width),
         *(f"  {item}" for item in items),
         *textwrap.wrap(advice, width),
+        *textwrap.wrap(_dynamic_note(k), width),
     ]
 
 
 def _axis_text(k: _Constants) -> str:
-    """:func:`_axis_facts` as one paragraph."""
+    """:func:`_axis_facts` and :func:`_dynamic_note` as one paragraph."""
     heading, items, advice = _axis_facts(k)
-    return f"{heading} {'; '.join(items)}. {advice}"
+    return f"{heading} {'; '.join(items)}. {advice} {_dynamic_note(k)}"
 
 
 def _axis_names() -> tuple[str, ...]:

@@ -84,13 +84,19 @@ constant command offset [-] (valve null bias; open-loop tests), sample time [s].
 
 
 def friction_table(
-    model, *, level: float = 1.0, slope: float = 1.0, offset: float = 0.0
+    model,
+    *,
+    level: float = 1.0,
+    slope: float = 1.0,
+    offset: float = 0.0,
+    stiffness: float = 1.0,
 ) -> np.ndarray:
     """The (7, 4) table of a :class:`~cylfric.model.FrictionModel` (see the module notes).
 
     ``level`` scales F_c, F_s and sigma_2 at every pressure [-]; ``slope`` scales their
     pressure dependence only (the coefficients beyond the intercept) [-]; ``offset`` [N] is
-    added to F_c and F_s at every pressure.
+    added to F_c and F_s at every pressure; ``stiffness`` scales sigma_0 [-] (and sigma_1 by
+    its square root, which keeps the bristles' damping ratio).
     """
     coefficients = model.coefficients()
     table = np.zeros((len(FRICTION_ROWS), 4))
@@ -106,6 +112,10 @@ def friction_table(
         else:
             law, values = "constant", [float(spec)]
         scale = level if name in ("F_c", "F_s", "sigma_2") else 1.0
+        if name == "sigma_0":
+            scale = stiffness
+        elif name == "sigma_1":
+            scale = math.sqrt(stiffness)
         values = [v * scale for v in values]
         if name in ("F_c", "F_s", "sigma_2") and law in ("linear", "quadratic"):
             values[1:] = [v * slope for v in values[1:]]

@@ -80,6 +80,8 @@ __all__ = [
     "compensator_constants",
     "compensator_outputs",
     "MEASUREMENTS",
+    "ramp_in",
+    "RAMP_IN_SPEED",
 ]
 
 COMPENSATORS = tuple(COMPENSATOR_CODES)
@@ -175,17 +177,44 @@ def read_reference(path: StrPath, axis: Axis = DEFAULT_AXIS) -> Reference:
     return Reference(grid - grid[0], xs, np.gradient(xs, axis.sample_time), path.name)
 
 
+RAMP_IN_SPEED = 5e-3
+"""Peak speed [m/s] of the ramp that brings the axis from its start position to a reference
+file's first position (:func:`ramp_in`)."""
+
+
+def ramp_in(reference: Reference, axis: Axis, *, speed: float = RAMP_IN_SPEED) -> Reference:
+    """``reference`` preceded by a smooth move (half a cosine, peak ``speed`` [m/s]) from the
+    axis's start position to its first position, and a 0.5 s hold; unchanged when it starts
+    within a micrometre of the start position. The name says it was ramped in."""
+    gap = float(reference.position[0]) - axis.start_position
+    if abs(gap) <= 1e-6:
+        return reference
+    t_s = axis.sample_time
+    duration = max(math.pi * abs(gap) / (2.0 * speed), 10 * t_s)
+    n_move, n_hold = int(math.ceil(duration / t_s)), int(round(0.5 / t_s))
+    phase = np.arange(n_move) * t_s / duration
+    move = axis.start_position + gap * 0.5 * (1 - np.cos(math.pi * phase))
+    move_v = gap * 0.5 * math.pi / duration * np.sin(math.pi * phase)
+    position = np.r_[move, np.full(n_hold, reference.position[0]), reference.position]
+    velocity = np.r_[move_v, np.zeros(n_hold), reference.velocity]
+    time = np.arange(position.size) * t_s
+    return Reference(time, position, velocity, f"{reference.name} (ramped in)")
+
+
 @dataclass(frozen=True)
 class PlantFriction:
     """How the plant's friction differs from the datasheet: ``level`` scales F_c, F_s,
     sigma_2 [-], ``slope`` their pressure dependence [-], ``offset`` [N] shifts F_c and F_s,
-    ``model`` replaces the datasheet (another session's fit); ``name`` labels the case."""
+    ``model`` replaces the datasheet (another session's fit), ``stiffness`` scales sigma_0;
+    ``name`` labels the case."""
 
     name: str = "datasheet"
     level: float = 1.0
     slope: float = 1.0
     offset: float = 0.0
     model: Any = None
+    stiffness: float = 1.0
+    """Factor on sigma_0 (sigma_1 by its square root) of the plant [-]."""
 
 
 @dataclass
@@ -345,7 +374,13 @@ def simulate_loop(
     plant_model = plant.model if plant.model is not None else model
     outputs = closed_loop(
         axis.vector(),
-        friction_table(plant_model, level=plant.level, slope=plant.slope, offset=plant.offset),
+        friction_table(
+            plant_model,
+            level=plant.level,
+            slope=plant.slope,
+            offset=plant.offset,
+            stiffness=plant.stiffness,
+        ),
         REFERENCE_CODES[plant_model.reference],
         friction_table(model),
         REFERENCE_CODES[model.reference],
