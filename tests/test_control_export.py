@@ -376,3 +376,28 @@ def test_cli_notes_the_default_axis_on_stderr(tmp_path):
     assert "--axis" not in done.stderr
     header = (tmp_path / "b" / "compensator" / "cylfric_compensator_params.h").read_text()
     assert all(fact in header for fact in OTHER_AXIS_TEXT)
+
+
+@needs_cc
+def test_c_step_carries_the_force_filter(model, recorded, tmp_path):
+    # the first-order filter on the force estimate (tau_f = 3 ms) is in the exported step
+    out = tmp_path / "filtered"
+    export_compensator(model, out, targets=["c"], force_filter=3e-3)
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver"
+    subprocess.run(
+        [CC, "-O2", "-std=c99", f"-I{out}", str(tmp_path / "driver.c"),
+         str(out / "cylfric_compensator.c"), "-o", str(exe), "-lm"],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    text = "\n".join(" ".join(repr(float(v)) for v in row) for row in recorded)
+    done = subprocess.run([str(exe), "3"], input=text, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    c_out = np.loadtxt(done.stdout.splitlines())
+    filtered = compensator_outputs(model, "lugre", recorded, force_filter=3e-3)
+    raw = compensator_outputs(model, "lugre", recorded)
+    _close(c_out, filtered)
+    # the filter acts: a = 1 - exp(-1 ms / 3 ms) on every force change after the first sample
+    a = -np.expm1(-1e-3 / 3e-3)
+    assert filtered[1, 0] == pytest.approx(raw[0, 0] + a * (raw[1, 0] - raw[0, 0]), rel=1e-12)
+    assert np.abs(np.diff(filtered[:, 0])).max() < np.abs(np.diff(raw[:, 0])).max()

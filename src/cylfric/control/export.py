@@ -52,7 +52,7 @@ from ..escape import c_comment, c_string, matlab_comment
 from ..escape import xml_attr as quoteattr
 from .axis import DEFAULT_AXIS, Axis
 from .kernel import COMPENSATOR_CODES, FRICTION_ROWS, REFERENCE_CODES, friction_table
-from .loop import OBSERVER_GAIN, SMOOTHING_VELOCITY, compensator_constants
+from .loop import FORCE_FILTER, OBSERVER_GAIN, SMOOTHING_VELOCITY, compensator_constants
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -137,14 +137,27 @@ def _number(value: float) -> str:
 class _Constants:
     """Everything the exported step fixes: the friction table, rule, axis, controller."""
 
-    def __init__(self, model, axis: Axis, smoothing_velocity: float, observer_gain: float):
+    def __init__(
+        self,
+        model,
+        axis: Axis,
+        smoothing_velocity: float,
+        observer_gain: float,
+        force_filter: float = 0.0,
+    ):
         self.model = model
         self.axis = axis
         self.table = friction_table(model)
         self.reference = model.reference
         ctrl = compensator_constants(
-            model, axis, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+            model,
+            axis,
+            smoothing_velocity=smoothing_velocity,
+            observer_gain=observer_gain,
+            force_filter=force_filter,
         )
+        self.force_filter = float(force_filter)
+        self.filter_gain = float(ctrl[10])
         self.sample_time = float(ctrl[9])
         self.smoothing = float(ctrl[5])
         self.observer_gain = float(ctrl[6])
@@ -159,6 +172,12 @@ class _Constants:
             ("CYLFRIC_SAMPLE_TIME", self.sample_time, "controller sample time T [s]"),
             ("CYLFRIC_SMOOTHING_VELOCITY", self.smoothing, "sign smoothing v_s [m/s]"),
             ("CYLFRIC_OBSERVER_GAIN", self.observer_gain, "LuGre observer gain k_o [1/s]"),
+            (
+                "CYLFRIC_FORCE_FILTER_GAIN",
+                self.filter_gain,
+                f"force filter a = 1 - exp(-T/tau_f), tau_f = {self.force_filter:g} s "
+                "(1: no filter) [-]",
+            ),
             (
                 "CYLFRIC_COULOMB_FORCE",
                 self.coulomb,
@@ -513,6 +532,9 @@ elseif kind == 3
 elseif kind ~= 0
     error('cylfric:kind', 'kind = %g; expected 0 none, 1 coulomb, 2 static or 3 lugre', kind);
 end
+if started && kind ~= 0
+    comp = state(3) + {_number(k.filter_gain)} * (comp - state(3));  % force filter
+end
 command = 0;
 if started && kind ~= 0
     rate = (comp - state(3)) / T + leakage_force_rate(comp, position);
@@ -645,6 +667,7 @@ def export_compensator(
     name: str = "cylfric_compensator",
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
+    force_filter: float = FORCE_FILTER,
 ) -> list[Path]:
     """Write the compensator step as C source, an FMU and/or a MATLAB function.
 
@@ -664,6 +687,8 @@ def export_compensator(
         FMU model identifier and MATLAB function prefix (a C identifier).
     smoothing_velocity, observer_gain : float
         Sign smoothing v_s [m/s] and LuGre observer gain k_o [1/s], as in the loop.
+    force_filter : float
+        Time constant tau_f [s] of the first-order filter on the force estimate (0: none).
 
     Returns
     -------
@@ -685,7 +710,7 @@ def export_compensator(
         )
     name = _check_name(name, "cylfric_compensator")
     model = _as_model(model)
-    constants = _Constants(model, axis, smoothing_velocity, observer_gain)
+    constants = _Constants(model, axis, smoothing_velocity, observer_gain, force_filter)
     out = Path(out)
     make_folder(out)
     written: list[Path] = []

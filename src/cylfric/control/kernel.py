@@ -76,11 +76,14 @@ CTRL = (
     "coulomb_force",
     "command_offset",
     "sample_time",
+    "force_filter_gain",
 )
 """Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
 (0), the feedforward's lead time [s] (the reference velocity fed forward is ``v_ref + lead
 a_ref``), sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
-constant command offset [-] (valve null bias; open-loop tests), sample time [s]."""
+constant command offset [-] (valve null bias; open-loop tests), sample time [s], the gain
+``a = 1 - exp(-T / tau_f)`` of the first-order filter on the compensator's force estimate
+[-] (1: no filter; :func:`compensator_step`)."""
 
 
 def friction_table(
@@ -241,7 +244,10 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
     ``state`` (:data:`COMPENSATOR_STATE`, updated in place); ``kind`` a code of
     COMPENSATOR_CODES, ``model`` the datasheet's friction table, ``model_ref`` its pressure
     rule, ``ctrl`` the controller vector (CTRL), ``ax`` the axis vector; ``oracle`` the
-    plant's friction [N] (used by kind 4 only). The C, FMU and MATLAB exports
+    plant's friction [N] (used by kind 4 only). From the second sample the force goes
+    through a first-order filter, ``F_k = F_{k-1} + a (F_raw - F_{k-1})`` with ``a = 1 -
+    exp(-T / tau_f)`` (``ctrl[10]``; 1 without filter), before the command ``u_c = ((F_k -
+    F_{k-1})/T + R_L(F_k)) / G_F``. The C, FMU and MATLAB exports
     (:mod:`cylfric.control.export`) are this function, line by line.
     """
     T = ctrl[9]
@@ -262,6 +268,8 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
         comp = lugre_instant(v_meas, z_hat, s0, s1, s2, fc, fs, v_r, al)
     elif kind == 4:
         comp = oracle
+    if started and kind != 0:  # first-order filter on the force: F <- F_prev + a (F - F_prev)
+        comp = state[2] + ctrl[10] * (comp - state[2])
     u_c = 0.0
     if started and kind != 0:  # the force's rate and its hold against leakage, through the valve
         rate = (comp - state[2]) / T + leakage_force_rate(comp, x, ax)

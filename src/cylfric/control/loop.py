@@ -76,6 +76,7 @@ __all__ = [
     "simulate_loop",
     "SMOOTHING_VELOCITY",
     "OBSERVER_GAIN",
+    "FORCE_FILTER",
     "PlantFriction",
     "compensator_constants",
     "compensator_outputs",
@@ -90,6 +91,13 @@ SMOOTHING_VELOCITY = 1e-3
 """Sign smoothing velocity v_s of the Coulomb and static terms [m/s]."""
 OBSERVER_GAIN = 0.0
 """Observer gain k_o of the LuGre observer [1/s] (0: open-loop observer)."""
+FORCE_FILTER = 0.0
+"""Time constant tau_f of the first-order filter on the compensator's force estimate [s]
+(0: no filter). The position's quantum makes the backward-difference velocity jump by
+q/T (1 mm/s for 1 um at 1 kHz) and the LuGre force's sigma_1 dz/dt + sigma_2 v with it; a
+filter of a few samples smooths that at the price of its lag (measured on the example
+differential axis with 1 um resolution: tau_f = 3 ms took the LuGre error from 0.90x to
+0.80x of PI alone in the reference loop, nothing on its double-rod twin; default off)."""
 
 
 @dataclass(frozen=True)
@@ -269,8 +277,11 @@ def controller_vector(
     *,
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
+    force_filter: float = FORCE_FILTER,
 ) -> np.ndarray:
-    """The compiled loop's controller vector (``kernel.CTRL``)."""
+    """The compiled loop's controller vector (``kernel.CTRL``); ``force_filter`` tau_f [s]."""
+    if not (math.isfinite(force_filter) and force_filter >= 0):
+        raise ValueError(f"force_filter = {force_filter!r} s; expected >= 0")
     pa, pb = axis.rest_pressures()
     coulomb = float(model.params_at(float(model.operating_pressure(pa, pb)))["F_c"])
     gains = (0.0, 0.0, 0.0) if tuning is None else (tuning.kp, tuning.ki, tuning.kd)
@@ -284,6 +295,7 @@ def controller_vector(
             coulomb,
             0.0,
             axis.sample_time,
+            -math.expm1(-axis.sample_time / force_filter) if force_filter > 0 else 1.0,
         ]
     )
 
@@ -294,11 +306,18 @@ def compensator_constants(
     *,
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
+    force_filter: float = FORCE_FILTER,
 ) -> np.ndarray:
     """The controller vector with the PID off: what the compensator step alone reads
-    (sign smoothing [m/s], observer gain [1/s], Coulomb level [N], sample time [s])."""
+    (sign smoothing [m/s], observer gain [1/s], Coulomb level [N], sample time [s], the
+    force filter's gain [-])."""
     ctrl = controller_vector(
-        axis, None, model, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+        axis,
+        None,
+        model,
+        smoothing_velocity=smoothing_velocity,
+        observer_gain=observer_gain,
+        force_filter=force_filter,
     )
     ctrl[:4] = 0.0
     return ctrl
@@ -322,6 +341,7 @@ def compensator_outputs(
     axis: Axis = DEFAULT_AXIS,
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
+    force_filter: float = FORCE_FILTER,
 ) -> np.ndarray:
     """The compensator (``kernel.compensator_step``) along recorded measurements.
 
@@ -344,7 +364,11 @@ def compensator_outputs(
         friction_table(model),
         REFERENCE_CODES[model.reference],
         compensator_constants(
-            model, axis, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+            model,
+            axis,
+            smoothing_velocity=smoothing_velocity,
+            observer_gain=observer_gain,
+            force_filter=force_filter,
         ),
         axis.vector(),
         data,
@@ -361,6 +385,7 @@ def simulate_loop(
     plant: PlantFriction | None = None,
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
+    force_filter: float = FORCE_FILTER,
 ) -> LoopRun:
     """Run the loop with one compensator; the compensator always uses ``model`` (the
     datasheet), the plant ``plant`` (default: the datasheet itself)."""
@@ -386,7 +411,12 @@ def simulate_loop(
         REFERENCE_CODES[model.reference],
         COMPENSATOR_CODES[compensator],
         controller_vector(
-            axis, tuning, model, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+            axis,
+            tuning,
+            model,
+            smoothing_velocity=smoothing_velocity,
+            observer_gain=observer_gain,
+            force_filter=force_filter,
         ),
         np.ascontiguousarray(reference.position),
         np.ascontiguousarray(reference.velocity),

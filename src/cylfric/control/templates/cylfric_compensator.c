@@ -14,6 +14,8 @@
  *            F = sigma_0 z^ + sigma_1 (v - sigma_0 |v| z^ / g(v)) + sigma_2 v  (eq. 2.5;
  *            Canudas de Wit et al. 1995)
  *   from the second sample on (the first outputs u_c = 0):
+ *   F      = F_prev + a (F - F_prev),  a = CYLFRIC_FORCE_FILTER_GAIN = 1 - exp(-T / tau_f)
+ *            (first-order filter on the force estimate; a = 1: none)
  *   R      = (F - F_prev) / T + R_L(F),  R_L(F) = beta C_i F / ((A_A + A_B) / 2)
  *            (A_A / V_A + A_B / V_B)     (the force rate that holds F against the
  *                                          cross-piston leakage C_i)
@@ -177,6 +179,8 @@ int cylfric_compensator_step(int kind, const cylfric_compensator_input *in,
         dz = v - q.s0 * fabs(v) * state->z_hat / g;
         comp = q.s0 * state->z_hat + q.s1 * dz + q.s2 * v;
     }
+    if (started && kind != CYLFRIC_NONE) /* first-order filter on the force */
+        comp = state->f_prev + CYLFRIC_FORCE_FILTER_GAIN * (comp - state->f_prev);
     out->force = comp;
     if (started && kind != CYLFRIC_NONE) {
         rate = (comp - state->f_prev) / T + cylfric_leakage_force_rate(comp, in->position);
