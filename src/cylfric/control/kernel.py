@@ -77,13 +77,15 @@ CTRL = (
     "command_offset",
     "sample_time",
     "force_filter_gain",
+    "velocity_input",
 )
 """Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
 (0), the feedforward's lead time [s] (the reference velocity fed forward is ``v_ref + lead
 a_ref``), sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
 constant command offset [-] (valve null bias; open-loop tests), sample time [s], the gain
 ``a = 1 - exp(-T / tau_f)`` of the first-order filter on the compensator's force estimate
-[-] (1: no filter; :func:`compensator_step`)."""
+[-] (1: no filter; :func:`compensator_step`), velocity input on (1: the compensator
+reads the measured velocity) or off (0: the backward difference of the position) [-]."""
 
 
 def friction_table(
@@ -236,7 +238,9 @@ COMPENSATOR_STATE_SIZE = len(COMPENSATOR_STATE)
 
 
 @njit(cache=True, inline="always")
-def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, v_ref, oracle):
+def compensator_step(
+    kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, v_ref, oracle, velocity=0.0
+):
     """One controller sample of a compensator: returns (force F [N], command u_c [-]).
 
     A pure function of the measurements (position ``x`` [m], chamber pressures ``pa``,
@@ -244,15 +248,20 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
     ``state`` (:data:`COMPENSATOR_STATE`, updated in place); ``kind`` a code of
     COMPENSATOR_CODES, ``model`` the datasheet's friction table, ``model_ref`` its pressure
     rule, ``ctrl`` the controller vector (CTRL), ``ax`` the axis vector; ``oracle`` the
-    plant's friction [N] (used by kind 4 only). From the second sample the force goes
-    through a first-order filter, ``F_k = F_{k-1} + a (F_raw - F_{k-1})`` with ``a = 1 -
-    exp(-T / tau_f)`` (``ctrl[10]``; 1 without filter), before the command ``u_c = ((F_k -
-    F_{k-1})/T + R_L(F_k)) / G_F``. The C, FMU and MATLAB exports
+    plant's friction [N] (used by kind 4 only); ``velocity`` the measured velocity [m/s],
+    read only with the velocity input on (``ctrl[11]`` = 1; otherwise the velocity is the
+    backward difference ``(x - x_prev) / T``, 0 at the first sample). From the second
+    sample the force goes through a first-order filter, ``F_k = F_{k-1} + a (F_raw -
+    F_{k-1})`` with ``a = 1 - exp(-T / tau_f)`` (``ctrl[10]``; 1 without filter), before
+    the command ``u_c = ((F_k - F_{k-1})/T + R_L(F_k)) / G_F``. The C, FMU and MATLAB exports
     (:mod:`cylfric.control.export`) are this function, line by line.
     """
     T = ctrl[9]
     started = state[3] > 0.0
-    v_meas = (x - state[0]) / T if started else 0.0
+    if ctrl[11] > 0.0:
+        v_meas = velocity
+    else:
+        v_meas = (x - state[0]) / T if started else 0.0
     state[0] = x
     comp = 0.0
     if kind == 1:
@@ -282,14 +291,16 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
 @njit(cache=True)
 def run_compensator(kind, model, model_ref, ctrl, ax, measurements):
     """:func:`compensator_step` along recorded measurements, from the zero state: rows
-    (x [m], p_A [Pa], p_B [Pa], x_ref [m], v_ref [m/s]); returns rows (F [N], u_c [-])."""
+    (x [m], p_A [Pa], p_B [Pa], x_ref [m], v_ref [m/s][, v [m/s]]); returns rows (F [N],
+    u_c [-])."""
     n = measurements.shape[0]
     out = np.empty((n, 2))
     state = np.zeros(COMPENSATOR_STATE_SIZE)
     for k in range(n):
         m = measurements[k]
+        v = m[5] if measurements.shape[1] > 5 else 0.0
         out[k, 0], out[k, 1] = compensator_step(
-            kind, model, model_ref, ctrl, ax, state, m[0], m[1], m[2], m[3], m[4], 0.0
+            kind, model, model_ref, ctrl, ax, state, m[0], m[1], m[2], m[3], m[4], 0.0, v
         )
     return out
 
@@ -334,7 +345,7 @@ def closed_loop(
         err = x_ref[k] - xm
         vr = v_ref[k]
         comp, u_c = compensator_step(
-            compensator, model, model_ref, ctrl, ax, cstate, xm, pa, pb, x_ref[k], vr, friction
+            compensator, model, model_ref, ctrl, ax, cstate, xm, pa, pb, x_ref[k], vr, friction, v
         )
         z_hat = cstate[1]
         ff = 0.0

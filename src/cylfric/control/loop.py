@@ -278,8 +278,11 @@ def controller_vector(
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
     force_filter: float = FORCE_FILTER,
+    velocity_input: bool = False,
 ) -> np.ndarray:
-    """The compiled loop's controller vector (``kernel.CTRL``); ``force_filter`` tau_f [s]."""
+    """The compiled loop's controller vector (``kernel.CTRL``); ``force_filter`` tau_f [s];
+    ``velocity_input``: the compensator reads the measured velocity instead of differencing
+    the position."""
     if not (math.isfinite(force_filter) and force_filter >= 0):
         raise ValueError(f"force_filter = {force_filter!r} s; expected >= 0")
     pa, pb = axis.rest_pressures()
@@ -296,6 +299,7 @@ def controller_vector(
             0.0,
             axis.sample_time,
             -math.expm1(-axis.sample_time / force_filter) if force_filter > 0 else 1.0,
+            1.0 if velocity_input else 0.0,
         ]
     )
 
@@ -307,10 +311,11 @@ def compensator_constants(
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
     force_filter: float = FORCE_FILTER,
+    velocity_input: bool = False,
 ) -> np.ndarray:
     """The controller vector with the PID off: what the compensator step alone reads
     (sign smoothing [m/s], observer gain [1/s], Coulomb level [N], sample time [s], the
-    force filter's gain [-])."""
+    force filter's gain [-], the velocity input's switch [-])."""
     ctrl = controller_vector(
         axis,
         None,
@@ -318,6 +323,7 @@ def compensator_constants(
         smoothing_velocity=smoothing_velocity,
         observer_gain=observer_gain,
         force_filter=force_filter,
+        velocity_input=velocity_input,
     )
     ctrl[:4] = 0.0
     return ctrl
@@ -342,6 +348,7 @@ def compensator_outputs(
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
     force_filter: float = FORCE_FILTER,
+    velocity_input: bool = False,
 ) -> np.ndarray:
     """The compensator (``kernel.compensator_step``) along recorded measurements.
 
@@ -355,10 +362,13 @@ def compensator_outputs(
             f"{[c for c in COMPENSATORS if c != 'oracle']} (the oracle reads the plant)"
         )
     data = np.ascontiguousarray(measurements, dtype=float)
-    if data.ndim != 2 or data.shape[1] != len(MEASUREMENTS):
+    if data.ndim != 2 or data.shape[1] not in (len(MEASUREMENTS), len(MEASUREMENTS) + 1):
         raise ValueError(
             f"measurements of shape {data.shape}; expected (n, 5) columns {list(MEASUREMENTS)}"
+            " and optionally a sixth, 'velocity [m/s]'"
         )
+    if velocity_input and data.shape[1] != len(MEASUREMENTS) + 1:
+        raise ValueError("velocity_input needs a sixth column 'velocity [m/s]'")
     return run_compensator(
         COMPENSATOR_CODES[compensator],
         friction_table(model),
@@ -369,6 +379,7 @@ def compensator_outputs(
             smoothing_velocity=smoothing_velocity,
             observer_gain=observer_gain,
             force_filter=force_filter,
+            velocity_input=velocity_input,
         ),
         axis.vector(),
         data,
@@ -386,9 +397,12 @@ def simulate_loop(
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
     force_filter: float = FORCE_FILTER,
+    velocity_input: bool = False,
 ) -> LoopRun:
     """Run the loop with one compensator; the compensator always uses ``model`` (the
-    datasheet), the plant ``plant`` (default: the datasheet itself)."""
+    datasheet), the plant ``plant`` (default: the datasheet itself). ``force_filter`` [s]
+    and ``velocity_input`` (the compensator reads the plant's true velocity, a velocity
+    sensor) as in :func:`controller_vector`."""
     if compensator not in COMPENSATOR_CODES:
         raise ValueError(f"unknown compensator {compensator!r}; valid: {list(COMPENSATORS)}")
     if isinstance(reference, str):
@@ -417,6 +431,7 @@ def simulate_loop(
             smoothing_velocity=smoothing_velocity,
             observer_gain=observer_gain,
             force_filter=force_filter,
+            velocity_input=velocity_input,
         ),
         np.ascontiguousarray(reference.position),
         np.ascontiguousarray(reference.velocity),

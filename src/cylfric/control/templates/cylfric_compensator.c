@@ -5,7 +5,8 @@
  * generated into cylfric_compensator_params.h. It is cylfric.control.kernel.compensator_step
  * line by line (SI units):
  *
- *   v      = (x - x_prev) / T  (0 at the first sample)
+ *   v      = (x - x_prev) / T  (0 at the first sample), or the input velocity when
+ *            CYLFRIC_VELOCITY_INPUT is 1
  *   p      = operating pressure of (p_A, p_B) by the datasheet's rule
  *   none:    F = 0
  *   coulomb: F = F_c0 tanh(v_ref / v_s)
@@ -162,7 +163,10 @@ int cylfric_compensator_step(int kind, const cylfric_compensator_input *in,
     out->force = 0.0;
     out->command = 0.0;
     if (kind < CYLFRIC_NONE || kind > CYLFRIC_LUGRE) return -1;
-    v = started ? (in->position - state->x_prev) / T : 0.0;
+    if (CYLFRIC_VELOCITY_INPUT > 0.0)
+        v = in->velocity;
+    else
+        v = started ? (in->position - state->x_prev) / T : 0.0;
     state->x_prev = in->position;
     if (kind == CYLFRIC_COULOMB) {
         comp = CYLFRIC_COULOMB_FORCE * tanh(in->velocity_reference / CYLFRIC_SMOOTHING_VELOCITY);
