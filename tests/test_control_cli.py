@@ -4,6 +4,7 @@ sigma_0 sensitivity in its outputs, a reference file ramped in, progress on stde
 from __future__ import annotations
 
 import json
+import math
 
 import pytest
 from typer.testing import CliRunner
@@ -90,3 +91,21 @@ def test_identified_sigma_not_flagged(tmp_path):
     assert "ASSUMED" not in done.output
     header = _flat(tmp_path / "exp" / "compensator" / "cylfric_compensator_params.h")
     assert "sigma_0 = 1e+07 N/m (identified)" in header
+
+
+def test_force_filter_option_reaches_loop_and_export(tmp_path):
+    sheet = _sheet(tmp_path, FrictionModel())
+    ref = tmp_path / "ref.csv"
+    ref.write_text("time [s],position [mm]\n0,100\n0.5,100.5\n1,100\n")
+    done = _run([str(sheet), "--out", str(tmp_path / "out"), "--no-robustness",
+                 "--reference", str(ref), "--force-filter-ms", "3",
+                 "--export-compensator", "c", "--velocity-input"])  # fmt: skip
+    assert done.exit_code == 0, done.output
+    doc = json.loads((tmp_path / "out" / "metrics.json").read_text())
+    assert doc["controller"]["force_filter_s"] == pytest.approx(3e-3)
+    header = (tmp_path / "out" / "compensator" / "cylfric_compensator_params.h").read_text()
+    assert "#define CYLFRIC_VELOCITY_INPUT (1.0)" in header
+    gain = -math.expm1(-1e-3 / 3e-3)
+    assert f"#define CYLFRIC_FORCE_FILTER_GAIN ({gain!r})" in header
+    bad = _run([str(sheet), "--out", str(tmp_path / "o2"), "--force-filter-ms", "-1"])
+    assert bad.exit_code == 2 and "--force-filter-ms" in bad.output

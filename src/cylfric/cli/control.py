@@ -66,6 +66,19 @@ def register(app) -> None:
         export_only: bool = typer.Option(
             False, "--export-only", help="Write the exports only; do not run the loop."
         ),
+        force_filter_ms: float = typer.Option(
+            0.0,
+            "--force-filter-ms",
+            help="Time constant [ms] of the first-order filter on the compensators' force "
+            "estimate, in the loop and the exports (0: none; a few samples smooth the "
+            "velocity steps of a quantised position, docs/control.md).",
+        ),
+        velocity_input: bool = typer.Option(
+            False,
+            "--velocity-input",
+            help="The exported step reads a measured velocity input instead of differencing "
+            "the position.",
+        ),
         json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Run the position loop with every compensator (none, coulomb, static, lugre,
@@ -83,13 +96,30 @@ def register(app) -> None:
         the_axis = load_axis(axis) if axis is not None else DEFAULT_AXIS
         ref = _resolve_reference(reference, the_axis)
         targets = _export_targets(export, fmu_kind, export_only)
+        if not (0.0 <= force_filter_ms < 1e4):
+            raise BadInput(f"--force-filter-ms {force_filter_ms!r}: expected 0 <= ms < 10000")
         _note_assumed(model)
+        tau = force_filter_ms * 1e-3
         if targets:
-            _write_exports(model, out, targets, the_axis, fmu_kind, default_axis=axis is None)
+            _write_exports(
+                model,
+                out,
+                targets,
+                the_axis,
+                fmu_kind,
+                default_axis=axis is None,
+                force_filter=tau,
+                velocity_input=velocity_input,
+            )
         if export_only:
             return
         result = compare_compensators(
-            model, axis=the_axis, reference=ref, robustness=robustness, progress=_progress()
+            model,
+            axis=the_axis,
+            reference=ref,
+            robustness=robustness,
+            progress=_progress(),
+            force_filter=tau,
         )
         result.write(out)
         document = result.to_dict()
@@ -186,12 +216,28 @@ def _export_targets(export: str | None, fmu_kind: str, export_only: bool) -> lis
     return targets
 
 
-def _write_exports(model, out: Path, targets, axis, fmu_kind: str, *, default_axis: bool) -> None:
+def _write_exports(
+    model,
+    out: Path,
+    targets,
+    axis,
+    fmu_kind: str,
+    *,
+    default_axis: bool,
+    force_filter: float = 0.0,
+    velocity_input: bool = False,
+) -> None:
     """Write the compensator into ``out/compensator``; note the default axis on stderr."""
     from ..control.export import export_compensator
 
     written = export_compensator(
-        model, out / "compensator", targets=targets, axis=axis, compensator=fmu_kind
+        model,
+        out / "compensator",
+        targets=targets,
+        axis=axis,
+        compensator=fmu_kind,
+        force_filter=force_filter,
+        velocity_input=velocity_input,
     )
     for path in written:
         console.print(terminal(f"written: {path}", markup=False), markup=False)

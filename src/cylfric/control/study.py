@@ -12,6 +12,7 @@ import io
 import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -20,6 +21,7 @@ from ..escape import html_text
 from .axis import DEFAULT_AXIS, Axis
 from .loop import (
     COMPENSATORS,
+    FORCE_FILTER,
     OBSERVER_GAIN,
     SMOOTHING_VELOCITY,
     LoopRun,
@@ -130,6 +132,7 @@ class ControlResult:
     datasheet: str | None = None
     sensitivity: dict[str, Any] = field(default_factory=dict)
     dynamic: dict[str, dict[str, Any]] = field(default_factory=dict)
+    force_filter: float = FORCE_FILTER
 
     def ratios(self, metrics: dict[str, dict] | None = None) -> dict[str, float | None]:
         """The acceptance ratios (RMS and reversal error of lugre against the others)."""
@@ -158,6 +161,7 @@ class ControlResult:
                 "feedforward_lead_s": feedforward_lead(self.axis),
                 "sign_smoothing_m_s": SMOOTHING_VELOCITY,
                 "observer_gain_1_s": OBSERVER_GAIN,
+                "force_filter_s": self.force_filter,
             },
             "compensators": self.metrics,
             "ratios": self.ratios(),
@@ -304,13 +308,16 @@ def compare_compensators(
     tuning: Tuning | None = None,
     sensitivity: bool = True,
     progress: Callable[[str], None] | None = None,
+    force_filter: float = FORCE_FILTER,
 ) -> ControlResult:
     """Run every compensator (:data:`~.loop.COMPENSATORS`) on ``axis`` with ``reference``;
     with ``robustness``, again on the plants of :func:`robustness_cases`; with
     ``sensitivity``, PI alone and LuGre on plants whose sigma_0 is :data:`SIGMA_0_FACTORS`
     times the datasheet's (sigma_1 by the square root) and whose friction level is
     :data:`LEVEL_FACTORS` times it, the compensator keeping the datasheet. ``progress`` is
-    called with a line before each group of runs (the first run compiles the kernels)."""
+    called with a line before each group of runs (the first run compiles the kernels);
+    ``force_filter`` [s] the compensators' force filter (:data:`~.loop.FORCE_FILTER`)."""
+    loop = partial(simulate_loop, force_filter=force_filter)
     say = progress or (lambda text: None)
     if isinstance(reference, str):
         reference = make_reference(reference, axis)
@@ -318,7 +325,7 @@ def compare_compensators(
     runs = {}
     for c in COMPENSATORS:
         say(f"running the loop: {c}")
-        runs[c] = simulate_loop(model, c, axis=axis, reference=reference, tuning=tuning)
+        runs[c] = loop(model, c, axis=axis, reference=reference, tuning=tuning)
     result = ControlResult(
         axis,
         reference,
@@ -327,25 +334,24 @@ def compare_compensators(
         {c: _metrics(r) for c, r in runs.items()},
         datasheet=getattr(model, "source", None),
         dynamic=dynamic_parameters(model),
+        force_filter=force_filter,
     )
     if sensitivity:
         say("sensitivity: plants with sigma_0 x0.1..x10 and friction x0.8..x1.2")
-        result.sensitivity = _sensitivity(model, axis, reference, tuning, result.dynamic)
+        result.sensitivity = _sensitivity(model, axis, reference, tuning, result.dynamic, loop)
     if robustness:
         say("robustness cases")
         for case in robustness_cases(model, scatter=scatter):
             result.robustness[case.name] = {
                 c: _metrics(
-                    simulate_loop(
-                        model, c, axis=axis, reference=reference, tuning=tuning, plant=case
-                    )
+                    loop(model, c, axis=axis, reference=reference, tuning=tuning, plant=case)
                 )
                 for c in COMPENSATORS
             }
     return result
 
 
-def _sensitivity(model, axis, reference, tuning, dynamic) -> dict[str, Any]:
+def _sensitivity(model, axis, reference, tuning, dynamic, loop) -> dict[str, Any]:
     """PI alone and LuGre RMS errors on plants that differ from the datasheet (see
     :func:`compare_compensators`)."""
     cases: dict[str, list[dict[str, float]]] = {"sigma_0": [], "friction_level": []}
@@ -353,9 +359,9 @@ def _sensitivity(model, axis, reference, tuning, dynamic) -> dict[str, Any]:
     plants += [("friction_level", f, PlantFriction(f"x{f:g}", level=f)) for f in LEVEL_FACTORS]
     for kind, factor, plant in plants:
         rms = {
-            c: _metrics(
-                simulate_loop(model, c, axis=axis, reference=reference, tuning=tuning, plant=plant)
-            )["rms_error_m"]
+            c: _metrics(loop(model, c, axis=axis, reference=reference, tuning=tuning, plant=plant))[
+                "rms_error_m"
+            ]
             for c in ("none", "lugre")
         }
         cases[kind].append(
