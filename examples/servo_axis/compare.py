@@ -1,6 +1,7 @@
 """The loop study on the example axis in both implementations (docs/control.md's table).
 
-Run: ``PYTHONPATH=src python examples/servo_axis/compare.py [seconds]``. cylfric's loop
+Run: ``PYTHONPATH=src python examples/servo_axis/compare.py [seconds [tau_f_ms]]``
+(``tau_f_ms``: the LuGre step's force filter). cylfric's loop
 (:func:`cylfric.control.loop.simulate_loop`) and the independent reference loop
 (:mod:`cylfric.control.reference_loop`) on the differential axis of ``axis.toml`` and its
 double-rod twin, sine 5 mm / 5 s, the seal of ``tests/test_control_reference.py``
@@ -50,9 +51,10 @@ def model_of(seal, sigma_0=None, sigma_1=None):
     )  # fmt: skip
 
 
-def step_of(model, axis):
+def step_of(model, axis, force_filter=0.0):
     table, rule = friction_table(model), REFERENCE_CODES[model.reference]
-    ctrl, vector = compensator_constants(model, axis), axis.vector()
+    ctrl = compensator_constants(model, axis, force_filter=force_filter)
+    vector = axis.vector()
     state = np.zeros(len(COMPENSATOR_STATE))
 
     def step(x, pa, pb, x_ref, v_ref):
@@ -62,7 +64,7 @@ def step_of(model, axis):
     return step
 
 
-def rows(axis, seconds, datasheet, level=1.0):
+def rows(axis, seconds, datasheet, level=1.0, force_filter=0.0):
     model = model_of(SEAL)  # the plant
     ref = make_reference("sine", axis, duration=seconds)
     tuning = tune(axis, viscous=SEAL["sigma_2"])
@@ -70,7 +72,10 @@ def rows(axis, seconds, datasheet, level=1.0):
     for name in ("none", "oracle", "lugre"):
         sheet = datasheet if name == "lugre" else model
         plant_case = PlantFriction("p", level=level, model=model)
-        run = simulate_loop(sheet, name, axis=axis, reference=ref, tuning=tuning, plant=plant_case)
+        run = simulate_loop(
+            sheet, name, axis=axis, reference=ref, tuning=tuning, plant=plant_case,
+            force_filter=force_filter if name == "lugre" else 0.0,
+        )  # fmt: skip
         ours[name] = float(np.sqrt(np.mean(run.error**2)))
     rax = ReferenceAxis.from_axis(
         axis, null_leakage=NULL_LEAKAGE, resolution=axis.position_resolution
@@ -81,13 +86,13 @@ def rows(axis, seconds, datasheet, level=1.0):
     cases = (("none", "none", "force"), ("oracle", "oracle", "force"),
              ("lugre", None, "force"), ("lugre command", None, "command"))  # fmt: skip
     for name, comp, path in cases:
-        comp = step_of(datasheet, axis) if comp is None else comp
+        comp = step_of(datasheet, axis, force_filter) if comp is None else comp
         theirs[name] = run_reference(rax, rseal, ref.position, ref.velocity, compensator=comp,
                                      path=path, tuning=rt).rms_error  # fmt: skip
     return ours, theirs
 
 
-def main(seconds: float = 10.0) -> None:
+def main(seconds: float = 10.0, force_filter: float = 0.0) -> None:
     base = load_axis(HERE / "axis.toml")
     identified = model_of(SEAL)
     assumed = model_of(SEAL, sigma_0=1e6, sigma_1=1.58e3)
@@ -96,7 +101,7 @@ def main(seconds: float = 10.0) -> None:
                                     ("identified, plant +20 %", identified, 1.2),
                                     ("identified, plant -20 %", identified, 0.8),
                                     ("assumed sigma_0 1e6", assumed, 1.0)):  # fmt: skip
-            ours, theirs = rows(axis, seconds, sheet, level)
+            ours, theirs = rows(axis, seconds, sheet, level, force_filter)
             n0, n1 = ours["none"], theirs["none"]
             print(
                 f"| {kind} | {label} | {n0 * 1e6:.3f} / {n1 * 1e6:.3f} | "
@@ -110,4 +115,7 @@ def main(seconds: float = 10.0) -> None:
 
 
 if __name__ == "__main__":
-    main(float(sys.argv[1]) if len(sys.argv) > 1 else 10.0)
+    main(
+        float(sys.argv[1]) if len(sys.argv) > 1 else 10.0,
+        float(sys.argv[2]) * 1e-3 if len(sys.argv) > 2 else 0.0,
+    )
