@@ -30,11 +30,13 @@ another integrator and another formulation of the valve:
   response at ``K_u/2``); cylfric's :func:`.tuning.tune` reads the -180 deg crossing of a
   frequency response instead;
 - **compensation**: a friction force ``F`` [N] goes through this loop's own force path, the
-  flow that changes ``A_A p_A - A_B p_B`` by ``F_k - F_{k-1}`` over a sample and holds it
-  against the cross-piston leakage, ``u_c = ((F_k - F_{k-1})/T + beta C_i (p_A - p_B)_F
-  (A_A/V_A + A_B/V_B)) / (beta (A_A dQ_A/dx_v / V_A - A_B dQ_B/dx_v / V_B))`` with the
-  landing derivatives of the orifice equations at the measured pressures; a compensator
-  may also return a valve command of its own (the exported step's ``command``), added as is.
+  opening that changes ``A_A p_A - A_B p_B`` by ``F_k - F_{k-1}`` over a sample and holds it
+  against what the flows take away from a held force (the cross-piston leakage and the
+  valve's own pressure-flow slope at the last command, the chamber pressures moved by
+  ``+-F/(A_A + A_B)``), ``u_c = ((F_k - F_{k-1})/T + H(F)) / (beta (A_A dQ_A/dx_v / V_A +
+  A_B |dQ_B/dx_v| / V_B))`` with the landing derivatives of the orifice equations at the
+  measured pressures; a compensator may also return a valve command of its own (the
+  exported step's ``command``), added as is.
 
 :func:`run_reference` returns the tracking error; ``compensator`` is ``"none"``,
 ``"oracle"`` (the plant's friction at the sample), or a callable ``step(x, p_A, p_B,
@@ -316,8 +318,13 @@ def _jacobian(axis: ReferenceAxis, seal: ReferenceSeal, viscous: float):
 
 
 def reference_tuning(axis: ReferenceAxis, seal: ReferenceSeal, viscous: float) -> dict:
-    """PI gains from the critical gain by eigenvalues (see the module notes)."""
+    """PI gains from the critical gain by eigenvalues (see the module notes). The valve
+    needs a null leakage > 0: without it the chambers' pressure level is a marginal mode
+    (an eigenvalue at one for any gain)."""
     from scipy.signal import cont2discrete
+
+    if not axis.null_leakage > 0:
+        raise ValueError("reference_tuning needs a valve null leakage > 0 [m^3/s]")
 
     a, b = _jacobian(axis, seal, viscous)
     t = 1.0 / axis.rate
@@ -465,12 +472,6 @@ def run_reference(
             _advance(y, u, p, fr, t / STEPS_PER_SAMPLE, STEPS_PER_SAMPLE)
     time = np.arange(n) * t
     return ReferenceRun(time, np.asarray(x_ref), out[:, 0], out[:, 3], out[:, 1], out[:, 2])
-
-
-def _leak_dp(axis: ReferenceAxis, force: float) -> float:
-    """The pressure difference p_A - p_B [Pa] a cylinder force F adds (both chambers
-    change by ``F / (A_A + A_B)`` in opposite senses)."""
-    return 2.0 * force / (axis.area_a + axis.area_b)
 
 
 def _hold(axis: ReferenceAxis, force: float, pa: float, pb: float, u: float, va, vb) -> float:
