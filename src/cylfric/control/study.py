@@ -250,7 +250,7 @@ class ControlResult:
         sens_rows = "".join(
             f"<tr><td>{html_text(kind)}</td><td>{row['factor']:g}</td>"
             f"<td>{row['none_rms_m'] * 1e6:.3f}</td><td>{row['lugre_rms_m'] * 1e6:.3f}</td>"
-            f"<td>{row['lugre_over_none']:.3f}</td></tr>"
+            f"<td>{_fmt(row['lugre_over_none'])}</td></tr>"
             for kind, rows in self.sensitivity.get("cases", {}).items()
             for row in rows
         )
@@ -286,6 +286,10 @@ class ControlResult:
             + f"<img alt='tracking error' src='data:image/png;base64,{image}'>"
             "</body></html>\n"
         )
+
+
+def _fmt(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f}"
 
 
 def _metrics(run: LoopRun) -> dict:
@@ -369,7 +373,7 @@ def _sensitivity(model, axis, reference, tuning, dynamic, loop) -> dict[str, Any
                 "factor": factor,
                 "none_rms_m": rms["none"],
                 "lugre_rms_m": rms["lugre"],
-                "lugre_over_none": rms["lugre"] / rms["none"] if rms["none"] else float("nan"),
+                "lugre_over_none": rms["lugre"] / rms["none"] if rms["none"] else None,
             }
         )
     s0 = dynamic["sigma_0"]
