@@ -358,7 +358,7 @@ def compare_compensators(
 def _sensitivity(model, axis, reference, tuning, dynamic, loop) -> dict[str, Any]:
     """PI alone and LuGre RMS errors on plants that differ from the datasheet (see
     :func:`compare_compensators`)."""
-    cases: dict[str, list[dict[str, float]]] = {"sigma_0": [], "friction_level": []}
+    cases: dict[str, list[dict[str, float | None]]] = {"sigma_0": [], "friction_level": []}
     plants = [("sigma_0", f, PlantFriction(f"x{f:g}", stiffness=f)) for f in SIGMA_0_FACTORS]
     plants += [("friction_level", f, PlantFriction(f"x{f:g}", level=f)) for f in LEVEL_FACTORS]
     for kind, factor, plant in plants:
