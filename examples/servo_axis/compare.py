@@ -96,7 +96,8 @@ def main(seconds: float = 10.0, force_filter: float = 0.0) -> None:
     base = load_axis(HERE / "axis.toml")
     identified = model_of(SEAL)
     assumed = model_of(SEAL, sigma_0=1e6, sigma_1=1.58e3)
-    for kind, axis in (("differential", base), ("double-rod", base.replace(rod_a=base.rod))):
+    double = load_axis(HERE / "axis_double_rod.toml")
+    for kind, axis in (("differential", base), ("double-rod", double)):
         for label, sheet, level in (("identified", identified, 1.0),
                                     ("identified, plant +20 %", identified, 1.2),
                                     ("identified, plant -20 %", identified, 0.8),
