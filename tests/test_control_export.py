@@ -39,6 +39,7 @@ int main(int argc, char **argv) {
     cylfric_compensator_output out;
     (void)argc;
     cylfric_compensator_init(&st);
+    in.velocity = 0.0;
     while (scanf("%lf %lf %lf %lf %lf", &in.position, &in.pressure_a, &in.pressure_b,
                  &in.position_reference, &in.velocity_reference) == 5) {
         if (cylfric_compensator_step(kind, &in, &st, &out) != 0) return 3;
@@ -132,6 +133,7 @@ def test_fmu_validates_and_reproduces_python(model, recorded, exported, fmpy, tm
     assert validate_fmu(str(fmu)) == []
     n = len(recorded)
     names = ["position", "pressure_a", "pressure_b", "position_reference", "velocity_reference"]
+    # the sixth input, velocity, keeps its start value 0 (read only with the velocity input)
     time = np.arange(n) * 1e-3
     signals = np.zeros(n, dtype=[("time", float)] + [(c, float) for c in names])
     signals["time"] = time
@@ -174,10 +176,10 @@ def test_fmu_outputs_feed_through_before_the_step(model, recorded, exported, fmp
     rows = recorded[:300]
     got = []
     for k, row in enumerate(rows):
-        slave.setReal(list(range(5)), list(row))
-        got.append(slave.getReal([5, 6]))
+        slave.setReal(list(range(6)), [*row, 0.0])
+        got.append(slave.getReal([6, 7]))
         slave.doStep(k * 1e-3, 1e-3)
-        assert slave.getReal([5, 6]) == got[-1]  # the step commits what was previewed
+        assert slave.getReal([6, 7]) == got[-1]  # the step commits what was previewed
     with pytest.raises(Exception, match="fmi2DoStep"):
         slave.doStep(0.3, 2e-3)  # not the compensator's sample time
     slave.terminate()
@@ -195,7 +197,7 @@ for kind = 0:3
   state = zeros(4, 1);
   out = zeros(size(M, 1), 2);
   for k = 1:size(M, 1)
-    [f, u, state] = cylfric_compensator_step(kind, M(k,1), M(k,2), M(k,3), M(k,4), M(k,5), state);
+    [f, u, state] = cylfric_compensator_step(kind, M(k,1), M(k,2), M(k,3), M(k,4), M(k,5), 0, state);
     out(k, :) = [f, u];
   end
   dlmwrite(sprintf('{tmp_path}/out%d.txt', kind), out, 'precision', '%.17g', 'delimiter', ' ');
@@ -376,3 +378,59 @@ def test_cli_notes_the_default_axis_on_stderr(tmp_path):
     assert "--axis" not in done.stderr
     header = (tmp_path / "b" / "compensator" / "cylfric_compensator_params.h").read_text()
     assert all(fact in header for fact in OTHER_AXIS_TEXT)
+
+
+@needs_cc
+def test_c_step_carries_the_force_filter(model, recorded, tmp_path):
+    # the first-order filter on the force estimate (tau_f = 3 ms) is in the exported step
+    out = tmp_path / "filtered"
+    export_compensator(model, out, targets=["c"], force_filter=3e-3)
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver"
+    subprocess.run(
+        [CC, "-O2", "-std=c99", f"-I{out}", str(tmp_path / "driver.c"),
+         str(out / "cylfric_compensator.c"), "-o", str(exe), "-lm"],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    text = "\n".join(" ".join(repr(float(v)) for v in row) for row in recorded)
+    done = subprocess.run([str(exe), "3"], input=text, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    c_out = np.loadtxt(done.stdout.splitlines())
+    filtered = compensator_outputs(model, "lugre", recorded, force_filter=3e-3)
+    raw = compensator_outputs(model, "lugre", recorded)
+    _close(c_out, filtered)
+    # the filter acts: a = 1 - exp(-1 ms / 3 ms) on every force change after the first sample
+    a = -np.expm1(-1e-3 / 3e-3)
+    assert filtered[1, 0] == pytest.approx(raw[0, 0] + a * (raw[1, 0] - raw[0, 0]), rel=1e-12)
+    assert np.abs(np.diff(filtered[:, 0])).max() < np.abs(np.diff(raw[:, 0])).max()
+
+
+@needs_cc
+def test_c_step_reads_the_velocity_input(model, recorded, tmp_path):
+    # exported with the velocity input, the step uses the measured velocity, not x's difference
+    out = tmp_path / "velocity"
+    export_compensator(model, out, targets=["c"], velocity_input=True)
+    driver = DRIVER.replace("    in.velocity = 0.0;\n", "").replace(
+        '"%lf %lf %lf %lf %lf", &in.position, &in.pressure_a, &in.pressure_b,\n'
+        "                 &in.position_reference, &in.velocity_reference) == 5",
+        '"%lf %lf %lf %lf %lf %lf", &in.position, &in.pressure_a, &in.pressure_b,\n'
+        "                 &in.position_reference, &in.velocity_reference, &in.velocity) == 6",
+    )
+    assert "&in.velocity) == 6" in driver
+    (tmp_path / "driver.c").write_text(driver)
+    exe = tmp_path / "driver"
+    subprocess.run(
+        [CC, "-O2", "-std=c99", f"-I{out}", str(tmp_path / "driver.c"),
+         str(out / "cylfric_compensator.c"), "-o", str(exe), "-lm"],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    # a velocity unlike the position's difference: the reference velocity
+    rows = np.column_stack([recorded, recorded[:, 4]])
+    text = "\n".join(" ".join(repr(float(v)) for v in row) for row in rows)
+    done = subprocess.run([str(exe), "3"], input=text, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    c_out = np.loadtxt(done.stdout.splitlines())
+    expected = compensator_outputs(model, "lugre", rows, velocity_input=True)
+    _close(c_out, expected)
+    differenced = compensator_outputs(model, "lugre", recorded)
+    assert np.abs(expected[:, 0] - differenced[:, 0]).max() > 1.0  # [N]: it reads the input

@@ -66,6 +66,19 @@ def register(app) -> None:
         export_only: bool = typer.Option(
             False, "--export-only", help="Write the exports only; do not run the loop."
         ),
+        force_filter_ms: float = typer.Option(
+            0.0,
+            "--force-filter-ms",
+            help="Time constant [ms] of the first-order filter on the compensators' force "
+            "estimate, in the loop and the exports (0: none; a few samples smooth the "
+            "velocity steps of a quantised position, docs/control.md).",
+        ),
+        velocity_input: bool = typer.Option(
+            False,
+            "--velocity-input",
+            help="The exported step reads a measured velocity input instead of differencing "
+            "the position.",
+        ),
         json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Run the position loop with every compensator (none, coulomb, static, lugre,
@@ -83,11 +96,31 @@ def register(app) -> None:
         the_axis = load_axis(axis) if axis is not None else DEFAULT_AXIS
         ref = _resolve_reference(reference, the_axis)
         targets = _export_targets(export, fmu_kind, export_only)
+        if not (0.0 <= force_filter_ms < 1e4):
+            raise BadInput(f"--force-filter-ms {force_filter_ms!r}: expected 0 <= ms < 10000")
+        _note_assumed(model)
+        tau = force_filter_ms * 1e-3
         if targets:
-            _write_exports(model, out, targets, the_axis, fmu_kind, default_axis=axis is None)
+            _write_exports(
+                model,
+                out,
+                targets,
+                the_axis,
+                fmu_kind,
+                default_axis=axis is None,
+                force_filter=tau,
+                velocity_input=velocity_input,
+            )
         if export_only:
             return
-        result = compare_compensators(model, axis=the_axis, reference=ref, robustness=robustness)
+        result = compare_compensators(
+            model,
+            axis=the_axis,
+            reference=ref,
+            robustness=robustness,
+            progress=_progress(),
+            force_filter=tau,
+        )
         result.write(out)
         document = result.to_dict()
         if json_output:
@@ -99,13 +132,66 @@ def register(app) -> None:
 
 def _resolve_reference(reference: str, axis):
     """The ``--reference`` value: a built-in name, or the trajectory read from a CSV file."""
-    from ..control.loop import REFERENCES, read_reference
+    from ..control.loop import RAMP_IN_SPEED, REFERENCES, ramp_in, read_reference
 
     if reference in REFERENCES:
         return reference
     if Path(reference).is_file():
-        return read_reference(reference, axis)
+        try:
+            read = read_reference(reference, axis)
+        except ValueError as exc:
+            raise BadInput(str(exc)) from None
+        ramped = ramp_in(read, axis)
+        if ramped is not read:
+            err_console.print(
+                terminal(
+                    f"note: {reference} starts at {read.position[0] * 1e3:.4g} mm, not at the "
+                    f"axis's start position {axis.start_position * 1e3:.4g} mm: the loop first "
+                    f"moves there (half-cosine ramp, peak {RAMP_IN_SPEED * 1e3:g} mm/s, "
+                    f"{ramped.time[-1] - read.time[-1]:.3g} s with a 0.5 s hold); the "
+                    "metrics include that ramp. Set start_position in axis.toml to avoid it.",
+                    markup=False,
+                ),
+                markup=False,
+                highlight=False,
+            )
+        return ramped
     raise BadInput(f"--reference {reference!r}: expected one of {list(REFERENCES)} or a CSV file")
+
+
+def _note_assumed(model) -> None:
+    """Name an assumed sigma_0 / sigma_1 on stderr, with how to identify them."""
+    from ..control.study import IDENTIFY_ADVICE, dynamic_parameters
+
+    dynamic = dynamic_parameters(model)
+    assumed = {n: d for n, d in dynamic.items() if d["status"] != "identified"}
+    if not assumed:
+        return
+    values = ", ".join(f"{n} = {d['value']:.4g} {d['unit']}" for n, d in assumed.items())
+    err_console.print(
+        terminal(
+            f"note: the datasheet's {values} {'are' if len(assumed) > 1 else 'is'} ASSUMED, "
+            "not identified; the LuGre compensator and its loop study use "
+            f"{'them' if len(assumed) > 1 else 'it'} (metrics.json 'dynamic_parameters'; "
+            f"'sensitivity' shows the LuGre gain for sigma_0 x0.1..x10): {IDENTIFY_ADVICE}.",
+            markup=False,
+        ),
+        markup=False,
+        highlight=False,
+    )
+
+
+def _progress():
+    """A callback printing the loop study's progress on stderr (the first run compiles the
+    numba kernels, tens of seconds)."""
+    first = [True]
+
+    def say(text: str) -> None:
+        suffix = " (the first run compiles the loop kernels: up to a minute)" if first[0] else ""
+        first[0] = False
+        err_console.print(terminal(f"{text}{suffix}", markup=False), markup=False, highlight=False)
+
+    return say
 
 
 def _export_targets(export: str | None, fmu_kind: str, export_only: bool) -> list[str]:
@@ -130,12 +216,28 @@ def _export_targets(export: str | None, fmu_kind: str, export_only: bool) -> lis
     return targets
 
 
-def _write_exports(model, out: Path, targets, axis, fmu_kind: str, *, default_axis: bool) -> None:
+def _write_exports(
+    model,
+    out: Path,
+    targets,
+    axis,
+    fmu_kind: str,
+    *,
+    default_axis: bool,
+    force_filter: float = 0.0,
+    velocity_input: bool = False,
+) -> None:
     """Write the compensator into ``out/compensator``; note the default axis on stderr."""
     from ..control.export import export_compensator
 
     written = export_compensator(
-        model, out / "compensator", targets=targets, axis=axis, compensator=fmu_kind
+        model,
+        out / "compensator",
+        targets=targets,
+        axis=axis,
+        compensator=fmu_kind,
+        force_filter=force_filter,
+        velocity_input=velocity_input,
     )
     for path in written:
         console.print(terminal(f"written: {path}", markup=False), markup=False)

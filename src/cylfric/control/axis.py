@@ -68,6 +68,7 @@ AXIS_KEYS: dict[str, tuple[str, str]] = {
     "start_position": ("length", "m"),
     "control_rate": ("frequency", "Hz"),
     "substeps": ("dimensionless", "-"),
+    "position_resolution": ("length", "m"),
 }
 """``axis.toml`` keys (table ``[axis]``): dimension and SI unit."""
 
@@ -174,6 +175,10 @@ class Axis:
     the demo loop's PI-alone RMS error agrees with 100 substeps to 1e-4 relative, the LuGre
     loop's 0.1 um residual to 1.5 %)."""
 
+    position_resolution: float = 0.0
+    """Quantum of the position measurement the controller reads [m] (``round(x / q) q``;
+    0: exact). A 1 um encoder or transducer: ``position_resolution = "0.001 mm"``."""
+
     def __post_init__(self) -> None:
         self._check_positive()
         self._check_ranges()
@@ -222,6 +227,10 @@ class Axis:
             )
         if not (isinstance(self.substeps, int) and 1 <= self.substeps <= 10000):
             raise AxisError(f"axis substeps = {self.substeps!r}; expected an integer 1..10000")
+        if not (math.isfinite(self.position_resolution) and 0 <= self.position_resolution < 1e-3):
+            raise AxisError(
+                f"axis position_resolution = {self.position_resolution!r} m; expected 0 <= q < 1 mm"
+            )
         if not math.isfinite(self.load_force):
             raise AxisError("axis load_force must be finite")
 
@@ -331,6 +340,7 @@ _VECTOR = (
     "spool_omega",
     "spool_damping",
     "load_force",
+    "position_resolution",
 )
 """Order of :meth:`Axis.vector` (the compiled loop reads it by index)."""
 

@@ -52,7 +52,7 @@ from ..escape import c_comment, c_string, matlab_comment
 from ..escape import xml_attr as quoteattr
 from .axis import DEFAULT_AXIS, Axis
 from .kernel import COMPENSATOR_CODES, FRICTION_ROWS, REFERENCE_CODES, friction_table
-from .loop import OBSERVER_GAIN, SMOOTHING_VELOCITY, compensator_constants
+from .loop import FORCE_FILTER, OBSERVER_GAIN, SMOOTHING_VELOCITY, compensator_constants
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -85,8 +85,13 @@ FMU_INPUTS = {
     "pressure_b": ("Pa", "measured gauge pressure in chamber B (rod side)"),
     "position_reference": ("m", "reference position"),
     "velocity_reference": ("m/s", "reference velocity"),
+    "velocity": (
+        "m/s",
+        "measured rod velocity, read only when the FMU was exported with the velocity "
+        "input (else the velocity is the position's backward difference)",
+    ),
 }
-"""Inputs of the compensator FMU (value references 0-4) with their units."""
+"""Inputs of the compensator FMU (value references 0-5) with their units."""
 FMU_OUTPUTS = {
     "force": ("N", "friction force estimate, positive in the direction of motion"),
     "command": (
@@ -96,7 +101,7 @@ FMU_OUTPUTS = {
         "baked in at export (see the model description)",
     ),
 }
-"""Outputs of the compensator FMU (value references 5, 6)."""
+"""Outputs of the compensator FMU (value references 6, 7)."""
 
 _AXIS_DEFINES = (
     ("CYLFRIC_AREA_A", "area_a", "piston area of chamber A [m^2]"),
@@ -137,14 +142,30 @@ def _number(value: float) -> str:
 class _Constants:
     """Everything the exported step fixes: the friction table, rule, axis, controller."""
 
-    def __init__(self, model, axis: Axis, smoothing_velocity: float, observer_gain: float):
+    def __init__(
+        self,
+        model,
+        axis: Axis,
+        smoothing_velocity: float,
+        observer_gain: float,
+        force_filter: float = 0.0,
+        velocity_input: bool = False,
+    ):
         self.model = model
         self.axis = axis
         self.table = friction_table(model)
         self.reference = model.reference
         ctrl = compensator_constants(
-            model, axis, smoothing_velocity=smoothing_velocity, observer_gain=observer_gain
+            model,
+            axis,
+            smoothing_velocity=smoothing_velocity,
+            observer_gain=observer_gain,
+            force_filter=force_filter,
+            velocity_input=velocity_input,
         )
+        self.velocity_input = bool(velocity_input)
+        self.force_filter = float(force_filter)
+        self.filter_gain = float(ctrl[10])
         self.sample_time = float(ctrl[9])
         self.smoothing = float(ctrl[5])
         self.observer_gain = float(ctrl[6])
@@ -159,6 +180,17 @@ class _Constants:
             ("CYLFRIC_SAMPLE_TIME", self.sample_time, "controller sample time T [s]"),
             ("CYLFRIC_SMOOTHING_VELOCITY", self.smoothing, "sign smoothing v_s [m/s]"),
             ("CYLFRIC_OBSERVER_GAIN", self.observer_gain, "LuGre observer gain k_o [1/s]"),
+            (
+                "CYLFRIC_FORCE_FILTER_GAIN",
+                self.filter_gain,
+                f"force filter a = 1 - exp(-T/tau_f), tau_f = {self.force_filter:g} s "
+                "(1: no filter) [-]",
+            ),
+            (
+                "CYLFRIC_VELOCITY_INPUT",
+                float(self.velocity_input),
+                "1: the step reads the input velocity; 0: (x - x_prev) / T [-]",
+            ),
             (
                 "CYLFRIC_COULOMB_FORCE",
                 self.coulomb,
@@ -205,20 +237,41 @@ def _axis_facts(k: _Constants) -> tuple[str, list[str], str]:
     return f"The valve command (output `command`) is computed for {which}", items, advice
 
 
+def _dynamic_note(k: _Constants) -> str:
+    """sigma_0 and sigma_1 with their status (identified or assumed) and, when assumed, how to
+    identify them. Numbers and fixed words only (no datasheet text)."""
+    from .study import IDENTIFY_ADVICE, dynamic_parameters
+
+    dynamic = dynamic_parameters(k.model)
+    parts = [
+        f"{name} = {d['value']:.6g} {d['unit']} "
+        f"({'identified' if d['status'] == 'identified' else 'ASSUMED, not identified'})"
+        for name, d in dynamic.items()
+    ]
+    text = "LuGre dynamic parameters of the datasheet: " + ", ".join(parts) + "."
+    if any(d["status"] != "identified" for d in dynamic.values()):
+        text += (
+            " The lugre kind's force depends on sigma_0 (an assumed value a factor 10 off can"
+            f" make it worthless; cylfric control's metrics.json 'sensitivity'): {IDENTIFY_ADVICE}."
+        )
+    return text
+
+
 def _axis_lines(k: _Constants, width: int = 86) -> list[str]:
-    """:func:`_axis_facts` as comment lines (no prefix)."""
+    """:func:`_axis_facts` and :func:`_dynamic_note` as comment lines (no prefix)."""
     heading, items, advice = _axis_facts(k)
     return [
         *textwrap.wrap(heading, width),
         *(f"  {item}" for item in items),
         *textwrap.wrap(advice, width),
+        *textwrap.wrap(_dynamic_note(k), width),
     ]
 
 
 def _axis_text(k: _Constants) -> str:
-    """:func:`_axis_facts` as one paragraph."""
+    """:func:`_axis_facts` and :func:`_dynamic_note` as one paragraph."""
     heading, items, advice = _axis_facts(k)
-    return f"{heading} {'; '.join(items)}. {advice}"
+    return f"{heading} {'; '.join(items)}. {advice} {_dynamic_note(k)}"
 
 
 def _axis_names() -> tuple[str, ...]:
@@ -246,7 +299,8 @@ def _params_header(k: _Constants) -> str:
         *(f" * {line}".rstrip() for line in _axis_lines(k)),
         " *",
         " * Call cylfric_compensator_step exactly once per sample, every CYLFRIC_SAMPLE_TIME:",
-        " * the velocity is (x - x_prev) / CYLFRIC_SAMPLE_TIME (see cylfric_compensator.h). */",
+        " * the velocity is (x - x_prev) / CYLFRIC_SAMPLE_TIME unless CYLFRIC_VELOCITY_INPUT is 1",
+        " * (then the input velocity; see cylfric_compensator.h). */",
         "#ifndef CYLFRIC_COMPENSATOR_PARAMS_H",
         "#define CYLFRIC_COMPENSATOR_PARAMS_H",
         f"#define CYLFRIC_DEFAULT_AXIS {int(k.axis == DEFAULT_AXIS)} "
@@ -279,7 +333,7 @@ def _fmu_description(k: _Constants, name: str, guid: str, kind: str) -> str:
     from ..export.fmu import _BASE, _unit_xml
 
     pa, pb = k.axis.rest_pressures()
-    starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0]
+    starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0, 0.0]
     description = " ".join(
         [
             f"cylfric friction compensator ({kind}) of the datasheet {k.source}: exactly one",
@@ -339,12 +393,12 @@ def _fmu_description(k: _Constants, name: str, guid: str, kind: str) -> str:
         "  </ModelVariables>",
         "  <ModelStructure>",
         "    <Outputs>",
-        '      <Unknown index="6"/>',
         '      <Unknown index="7"/>',
+        '      <Unknown index="8"/>',
         "    </Outputs>",
         "    <InitialUnknowns>",
-        '      <Unknown index="6"/>',
         '      <Unknown index="7"/>',
+        '      <Unknown index="8"/>',
         "    </InitialUnknowns>",
         "  </ModelStructure>",
         "</fmiModelDescription>",
@@ -355,7 +409,7 @@ def _fmu_description(k: _Constants, name: str, guid: str, kind: str) -> str:
 
 def _fmu_header(k: _Constants, name: str, guid: str, kind: str) -> str:
     pa, pb = k.axis.rest_pressures()
-    starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0, 0.0, 0.0, 0.0]
+    starts = [k.axis.start_position, pa, pb, k.axis.start_position, 0.0, 0.0, 0.0, 0.0, 0.0]
     return "\n".join(
         [
             "/* Generated by cylfric.control.export: identifier, GUID, kind and start values. */",
@@ -439,7 +493,7 @@ def _matlab(k: _Constants, name: str) -> str:
     fn = f"{name}_step"
     signature = (
         f"function [force, command, state] = {fn}(kind, position, pressure_a, pressure_b, "
-        "position_reference, velocity_reference, state)"
+        "position_reference, velocity_reference, velocity, state)"
     )
     law = matlab_comment(k.model.friction_law)
     vs = _number(k.smoothing)
@@ -447,15 +501,17 @@ def _matlab(k: _Constants, name: str) -> str:
     return f"""{signature}
 %{fn.upper()} One sample of the cylfric friction compensator (SI units).
 %   [force, command, state] = {fn}(kind, position, pressure_a, pressure_b,
-%       position_reference, velocity_reference, state)
+%       position_reference, velocity_reference, velocity, state)
 %   kind: 0 none, 1 coulomb, 2 static, 3 lugre; position [m], pressure_a, pressure_b [Pa],
-%   position_reference [m], velocity_reference [m/s]; state: 4-vector [x_prev [m];
-%   z_hat [m]; f_prev [N]; started [-]], zeros(4, 1) before the first sample.
+%   position_reference [m], velocity_reference [m/s], velocity: the measured velocity
+%   [m/s], read only when exported with the velocity input (else pass 0); state:
+%   4-vector [x_prev [m]; z_hat [m]; f_prev [N]; started [-]], zeros(4, 1) before the
+%   first sample.
 %   force: the friction force estimate [N]; command: the valve command [-] that changes the
 %   cylinder force by the estimate's change and holds it against the cross-piston leakage
 %   (add it to the position controller's command).
-%   Call exactly once per controller sample, every T = {k.sample_time!r} s: there is no
-%   velocity input, the velocity is (position - previous position) / T. position: absolute
+%   Call exactly once per controller sample, every T = {k.sample_time!r} s: without the
+%   velocity input the velocity is (position - previous position) / T. position: absolute
 %   from the cap end (x = 0 at chamber A's dead volume, > 0 extends), the reference in the
 %   same frame; pressures gauge [Pa]; command > 0 opens P->A (extension); force > 0 in the
 %   direction of motion. The first sample (state(4) = 0) outputs command 0 (no previous
@@ -469,7 +525,9 @@ def _matlab(k: _Constants, name: str) -> str:
 %   Friction law: {law}; operating pressure {_REFERENCE_C[k.reference]}.
 T = {_number(k.sample_time)};  % sample time [s]
 started = state(4) > 0;
-if started
+if {int(k.velocity_input)}
+    v = velocity;
+elseif started
     v = (position - state(1)) / T;
 else
     v = 0;
@@ -491,6 +549,9 @@ elseif kind == 3
     comp = q(6) * state(2) + q(7) * dz + q(3) * v;
 elseif kind ~= 0
     error('cylfric:kind', 'kind = %g; expected 0 none, 1 coulomb, 2 static or 3 lugre', kind);
+end
+if started && kind ~= 0
+    comp = state(3) + {_number(k.filter_gain)} * (comp - state(3));  % force filter
 end
 command = 0;
 if started && kind ~= 0
@@ -624,6 +685,8 @@ def export_compensator(
     name: str = "cylfric_compensator",
     smoothing_velocity: float = SMOOTHING_VELOCITY,
     observer_gain: float = OBSERVER_GAIN,
+    force_filter: float = FORCE_FILTER,
+    velocity_input: bool = False,
 ) -> list[Path]:
     """Write the compensator step as C source, an FMU and/or a MATLAB function.
 
@@ -643,6 +706,11 @@ def export_compensator(
         FMU model identifier and MATLAB function prefix (a C identifier).
     smoothing_velocity, observer_gain : float
         Sign smoothing v_s [m/s] and LuGre observer gain k_o [1/s], as in the loop.
+    force_filter : float
+        Time constant tau_f [s] of the first-order filter on the force estimate (0: none).
+    velocity_input : bool
+        The step reads the input ``velocity`` [m/s] (a velocity sensor or the user's own
+        estimate) instead of differencing the position.
 
     Returns
     -------
@@ -664,7 +732,9 @@ def export_compensator(
         )
     name = _check_name(name, "cylfric_compensator")
     model = _as_model(model)
-    constants = _Constants(model, axis, smoothing_velocity, observer_gain)
+    constants = _Constants(
+        model, axis, smoothing_velocity, observer_gain, force_filter, velocity_input
+    )
     out = Path(out)
     make_folder(out)
     written: list[Path] = []

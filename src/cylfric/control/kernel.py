@@ -76,36 +76,51 @@ CTRL = (
     "coulomb_force",
     "command_offset",
     "sample_time",
+    "force_filter_gain",
+    "velocity_input",
 )
 """Order of the controller vector: gains [1/m], [1/(m*s)], [s/m], feedforward on (1) or off
 (0), the feedforward's lead time [s] (the reference velocity fed forward is ``v_ref + lead
 a_ref``), sign smoothing velocity [m/s], observer gain [1/s], Coulomb level [N], a
-constant command offset [-] (valve null bias; open-loop tests), sample time [s]."""
+constant command offset [-] (valve null bias; open-loop tests), sample time [s], the gain
+``a = 1 - exp(-T / tau_f)`` of the first-order filter on the compensator's force estimate
+[-] (1: no filter; :func:`compensator_step`), velocity input on (1: the compensator
+reads the measured velocity) or off (0: the backward difference of the position) [-]."""
 
 
 def friction_table(
-    model, *, level: float = 1.0, slope: float = 1.0, offset: float = 0.0
+    model,
+    *,
+    level: float = 1.0,
+    slope: float = 1.0,
+    offset: float = 0.0,
+    stiffness: float = 1.0,
 ) -> np.ndarray:
     """The (7, 4) table of a :class:`~cylfric.model.FrictionModel` (see the module notes).
 
     ``level`` scales F_c, F_s and sigma_2 at every pressure [-]; ``slope`` scales their
     pressure dependence only (the coefficients beyond the intercept) [-]; ``offset`` [N] is
-    added to F_c and F_s at every pressure.
+    added to F_c and F_s at every pressure; ``stiffness`` scales sigma_0 [-] (and sigma_1 by
+    its square root, which keeps the bristles' damping ratio).
     """
     coefficients = model.coefficients()
     table = np.zeros((len(FRICTION_ROWS), 4))
     defaults = {"F_s": coefficients.get("F_c"), "sigma_2": 0.0, "v_r": 1.0, "alpha": 1.0}
     for row, name in enumerate(FRICTION_ROWS):
-        spec = coefficients.get(name)
-        if spec is None:
-            spec = defaults[name]
+        spec, source = coefficients.get(name), name
+        if spec is None:  # not in the datasheet's law (Coulomb-only: F_s = F_c, sigma_2 = 0)
+            spec, source = defaults[name], "F_c"
         if isinstance(spec, dict):
-            law = spec.get("law", model.laws.get(name, model.pressure_law))
+            law = spec.get("law") or model.laws.get(source) or model.pressure_law
             keys = _LAW_KEYS[law]
             values = [float(spec[k]) for k in keys]
         else:
             law, values = "constant", [float(spec)]
         scale = level if name in ("F_c", "F_s", "sigma_2") else 1.0
+        if name == "sigma_0":
+            scale = stiffness
+        elif name == "sigma_1":
+            scale = math.sqrt(stiffness)
         values = [v * scale for v in values]
         if name in ("F_c", "F_s", "sigma_2") and law in ("linear", "quadratic"):
             values[1:] = [v * slope for v in values[1:]]
@@ -223,7 +238,9 @@ COMPENSATOR_STATE_SIZE = len(COMPENSATOR_STATE)
 
 
 @njit(cache=True, inline="always")
-def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, v_ref, oracle):
+def compensator_step(
+    kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, v_ref, oracle, velocity=0.0
+):
     """One controller sample of a compensator: returns (force F [N], command u_c [-]).
 
     A pure function of the measurements (position ``x`` [m], chamber pressures ``pa``,
@@ -231,12 +248,20 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
     ``state`` (:data:`COMPENSATOR_STATE`, updated in place); ``kind`` a code of
     COMPENSATOR_CODES, ``model`` the datasheet's friction table, ``model_ref`` its pressure
     rule, ``ctrl`` the controller vector (CTRL), ``ax`` the axis vector; ``oracle`` the
-    plant's friction [N] (used by kind 4 only). The C, FMU and MATLAB exports
+    plant's friction [N] (used by kind 4 only); ``velocity`` the measured velocity [m/s],
+    read only with the velocity input on (``ctrl[11]`` = 1; otherwise the velocity is the
+    backward difference ``(x - x_prev) / T``, 0 at the first sample). From the second
+    sample the force goes through a first-order filter, ``F_k = F_{k-1} + a (F_raw -
+    F_{k-1})`` with ``a = 1 - exp(-T / tau_f)`` (``ctrl[10]``; 1 without filter), before
+    the command ``u_c = ((F_k - F_{k-1})/T + R_L(F_k)) / G_F``. The C, FMU and MATLAB exports
     (:mod:`cylfric.control.export`) are this function, line by line.
     """
     T = ctrl[9]
     started = state[3] > 0.0
-    v_meas = (x - state[0]) / T if started else 0.0
+    if ctrl[11] > 0.0:
+        v_meas = velocity
+    else:
+        v_meas = (x - state[0]) / T if started else 0.0
     state[0] = x
     comp = 0.0
     if kind == 1:
@@ -252,6 +277,8 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
         comp = lugre_instant(v_meas, z_hat, s0, s1, s2, fc, fs, v_r, al)
     elif kind == 4:
         comp = oracle
+    if started and kind != 0:  # first-order filter on the force: F <- F_prev + a (F - F_prev)
+        comp = state[2] + ctrl[10] * (comp - state[2])
     u_c = 0.0
     if started and kind != 0:  # the force's rate and its hold against leakage, through the valve
         rate = (comp - state[2]) / T + leakage_force_rate(comp, x, ax)
@@ -264,14 +291,16 @@ def compensator_step(kind, model, model_ref, ctrl, ax, state, x, pa, pb, x_ref, 
 @njit(cache=True)
 def run_compensator(kind, model, model_ref, ctrl, ax, measurements):
     """:func:`compensator_step` along recorded measurements, from the zero state: rows
-    (x [m], p_A [Pa], p_B [Pa], x_ref [m], v_ref [m/s]); returns rows (F [N], u_c [-])."""
+    (x [m], p_A [Pa], p_B [Pa], x_ref [m], v_ref [m/s][, v [m/s]]); returns rows (F [N],
+    u_c [-])."""
     n = measurements.shape[0]
     out = np.empty((n, 2))
     state = np.zeros(COMPENSATOR_STATE_SIZE)
     for k in range(n):
         m = measurements[k]
+        v = m[5] if measurements.shape[1] > 5 else 0.0
         out[k, 0], out[k, 1] = compensator_step(
-            kind, model, model_ref, ctrl, ax, state, m[0], m[1], m[2], m[3], m[4], 0.0
+            kind, model, model_ref, ctrl, ax, state, m[0], m[1], m[2], m[3], m[4], 0.0, v
         )
     return out
 
@@ -301,20 +330,22 @@ def closed_loop(
     s = 0.0
     sd = 0.0
     integ = 0.0
-    x_prev = x
+    x_prev = x if ax[17] <= 0.0 else round(x / ax[17]) * ax[17]
     cstate = np.zeros(COMPENSATOR_STATE_SIZE)
     z_hat = 0.0
     u = 0.0
     comp = 0.0
     friction = 0.0
+    quantum = ax[17]
     for k in range(n):
         # ---------------------------------------------------------- the controller
-        v_meas = (x - x_prev) / T if k > 0 else 0.0
-        x_prev = x
-        err = x_ref[k] - x
+        xm = x if quantum <= 0.0 else round(x / quantum) * quantum  # the measured position
+        v_meas = (xm - x_prev) / T if k > 0 else 0.0
+        x_prev = xm
+        err = x_ref[k] - xm
         vr = v_ref[k]
         comp, u_c = compensator_step(
-            compensator, model, model_ref, ctrl, ax, cstate, x, pa, pb, x_ref[k], vr, friction
+            compensator, model, model_ref, ctrl, ax, cstate, xm, pa, pb, x_ref[k], vr, friction, v
         )
         z_hat = cstate[1]
         ff = 0.0

@@ -10,7 +10,9 @@ from __future__ import annotations
 import base64
 import io
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -19,6 +21,7 @@ from ..escape import html_text
 from .axis import DEFAULT_AXIS, Axis
 from .loop import (
     COMPENSATORS,
+    FORCE_FILTER,
     OBSERVER_GAIN,
     SMOOTHING_VELOCITY,
     LoopRun,
@@ -35,7 +38,40 @@ if TYPE_CHECKING:
     from cylfric._typing import StrPath
     from cylfric.model import FrictionModel
 
-__all__ = ["ControlResult", "compare_compensators", "ROBUSTNESS_CASES", "robustness_cases"]
+__all__ = [
+    "ControlResult",
+    "compare_compensators",
+    "ROBUSTNESS_CASES",
+    "robustness_cases",
+    "SIGMA_0_FACTORS",
+    "LEVEL_FACTORS",
+    "dynamic_parameters",
+    "IDENTIFY_ADVICE",
+]
+
+SIGMA_0_FACTORS = (0.1, 0.3, 1.0, 3.0, 10.0)
+"""Factors on the datasheet's sigma_0 of the plants of the sensitivity study [-]."""
+LEVEL_FACTORS = (0.8, 1.0, 1.2)
+"""Factors on the friction level (F_c, F_s, sigma_2) of the sensitivity study [-]."""
+IDENTIFY_ADVICE = (
+    "identify them from presliding and breakaway runs in the campaign (cylfric fit with "
+    "presliding tests, docs/dynamic.md) or from a short logged motion of the axis itself "
+    "(small sine around a reversal and a slow ramp)"
+)
+"""How to identify an assumed sigma_0 / sigma_1 (said wherever they are used)."""
+
+
+def dynamic_parameters(model: FrictionModel) -> dict[str, dict[str, Any]]:
+    """sigma_0 and sigma_1 of the datasheet: value at the rest pressure (SI), ``status``
+    (``identified`` or ``assumed``) and its reason."""
+    out: dict[str, dict[str, Any]] = {}
+    coefficients = model.coefficients()
+    for name, unit in (("sigma_0", "N/m"), ("sigma_1", "N*s/m")):
+        state, reason = model.dynamic_status.get(name, ("assumed", "not stated"))
+        spec = coefficients.get(name)
+        value = spec.get("intercept") if isinstance(spec, dict) else spec
+        out[name] = {"value": value, "unit": unit, "status": state, "reason": reason}
+    return out
 
 
 def robustness_cases(
@@ -94,6 +130,9 @@ class ControlResult:
     metrics: dict[str, dict]
     robustness: dict[str, dict[str, dict]] = field(default_factory=dict)
     datasheet: str | None = None
+    sensitivity: dict[str, Any] = field(default_factory=dict)
+    dynamic: dict[str, dict[str, Any]] = field(default_factory=dict)
+    force_filter: float = FORCE_FILTER
 
     def ratios(self, metrics: dict[str, dict] | None = None) -> dict[str, float | None]:
         """The acceptance ratios (RMS and reversal error of lugre against the others)."""
@@ -122,6 +161,7 @@ class ControlResult:
                 "feedforward_lead_s": feedforward_lead(self.axis),
                 "sign_smoothing_m_s": SMOOTHING_VELOCITY,
                 "observer_gain_1_s": OBSERVER_GAIN,
+                "force_filter_s": self.force_filter,
             },
             "compensators": self.metrics,
             "ratios": self.ratios(),
@@ -129,6 +169,8 @@ class ControlResult:
                 case: {"compensators": metrics, "ratios": self.ratios(metrics)}
                 for case, metrics in self.robustness.items()
             },
+            "dynamic_parameters": self.dynamic,
+            "sensitivity": self.sensitivity,
         }
 
     def to_pandas(self):
@@ -192,6 +234,36 @@ class ControlResult:
                 f"<tr><td>{html_text(name)}</td>{text}<td>{m['control_effort_rms']:.4f}</td></tr>"
             )
         image = base64.b64encode(png).decode()
+        dynamic = "".join(
+            f"<tr><td>{html_text(n)}</td><td>{d['value']:.4g} "
+            f"{html_text(d['unit'])}</td><td><b>{html_text(d['status'])}</b></td>"
+            f"<td>{html_text(d['reason'])}</td></tr>"
+            for n, d in self.dynamic.items()
+        )
+        assumed = [n for n, d in self.dynamic.items() if d["status"] != "identified"]
+        warning = (
+            f"<p><b>{html_text(', '.join(assumed))} assumed, not identified</b>: the LuGre "
+            f"compensator depends on them (table below); {html_text(IDENTIFY_ADVICE)}.</p>"
+            if assumed
+            else ""
+        )
+        sens_rows = "".join(
+            f"<tr><td>{html_text(kind)}</td><td>{row['factor']:g}</td>"
+            f"<td>{row['none_rms_m'] * 1e6:.3f}</td><td>{row['lugre_rms_m'] * 1e6:.3f}</td>"
+            f"<td>{_fmt(row['lugre_over_none'])}</td></tr>"
+            for kind, rows in self.sensitivity.get("cases", {}).items()
+            for row in rows
+        )
+        sensitivity = (
+            "<h2>Sensitivity of the LuGre gain</h2><p>"
+            + html_text(self.sensitivity.get("note", ""))
+            + "</p><table border='1'><tr><th>plant differs in</th><th>factor</th>"
+            "<th>PI alone RMS [µm]</th><th>LuGre RMS [µm]</th><th>LuGre / PI alone</th></tr>"
+            + sens_rows
+            + "</table>"
+            if sens_rows
+            else ""
+        )
         title = html_text(self.datasheet or "datasheet")
         return (
             "<!DOCTYPE html><html><head><meta charset='utf-8'><title>cylfric control</title>"
@@ -204,9 +276,20 @@ class ControlResult:
             "<th>max error [µm]</th><th>reversal error [µm]</th><th>command RMS [-]</th></tr>"
             + "".join(rows)
             + "</table>"
-            f"<img alt='tracking error' src='data:image/png;base64,{image}'>"
+            + "<h2>Dynamic parameters of the datasheet</h2>"
+            + warning
+            + "<table border='1'><tr><th>parameter</th><th>value</th><th>status</th>"
+            "<th>reason</th></tr>"
+            + dynamic
+            + "</table>"
+            + sensitivity
+            + f"<img alt='tracking error' src='data:image/png;base64,{image}'>"
             "</body></html>\n"
         )
+
+
+def _fmt(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f}"
 
 
 def _metrics(run: LoopRun) -> dict:
@@ -227,16 +310,26 @@ def compare_compensators(
     robustness: bool = True,
     scatter: FrictionModel | None = None,
     tuning: Tuning | None = None,
+    sensitivity: bool = True,
+    progress: Callable[[str], None] | None = None,
+    force_filter: float = FORCE_FILTER,
 ) -> ControlResult:
     """Run every compensator (:data:`~.loop.COMPENSATORS`) on ``axis`` with ``reference``;
-    with ``robustness``, again on the plants of :func:`robustness_cases`."""
+    with ``robustness``, again on the plants of :func:`robustness_cases`; with
+    ``sensitivity``, PI alone and LuGre on plants whose sigma_0 is :data:`SIGMA_0_FACTORS`
+    times the datasheet's (sigma_1 by the square root) and whose friction level is
+    :data:`LEVEL_FACTORS` times it, the compensator keeping the datasheet. ``progress`` is
+    called with a line before each group of runs (the first run compiles the kernels);
+    ``force_filter`` [s] the compensators' force filter (:data:`~.loop.FORCE_FILTER`)."""
+    loop = partial(simulate_loop, force_filter=force_filter)
+    say = progress or (lambda text: None)
     if isinstance(reference, str):
         reference = make_reference(reference, axis)
     tuning = tuning or tune(axis, viscous=_rest_viscous(model, axis))
-    runs = {
-        c: simulate_loop(model, c, axis=axis, reference=reference, tuning=tuning)
-        for c in COMPENSATORS
-    }
+    runs = {}
+    for c in COMPENSATORS:
+        say(f"running the loop: {c}")
+        runs[c] = loop(model, c, axis=axis, reference=reference, tuning=tuning)
     result = ControlResult(
         axis,
         reference,
@@ -244,15 +337,50 @@ def compare_compensators(
         runs,
         {c: _metrics(r) for c, r in runs.items()},
         datasheet=getattr(model, "source", None),
+        dynamic=dynamic_parameters(model),
+        force_filter=force_filter,
     )
+    if sensitivity:
+        say("sensitivity: plants with sigma_0 x0.1..x10 and friction x0.8..x1.2")
+        result.sensitivity = _sensitivity(model, axis, reference, tuning, result.dynamic, loop)
     if robustness:
+        say("robustness cases")
         for case in robustness_cases(model, scatter=scatter):
             result.robustness[case.name] = {
                 c: _metrics(
-                    simulate_loop(
-                        model, c, axis=axis, reference=reference, tuning=tuning, plant=case
-                    )
+                    loop(model, c, axis=axis, reference=reference, tuning=tuning, plant=case)
                 )
                 for c in COMPENSATORS
             }
     return result
+
+
+def _sensitivity(model, axis, reference, tuning, dynamic, loop) -> dict[str, Any]:
+    """PI alone and LuGre RMS errors on plants that differ from the datasheet (see
+    :func:`compare_compensators`)."""
+    cases: dict[str, list[dict[str, float | None]]] = {"sigma_0": [], "friction_level": []}
+    plants = [("sigma_0", f, PlantFriction(f"x{f:g}", stiffness=f)) for f in SIGMA_0_FACTORS]
+    plants += [("friction_level", f, PlantFriction(f"x{f:g}", level=f)) for f in LEVEL_FACTORS]
+    for kind, factor, plant in plants:
+        rms = {
+            c: _metrics(loop(model, c, axis=axis, reference=reference, tuning=tuning, plant=plant))[
+                "rms_error_m"
+            ]
+            for c in ("none", "lugre")
+        }
+        cases[kind].append(
+            {
+                "factor": factor,
+                "none_rms_m": rms["none"],
+                "lugre_rms_m": rms["lugre"],
+                "lugre_over_none": rms["lugre"] / rms["none"] if rms["none"] else None,
+            }
+        )
+    s0 = dynamic["sigma_0"]
+    note = (
+        f"The compensator keeps the datasheet (sigma_0 = {s0['value']:.4g} N/m, "
+        f"{s0['status']}); the plant's sigma_0 is the factor times it (sigma_1 times its "
+        "square root), or its friction level (F_c, F_s, sigma_2) the factor times the "
+        "datasheet's."
+    )
+    return {"note": note, "cases": cases}

@@ -5,7 +5,8 @@
  * generated into cylfric_compensator_params.h. It is cylfric.control.kernel.compensator_step
  * line by line (SI units):
  *
- *   v      = (x - x_prev) / T  (0 at the first sample)
+ *   v      = (x - x_prev) / T  (0 at the first sample), or the input velocity when
+ *            CYLFRIC_VELOCITY_INPUT is 1
  *   p      = operating pressure of (p_A, p_B) by the datasheet's rule
  *   none:    F = 0
  *   coulomb: F = F_c0 tanh(v_ref / v_s)
@@ -14,6 +15,8 @@
  *            F = sigma_0 z^ + sigma_1 (v - sigma_0 |v| z^ / g(v)) + sigma_2 v  (eq. 2.5;
  *            Canudas de Wit et al. 1995)
  *   from the second sample on (the first outputs u_c = 0):
+ *   F      = F_prev + a (F - F_prev),  a = CYLFRIC_FORCE_FILTER_GAIN = 1 - exp(-T / tau_f)
+ *            (first-order filter on the force estimate; a = 1: none)
  *   R      = (F - F_prev) / T + R_L(F),  R_L(F) = beta C_i F / ((A_A + A_B) / 2)
  *            (A_A / V_A + A_B / V_B)     (the force rate that holds F against the
  *                                          cross-piston leakage C_i)
@@ -160,7 +163,10 @@ int cylfric_compensator_step(int kind, const cylfric_compensator_input *in,
     out->force = 0.0;
     out->command = 0.0;
     if (kind < CYLFRIC_NONE || kind > CYLFRIC_LUGRE) return -1;
-    v = started ? (in->position - state->x_prev) / T : 0.0;
+    if (CYLFRIC_VELOCITY_INPUT > 0.0)
+        v = in->velocity;
+    else
+        v = started ? (in->position - state->x_prev) / T : 0.0;
     state->x_prev = in->position;
     if (kind == CYLFRIC_COULOMB) {
         comp = CYLFRIC_COULOMB_FORCE * tanh(in->velocity_reference / CYLFRIC_SMOOTHING_VELOCITY);
@@ -177,6 +183,8 @@ int cylfric_compensator_step(int kind, const cylfric_compensator_input *in,
         dz = v - q.s0 * fabs(v) * state->z_hat / g;
         comp = q.s0 * state->z_hat + q.s1 * dz + q.s2 * v;
     }
+    if (started && kind != CYLFRIC_NONE) /* first-order filter on the force */
+        comp = state->f_prev + CYLFRIC_FORCE_FILTER_GAIN * (comp - state->f_prev);
     out->force = comp;
     if (started && kind != CYLFRIC_NONE) {
         rate = (comp - state->f_prev) / T + cylfric_leakage_force_rate(comp, in->position);

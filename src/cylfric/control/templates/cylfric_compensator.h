@@ -13,7 +13,8 @@
  * controller's command before the valve.
  *
  * The contract (the numbers in cylfric_compensator_params.h):
- * - ONE CALL PER SAMPLE, EVERY CYLFRIC_SAMPLE_TIME. There is no velocity input: the step
+ * - ONE CALL PER SAMPLE, EVERY CYLFRIC_SAMPLE_TIME. Unless exported with the velocity
+ *   input (CYLFRIC_VELOCITY_INPUT 1: the step reads in->velocity), the step
  *   takes v = (x - x_prev) / CYLFRIC_SAMPLE_TIME, and the command the force change over that
  *   period. Calling it at another rate, twice in one sample, or skipping samples gives a
  *   wrong velocity, observer and command. After a pause, call cylfric_compensator_init.
@@ -48,6 +49,8 @@ typedef struct {
     double pressure_b;         /* measured pressure in chamber B [Pa] */
     double position_reference; /* reference position [m] */
     double velocity_reference; /* reference velocity [m/s] */
+    double velocity;           /* measured rod velocity [m/s]; read only when
+                                  CYLFRIC_VELOCITY_INPUT is 1 (else set it to 0) */
 } cylfric_compensator_input;
 
 typedef struct {

@@ -10,8 +10,8 @@
  * on a copy of the state (direct feedthrough); fmi2DoStep then commits the same sample.
  *
  * Value references: 0 position [m], 1 pressure_a [Pa], 2 pressure_b [Pa],
- * 3 position_reference [m], 4 velocity_reference [m/s] (inputs); 5 force [N],
- * 6 command [-] (outputs); 7 z_hat [m] (local). Conventions as cylfric_compensator.h:
+ * 3 position_reference [m], 4 velocity_reference [m/s], 5 velocity [m/s] (inputs); 6 force
+ * [N], 7 command [-] (outputs); 8 z_hat [m] (local). Conventions as cylfric_compensator.h:
  * position absolute from the cap end, gauge pressures, command > 0 opens P->A (extension),
  * the first sample outputs command 0; the command is for the axis baked in at export (listed
  * in modelDescription.xml's description and in cylfric_compensator_params.h).
@@ -26,7 +26,7 @@
 #include "cylfric_compensator.c"
 
 enum { VR_POSITION, VR_PRESSURE_A, VR_PRESSURE_B, VR_POSITION_REFERENCE,
-       VR_VELOCITY_REFERENCE, VR_FORCE, VR_COMMAND, VR_Z_HAT, N_REALS };
+       VR_VELOCITY_REFERENCE, VR_VELOCITY, VR_FORCE, VR_COMMAND, VR_Z_HAT, N_REALS };
 
 typedef struct {
     fmi2Real r[N_REALS];
@@ -57,6 +57,7 @@ static void sample(Instance *c, cylfric_compensator_state *state) {
     in.pressure_b = c->r[VR_PRESSURE_B];
     in.position_reference = c->r[VR_POSITION_REFERENCE];
     in.velocity_reference = c->r[VR_VELOCITY_REFERENCE];
+    in.velocity = c->r[VR_VELOCITY];
     cylfric_compensator_step(CYLFRIC_FMU_KIND, &in, state, &out);
     c->r[VR_FORCE] = out.force;
     c->r[VR_COMMAND] = out.command;
@@ -169,7 +170,7 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
     Instance *c = (Instance *)comp;
     size_t i;
     for (i = 0; i < nvr; i++) {
-        if (vr[i] > VR_VELOCITY_REFERENCE) {
+        if (vr[i] > VR_VELOCITY) {
             log_error(c, "value reference %u is not an input", vr[i]);
             return fmi2Error;
         }
