@@ -111,11 +111,11 @@ def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, An
             rows.append(
                 {
                     "component": name,
-                    "what it measures": COMPONENT_MEANING.get(name, ""),
                     "std [%]": _number(part.get("std_percent")),
                     "std [N]": _number(part.get("std_N")),
                     "source": str(part.get("source", "")),
                     "prior basis": basis,
+                    "what it measures": COMPONENT_MEANING.get(name, ""),
                 }
             )
         total = scatter.get("reproducibility")
@@ -123,11 +123,11 @@ def scatter_html(scatter: Mapping[str, Any] | None, lack_of_fit: Mapping[str, An
             rows.append(
                 {
                     "component": "reproducibility (ISO 5725-2 s_R)",
-                    "what it measures": COMPONENT_MEANING["reproducibility"],
                     "std [%]": _number(total.get("std_percent")),
                     "std [N]": _number(total.get("std_N")),
                     "source": "combined",
                     "prior basis": "",
+                    "what it measures": COMPONENT_MEANING["reproducibility"],
                 }
             )
         counts = ", ".join(
