@@ -22,8 +22,8 @@ from synthetic_rig import friction_law, write_campaign, write_run
 from typer.testing import CliRunner
 
 from cylfric.cli import app
-from cylfric.plausibility import ForceBalanceError, check_force_balance
 from cylfric.quality import QualityError, assess
+from cylfric.quality.plausibility import ForceBalanceError, check_force_balance
 from cylfric.steady_state import extract_campaign
 
 RECIPE = Path(__file__).resolve().parents[1] / "examples" / "zillen2021" / "campaign.toml"

@@ -17,8 +17,8 @@ from synthetic_rig import write_campaign, write_run
 from typer.testing import CliRunner
 
 from cylfric.cli import app
-from cylfric.plausibility import ImplausibleDataError, check_plausibility
 from cylfric.quality import assess
+from cylfric.quality.plausibility import ImplausibleDataError, check_plausibility
 from cylfric.steady_state import extract_campaign
 
 runner = CliRunner()

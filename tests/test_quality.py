@@ -291,7 +291,7 @@ def test_a_flipped_load_cell_sign_exits_2_naming_the_key_and_its_line(clean, tmp
     )
     result, out = fit_no_report(folder, tmp_path)
     assert result.exit_code == 2, result.output
-    # the gate's force-balance check (cylfric.plausibility) stops it before the fit
+    # the gate's force-balance check (cylfric.quality.plausibility) stops it before the fit
     text = " ".join(result.output.split())
     assert "the friction is below 0 N in" in text
     assert "load_cell_sign = -1 (line 5)" in text

@@ -68,7 +68,7 @@ class FitOptions:
         are there (a note says which is missing otherwise); True: required (ValueError
         without them); False: never.
     accept_force_balance : bool
-        Fit even when the gate's physical checks (:mod:`cylfric.plausibility`) find the
+        Fit even when the gate's physical checks (:mod:`cylfric.quality.plausibility`) find the
         force balance contradicted (the offset or the friction following the pressure
         force: a ``load_cell_sign`` / ``position_sign`` of campaign.toml) or a friction
         above the pressure force the cylinder could make (a unit slip); the findings become

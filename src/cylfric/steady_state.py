@@ -615,7 +615,7 @@ class Extraction:
     config : CampaignConfig or None
         The campaign's configuration the points were extracted with (the force balance's
         areas and signs, the pressure reference): the data-quality gate checks the points
-        against it (:mod:`cylfric.plausibility`). None: not known.
+        against it (:mod:`cylfric.quality.plausibility`). None: not known.
     """
 
     points: pd.DataFrame

@@ -49,9 +49,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from ._runtable import RunTable, run_column
-from .friction.pressure import PRESSURE_REFERENCES
-from .levels import pressure_levels
+from .._runtable import RunTable, run_column
+from ..friction.pressure import PRESSURE_REFERENCES
+from ..levels import pressure_levels
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
@@ -602,7 +602,7 @@ def assess(
         Fewest strokes of a setting (run nominal pressure and speed, labels, direction) for
         the ``transient`` check [-].
     accept_force_balance : bool
-        Fit even when the physical checks of :mod:`cylfric.plausibility` find the force
+        Fit even when the physical checks of :mod:`cylfric.quality.plausibility` find the force
         balance or the units contradicted (a sign of campaign.toml, a friction above the
         cylinder's pressure force): their findings become :attr:`QualityReport.notes`
         instead of an error.
@@ -616,9 +616,9 @@ def assess(
     QualityError
         When the gate would exclude more than ``max_excluded_fraction`` of the runs, or the
         ``scale`` check more than ``max_scale_fraction``; its subclasses
-        :class:`~cylfric.plausibility.ForceBalanceError` (the offset or the friction
+        :class:`~cylfric.quality.plausibility.ForceBalanceError` (the offset or the friction
         follows the balance's pressure force, or is below 0: a sign of campaign.toml) and
-        :class:`~cylfric.plausibility.ImplausibleDataError` (a friction above the pressure
+        :class:`~cylfric.quality.plausibility.ImplausibleDataError` (a friction above the pressure
         force the cylinder could make: a unit slip), unless ``accept_force_balance``.
     """
     from .plausibility import check_force_balance, check_plausibility

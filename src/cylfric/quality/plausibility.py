@@ -34,13 +34,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._runtable import run_column
-from .quality import QualityError, _relative
+from .._runtable import run_column
+from . import QualityError, _relative
 
 if TYPE_CHECKING:
     import pandas as pd
 
-    from .steady_state import Extraction
+    from ..steady_state import Extraction
 
 __all__ = [
     "ForceBalanceError",
@@ -116,7 +116,7 @@ def _recipe(extraction: Extraction) -> str:
 
 def _signs(extraction: Extraction) -> str:
     """'load_cell_sign = -1 (line 15), position_sign = 1 (not set: the default)'."""
-    from .io.campaign import _line_of
+    from ..io.campaign import _line_of
 
     config = extraction.config
     recipe = _recipe(extraction)
