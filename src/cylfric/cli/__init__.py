@@ -29,6 +29,9 @@ from . import fit  # noqa: F401
 from . import bench  # noqa: F401
 
 # isort: split
+from . import field  # noqa: F401  (fit-field, generate-field)
+
+# isort: split
 from . import catalog, control, drift, export, many, motion, plan
 from .fit import run_fit
 

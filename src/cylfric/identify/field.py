@@ -60,6 +60,7 @@ DEFAULTS: dict[str, Any] = {
     "change_level": 0.99,  # 1 % false alarms per comparison: <= 1 in 20 comparisons is likely
     "reproducibility": None,  # relative between-day scatter; None: estimated (>= 4 days)
     "cutoff": 6.0,  # Hz, zero-phase low-pass of position and force
+    "cutoff_check": 0.7,  # the systematic band: the fit again at this share of the cut-off
     "rest_guard": 1.0,  # periods of the cut-off kept clear of rest (a reversal, a stop)
     "decimate": 0.04,  # s between the regression's samples
     "steady_acceleration": 0.02,  # m/s^2
@@ -607,7 +608,7 @@ def fit_field(
         moving = s.position[(s.stroke >= 0) & s.usable]
         if moving.size < 100:
             moving = s.position
-        lo, hi = np.quantile(moving, [0.0, 1.0])
+        lo, hi = np.quantile(moving, [0.01, 0.99])  # the logged stroke
         ranges.append((float(lo), float(max(hi, lo + 1e-3))))
     status = {
         "F_c": "identified",
@@ -708,6 +709,15 @@ def fit_field(
             X, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
             nf = len(names)
     friction_cov = cov[-nf:, -nf:]
+    # systematic part: the same fit with a lower cut-off (0.7x); the change of the friction
+    # coefficients is the filter's bias scale, added as a covariance outer(d, d)
+    low = {**o, "cutoff": o["cutoff"] * o["cutoff_check"]}
+    signals_low = [prepare_log(r, config, low) for r in records]
+    rows_low = _rows(signals_low, ranges, low)
+    coef_low = _solve(rows_low, len(signals), ranges, low, names)[1]
+    systematic = coef[-nf:] - coef_low[-nf:]
+    del signals_low, rows_low
+    friction_cov = friction_cov + np.outer(systematic, systematic)
     parameters: dict[str, float | None] = dict.fromkeys(("F_c", "F_v", "k_p"))
     stderr: dict[str, float | None] = dict.fromkeys(("F_c", "F_v", "k_p"))
     for i, name in enumerate(names):
@@ -742,6 +752,11 @@ def fit_field(
     fit.bands = _bands(fit)
     _compare_cross_check(fit)
     fit.days, fit.changes, fit.reproducibility = _trend(signals, ranges, o, names, reference)
+    if any(c["significant"] for c in fit.changes):
+        notes.append(
+            "the friction changed between days (trend): the law above is the mean over all "
+            "logs; the per-day levels are in the trend"
+        )
     for s in signals:
         if s.rate < 20:
             notes.append(f"{s.name}: logged at {s.rate:.3g} Hz; accelerations need >= 20 Hz")

@@ -81,7 +81,7 @@ class Crane:
     boom_mass: float = 900.0
     rod_eye: float = 1.4
     base: tuple[float, float] = (0.3, -1.0)
-    angles: tuple[float, float] = (math.radians(-15.0), math.radians(55.0))
+    angles: tuple[float, float] = (math.radians(-25.0), math.radians(35.0))
     bore: float = 0.125
     rod: float = 0.070
     rod_mass: float = 40.0
