@@ -341,22 +341,22 @@ def _design(rows: _Rows, n_logs, ranges, load_degree, mass_degree, friction_cols
     return X
 
 
-def _cluster_robust(X, residual, cluster):
-    """CR1 sandwich covariance, clusters = strokes."""
-    n, k = X.shape
-    scale = np.sqrt(np.sum(X**2, axis=0))
-    scale[scale == 0] = 1.0
-    Xs = X / scale
-    bread = np.linalg.pinv(Xs.T @ Xs)
-    order = np.argsort(cluster, kind="stable")
-    c_sorted = cluster[order]
-    starts = np.flatnonzero(np.diff(c_sorted, prepend=c_sorted[0] - 1))
-    scores = np.add.reduceat(Xs[order] * residual[order, None], starts, axis=0)
+def _cluster_robust(Xs, residual, cluster, bread):
+    """CR1 sandwich covariance of scaled columns ``Xs`` (``bread`` = pinv(Xs'Xs)), clusters
+    = strokes (the rows are in time order, so a stroke's rows are contiguous)."""
+    n, k = Xs.shape
+    if np.all(np.diff(cluster) >= 0):
+        starts = np.flatnonzero(np.diff(cluster, prepend=cluster[0] - 1))
+        scores = np.add.reduceat(Xs * residual[:, None], starts, axis=0)
+    else:
+        order = np.argsort(cluster, kind="stable")
+        c_sorted = cluster[order]
+        starts = np.flatnonzero(np.diff(c_sorted, prepend=c_sorted[0] - 1))
+        scores = np.add.reduceat(Xs[order] * residual[order, None], starts, axis=0)
     g = starts.size
     meat = scores.T @ scores
     factor = g / max(g - 1, 1) * (n - 1) / max(n - k, 1)
-    cov = factor * bread @ meat @ bread
-    return cov / np.outer(scale, scale), g
+    return factor * bread @ meat @ bread, g
 
 
 def _speed_bands(speed, ratio, min_samples):
@@ -533,14 +533,17 @@ def _normal_quantile(q):
 
 
 def _solve(rows, n_logs, ranges, o, names):
+    """Least squares by the normal equations of the scaled columns (the Legendre bases are
+    well conditioned); pinv for a rank-deficient log. Returns X, coef, residual, cov, G."""
     X = _design(rows, n_logs, ranges, o["load_degree"], o["mass_degree"], names)
-    scale = np.sqrt(np.sum(X**2, axis=0))
+    scale = np.sqrt(np.einsum("ij,ij->j", X, X))
     scale[scale == 0] = 1.0
-    coef, *_ = np.linalg.lstsq(X / scale, rows.force, rcond=None)
-    coef = coef / scale
-    residual = rows.force - X @ coef
-    cov, clusters = _cluster_robust(X, residual, rows.cluster)
-    return X, coef, residual, cov, clusters
+    Xs = X / scale
+    bread = np.linalg.pinv(Xs.T @ Xs)
+    coef_s = bread @ (Xs.T @ rows.force)
+    residual = rows.force - Xs @ coef_s
+    cov_s, clusters = _cluster_robust(Xs, residual, rows.cluster, bread)
+    return X, coef_s / scale, residual, cov_s / np.outer(scale, scale), clusters
 
 
 def _vif(X, column):
@@ -599,6 +602,14 @@ def fit_field(
     """
     if not records:
         raise ValueError("no logs given; expected at least one")
+    from threadpoolctl import threadpool_limits
+
+    # tall, narrow matrices: BLAS threads only contend (as in identify.steady)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _fit_field(records, config, options)
+
+
+def _fit_field(records, config, options) -> FieldFit:
     o = {**DEFAULTS, **config.fit, **(options or {})}
     signals = [prepare_log(r, config, o) for r in records]
     flags = [n for s in signals for n in s.notes]

@@ -145,7 +145,7 @@ class FieldSettings:
     """
 
     crane: Crane = field(default_factory=Crane)
-    payloads: tuple[float, ...] = (300.0, 700.0)
+    payloads: tuple[float, ...] = (500.0, 900.0)
     F_c: float = 1400.0
     F_v: float = 6000.0
     k_p: float = 0.0
