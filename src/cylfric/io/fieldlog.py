@@ -378,7 +378,9 @@ def read_field_logs(paths, config: FieldConfig) -> list[FieldRecord]:
 
 def _missing(path, config, role, found) -> BenchFileError:
     line = _line_of(config.source, role, "columns") if config.source else None
-    listed = ", ".join(repr(f) for f in sorted(found)[:12])
+    listed = ", ".join(
+        f if isinstance(f, str) and f.startswith("[") else repr(f) for f in sorted(found)[:12]
+    )
     return BenchFileError(
         path,
         f"no column {config.columns[role]!r} (columns.{role} in {config.source or 'field.toml'}"
@@ -391,7 +393,16 @@ def _read_text(path: Path, config: FieldConfig):
     from .text import read_bench_arrays
 
     roles = {r: config.columns[r] for r in REQUIRED_ROLES}
-    arrays, metadata = read_bench_arrays(path, roles=roles)
+    try:
+        arrays, metadata = read_bench_arrays(path, roles=roles)
+    except BenchFileError as exc:
+        # the text reader words a missing role for campaign.toml: name field.toml instead
+        named = re.search(
+            r"\[columns\] (\w+) = .* names no column; the file has (.*)$", exc.message
+        )
+        if named is None:
+            raise
+        raise _missing(path, config, named.group(1), [named.group(2)]) from None
     names = metadata.get("columns", [])
     signals: dict[str, np.ndarray | None] = {}
     for role in REQUIRED_ROLES:
