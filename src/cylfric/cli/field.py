@@ -205,7 +205,7 @@ def _figures(fit) -> dict[str, bytes]:
 
     from ..escape import plot_text
 
-    out = {}
+    out: dict[str, bytes] = {}
     if not fit.identified:
         return out
     fig = Figure(figsize=(7, 4.5))

@@ -341,24 +341,6 @@ def _design(rows: _Rows, n_logs, ranges, load_degree, mass_degree, friction_cols
     return X
 
 
-def _cluster_robust(Xs, residual, cluster, bread):
-    """CR1 sandwich covariance of scaled columns ``Xs`` (``bread`` = pinv(Xs'Xs)), clusters
-    = strokes (the rows are in time order, so a stroke's rows are contiguous)."""
-    n, k = Xs.shape
-    if np.all(np.diff(cluster) >= 0):
-        starts = np.flatnonzero(np.diff(cluster, prepend=cluster[0] - 1))
-        scores = np.add.reduceat(Xs * residual[:, None], starts, axis=0)
-    else:
-        order = np.argsort(cluster, kind="stable")
-        c_sorted = cluster[order]
-        starts = np.flatnonzero(np.diff(c_sorted, prepend=c_sorted[0] - 1))
-        scores = np.add.reduceat(Xs[order] * residual[order, None], starts, axis=0)
-    g = starts.size
-    meat = scores.T @ scores
-    factor = g / max(g - 1, 1) * (n - 1) / max(n - k, 1)
-    return factor * bread @ meat @ bread, g
-
-
 def _speed_bands(speed, ratio, min_samples):
     """Band edges grouping steady speeds [m/s]: a new band beyond ``ratio`` x its start."""
     values = np.sort(speed)
@@ -533,30 +515,57 @@ def _normal_quantile(q):
 
 
 def _solve(rows, n_logs, ranges, o, names):
-    """Least squares by the normal equations of the scaled columns (the Legendre bases are
-    well conditioned); pinv for a rank-deficient log. Returns X, coef, residual, cov, G."""
-    X = _design(rows, n_logs, ranges, o["load_degree"], o["mass_degree"], names)
-    scale = np.sqrt(np.einsum("ij,ij->j", X, X))
+    """Least squares by normal equations accumulated log by log (each log's load and mass
+    columns are its own, the friction columns shared), so the memory is one log's design;
+    pinv of the column-scaled Gram matrix. Returns (vif, coef, residual, cov, clusters):
+    ``vif(j)`` the variance inflation of column j, the covariance CR1 by stroke."""
+    nl, nm, nf = o["load_degree"] + 1, o["mass_degree"] + 1, len(names)
+    per_log = nl + nm
+    k = n_logs * per_log + nf
+    gram = np.zeros((k, k))
+    rhs = np.zeros(k)
+    total = np.zeros(k)
+    square = np.zeros(k)
+    blocks = []
+    bounds = np.searchsorted(rows.log, np.arange(n_logs + 1))  # rows are in log order
+    for j in range(n_logs):
+        part = slice(bounds[j], bounds[j + 1])
+        sub = _Rows(*(getattr(rows, f)[part] for f in _Rows.__dataclass_fields__))
+        sub.log = np.zeros(sub.xi.size, dtype=int)
+        D = _design(sub, 1, [ranges[j]], o["load_degree"], o["mass_degree"], names)
+        index = np.r_[j * per_log : (j + 1) * per_log, n_logs * per_log : k]
+        gram[np.ix_(index, index)] += D.T @ D
+        rhs[index] += D.T @ sub.force
+        total[index] += D.sum(axis=0)
+        square[index] += np.einsum("ij,ij->j", D, D)
+        blocks.append((part, D, index))
+    scale = np.sqrt(np.diag(gram)).copy()
     scale[scale == 0] = 1.0
-    Xs = X / scale
-    bread = np.linalg.pinv(Xs.T @ Xs)
-    coef_s = bread @ (Xs.T @ rows.force)
-    residual = rows.force - Xs @ coef_s
-    cov_s, clusters = _cluster_robust(Xs, residual, rows.cluster, bread)
-    return X, coef_s / scale, residual, cov_s / np.outer(scale, scale), clusters
+    bread = np.linalg.pinv(gram / np.outer(scale, scale))
+    coef = (bread @ (rhs / scale)) / scale
+    residual = np.empty(rows.force.size)
+    scores = []
+    for part, D, index in blocks:
+        r = rows.force[part] - D @ coef[index]
+        residual[part] = r
+        cluster = rows.cluster[part]
+        if cluster.size == 0:
+            continue
+        starts = np.flatnonzero(np.diff(cluster, prepend=cluster[0] - 1))
+        local = np.add.reduceat(D * r[:, None], starts, axis=0) / scale[index]
+        full = np.zeros((local.shape[0], k))
+        full[:, index] = local
+        scores.append(full)
+    S = np.concatenate(scores) if scores else np.zeros((0, k))
+    g, n = S.shape[0], rows.force.size
+    factor = g / max(g - 1, 1) * (n - 1) / max(n - k, 1)
+    cov = factor * bread @ (S.T @ S) @ bread / np.outer(scale, scale)
 
+    def vif(column):
+        centred = square[column] - total[column] ** 2 / max(n, 1)
+        return float(centred * bread[column, column] / scale[column] ** 2)
 
-def _vif(X, column):
-    """Variance inflation factor of ``column`` of X given the others."""
-    y = X[:, column]
-    others = np.delete(X, column, axis=1)
-    scale = np.sqrt(np.sum(others**2, axis=0))
-    scale[scale == 0] = 1.0
-    beta, *_ = np.linalg.lstsq(others / scale, y, rcond=None)
-    r = y - (others / scale) @ beta
-    ss = np.sum((y - y.mean()) ** 2)
-    r2 = 1 - np.sum(r**2) / ss if ss > 0 else 1.0
-    return math.inf if r2 >= 1 else 1 / (1 - r2)
+    return vif, coef, residual, cov, g
 
 
 def _pressure_independent_spread(rows, n_logs, degree):
@@ -578,8 +587,8 @@ def _pressure_independent_spread(rows, n_logs, degree):
 
 def _fit_block(signals, ranges, o, names):
     rows = _rows(signals, ranges, o)
-    X, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
-    return rows, X, coef, residual, cov, clusters
+    vif, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
+    return rows, vif, coef, residual, cov, clusters
 
 
 def fit_field(
@@ -707,17 +716,17 @@ def _fit_field(records, config, options) -> FieldFit:
             "where a pressure slope cannot be told from a change of friction between logs or "
             "from a friction that changes along the stroke"
         )
-    X, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
+    vif_of, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
     nf = len(names)
     if "k_p" in names:
-        vif = _vif(X, X.shape[1] - nf + names.index("k_p"))
+        vif = vif_of(coef.size - nf + names.index("k_p"))
         if vif > o["vif_limit"]:
             names.remove("k_p")
             status["k_p"] = (
                 f"not identified: the pressure is confounded with the load and the direction "
                 f"(variance inflation {vif:.3g} > {o['vif_limit']:g})"
             )
-            X, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
+            _, coef, residual, cov, clusters = _solve(rows, len(signals), ranges, o, names)
             nf = len(names)
     friction_cov = cov[-nf:, -nf:]
     # systematic part: the same fit with a lower cut-off (0.7x); the change of the friction
@@ -857,7 +866,7 @@ def _trend(signals, ranges, o, names, reference):
         )
         if not both:
             continue
-        rows, X, coef, residual, cov, _ = _fit_block(sub, sub_ranges, o, day_names)
+        rows, _, coef, residual, cov, _ = _fit_block(sub, sub_ranges, o, day_names)
         nf = len(day_names)
         J = np.array([{"F_c": 1.0, "F_v": reference, "k_p": 0.0}[n] for n in day_names])
         if "k_p" in day_names:
