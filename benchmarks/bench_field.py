@@ -165,8 +165,13 @@ def main() -> None:
         "machine": platform.machine(),
         "cores used": 1,
         "truth": {"F_c [N]": SETTINGS.F_c, "F_v [N*s/m]": SETTINGS.F_v},
-        "change_and_accuracy": change_and_accuracy(args.draws),
     }
+    if args.draws:
+        result["change_and_accuracy"] = change_and_accuracy(args.draws)
+    elif RESULTS.is_file():  # --draws 0: keep the last run's draws
+        result["change_and_accuracy"] = json.loads(RESULTS.read_text())["change_and_accuracy"]
+    RESULTS.parent.mkdir(exist_ok=True)
+    RESULTS.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     if not args.skip_day:
         result["one_day"] = one_day()
     RESULTS.parent.mkdir(exist_ok=True)

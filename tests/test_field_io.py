@@ -39,7 +39,7 @@ def _columns(log):
 
 def _mat_config(tmp_path: Path) -> Path:
     path = tmp_path / "field.toml"
-    text = field_toml(SETTINGS, "mat").replace('"valve command"', '"valve_command"')
+    text = field_toml(SETTINGS, "mat")
     path.write_text(text, encoding="utf-8")
     return path
 

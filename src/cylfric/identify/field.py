@@ -638,11 +638,22 @@ def _fit_field(records, config, options) -> FieldFit:
         "the mean of extension and retraction, so only the friction's mean over the two "
         "directions is identified (symmetric law assumed)",
     }
-    # which directions have chamber pressures
-    both = []
-    for s in signals:
-        use = (s.stroke >= 0) & s.usable
-        both.append(np.any(s.velocity[use] > 0) and np.any(s.velocity[use] < 0))
+    # a log counts if it moved both ways with chamber pressures valid in both
+    kept, ranges_kept, dropped = [], [], []
+    for s, r in zip(signals, ranges, strict=True):
+        moving = s.stroke >= 0
+        use = moving & s.usable
+        if np.any(s.velocity[use] > 0) and np.any(s.velocity[use] < 0):
+            kept.append(s)
+            ranges_kept.append(r)
+        elif np.any(s.velocity[moving] > 0) and np.any(s.velocity[moving] < 0):
+            dropped.append(
+                f"{s.name}: chamber pressures valid in one direction only (a sensor on the "
+                "valve side of a load-holding valve)"
+            )
+        else:
+            dropped.append(f"{s.name}: no motion in both directions above the minimum speed")
+    notes.extend(f"{d}; not used" for d in dropped)
     steady_speed = np.concatenate([np.abs(s.velocity[s.steady]) for s in signals])
     reference = float(np.median(steady_speed)) if steady_speed.size else math.nan
     selection = {
@@ -663,11 +674,10 @@ def _fit_field(records, config, options) -> FieldFit:
             for k, s in enumerate(signals)
         ],
     }
-    if not all(both):
+    if not kept:
         reason = (
-            "not identified: the chamber pressures are valid in one direction only (a sensor on "
-            "the valve side of a load-holding valve), and the friction needs both directions at "
-            "equal position"
+            "not identified: the friction needs both directions at equal position with "
+            "chamber pressures; " + "; ".join(dropped)
         )
         for name in ("F_c", "F_v", "k_p"):
             status[name] = reason
@@ -692,6 +702,9 @@ def _fit_field(records, config, options) -> FieldFit:
             rmse=math.nan,
             identified=False,
         )
+    signals, ranges = kept, ranges_kept
+    steady_speed = np.concatenate([np.abs(s.velocity[s.steady]) for s in signals])
+    reference = float(np.median(steady_speed)) if steady_speed.size else math.nan
     names = ["F_c", "F_v", "k_p"]
     # speed dependence: identified only over a range of speeds
     if steady_speed.size:

@@ -533,7 +533,7 @@ def field_toml(settings: FieldSettings, fmt: str = "csv") -> str:
         'orientation = "A extends"\n\n'
         "[columns]\n"
         'time = "time"\nposition = "position"\npressure_a = "p_A"\npressure_b = "p_B"\n'
-        'valve = "valve command"\n'
+        f'valve = "{"valve command" if fmt == "csv" else "valve_command"}"\n'
         f"{units}\n"
         "[sensors]\n"
         f'pressure_a = "{sensor}"\npressure_b = "chamber"\n'
