@@ -133,15 +133,19 @@ def one_day(keep: bool = False) -> dict:
         for fmt in ("mat73", "csv"):
             config = load_field_config(folder / fmt / "field.toml")
             files = sorted(p for p in (folder / fmt).iterdir() if p.suffix in (".csv", ".mat"))
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             records = read_field_logs(files, config)
-            t1 = time.perf_counter()
+            t1, c1 = time.perf_counter(), time.process_time()
             fit = fit_field(records, config)
-            t2 = time.perf_counter()
+            t2, c2 = time.perf_counter(), time.process_time()
             out[fmt] = {
                 "read [s]": t1 - t0,
                 "identify [s]": t2 - t1,
                 "total [s]": t2 - t0,
+                "CPU read [s]": c1 - c0,
+                "CPU identify [s]": c2 - c1,
+                "CPU total [s]": c2 - c0,
+                "load average at the end": os.getloadavg()[0],
                 "F_c [N]": fit.parameters["F_c"],
                 "F_v [N*s/m]": fit.parameters["F_v"],
             }

@@ -233,3 +233,34 @@ def test_valve_side_pressure_is_flagged_and_not_used():
     assert not fit.identified
     assert fit.parameters["F_c"] is None
     assert "valid in one direction only" in fit.status["F_c"]
+
+
+# --- against a seal datasheet --------------------------------------------------------------
+
+
+def _sheet(scale=1.0):
+    from cylfric.model import FrictionModel
+
+    return FrictionModel(
+        {
+            "F_c": {"intercept": scale * SETTINGS.F_c, "slope": 0.0},
+            "sigma_2": {"intercept": scale * SETTINGS.F_v, "slope": 0.0},
+        },
+        friction_law="coulomb_viscous",
+    )
+
+
+def test_datasheet_comparison_at_the_operating_points(one_day):
+    """The bench's own law as the datasheet: as the datasheet; 30 % lower: above it."""
+    from cylfric.identify.field import compare_datasheet
+
+    fit, _ = one_day
+    same = compare_datasheet(fit, _sheet())
+    assert same["verdict"] == "as the datasheet"
+    assert len(same["points"]) == len(fit.cross_check)
+    for point in same["points"]:
+        assert abs(point["difference [%]"]) < 1
+        assert point["pressure [Pa]"] > 10e5  # the logged chambers, not a default
+    lower = compare_datasheet(fit, _sheet(0.7))
+    assert lower["verdict"] == "above the datasheet"
+    assert all(abs(p["difference [%]"] - 100 * (1 / 0.7 - 1)) < 2 for p in lower["points"])

@@ -176,9 +176,29 @@ def test_generate_and_fit_field_end_to_end(tmp_path):
     truth = json.loads((logs / "truth.json").read_text())
     out = tmp_path / "out"
     files = sorted(str(p) for p in logs.glob("*.csv"))
+    from cylfric.model import FrictionModel
+
+    sheet = FrictionModel(
+        {
+            "F_c": {"intercept": SETTINGS.F_c, "slope": 0.0},
+            "sigma_2": {"intercept": SETTINGS.F_v, "slope": 0.0},
+        },
+        friction_law="coulomb_viscous",
+    )
+    (tmp_path / "sheet.json").write_text(json.dumps(sheet.to_datasheet()))
     done = runner.invoke(
         app,
-        ["fit-field", *files, "--config", str(logs / "field.toml"), "--out", str(out), "--json"],
+        [
+            "fit-field",
+            *files,
+            "--config",
+            str(logs / "field.toml"),
+            "--out",
+            str(out),
+            "--json",
+            "--datasheet",
+            str(tmp_path / "sheet.json"),
+        ],
     )
     assert done.exit_code == 0, done.output
     document = json.loads((out / "field.json").read_text())
@@ -189,6 +209,11 @@ def test_generate_and_fit_field_end_to_end(tmp_path):
         assert (out / name).is_file()
     (change,) = document["trend"]["changes"]
     assert change["significant"] and abs(change["change [%]"] - 15) < 3
+    # the pooled law of a +0 % and a +15 % day sits about 7 % above the first day's sheet
+    comparison = document["datasheet"]
+    assert len(comparison["points"]) == len(document["cross_check"]) >= 2
+    assert (out / "datasheet_comparison.csv").stat().st_size > 0
+    assert all(0 < p["difference [%]"] < 15 for p in comparison["points"])
     days = {log["day"] for log in truth["logs"].values()}
     assert len(document["trend"]["days"]) == len(days) == 2
 

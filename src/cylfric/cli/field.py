@@ -20,6 +20,7 @@ TABLES = {
 FIGURES = ("load.png", "friction.png", "mass.png", "trend.png")
 REPORT = "report.html"
 LOAD_CSV = "load_curves.csv"
+DATASHEET_CSV = "datasheet_comparison.csv"
 
 
 @app.command("fit-field")
@@ -33,6 +34,12 @@ def fit_field_command(
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print field.json instead of a summary."),
+    datasheet: Path = typer.Option(
+        None,
+        "--datasheet",
+        help="A seal datasheet (datasheet.json of this cylinder's size): compare the "
+        "in-service friction with it at the machine's operating points.",
+    ),
 ):
     """Friction of a cylinder in service, from its machine's own logs (no load cell).
 
@@ -42,7 +49,7 @@ def fit_field_command(
     the friction level per day and a change test. Writes field.json, CSV tables, figures
     and report.html into OUT.
     """
-    _run(logs, config, out, as_json)
+    _run(logs, config, out, as_json, datasheet)
 
 
 @app.command("generate-field")
@@ -88,7 +95,7 @@ def generate_field_command(
     )
 
 
-def _run(logs, config, out, as_json) -> None:
+def _run(logs, config, out, as_json, datasheet=None) -> None:
     import json
     import warnings
 
@@ -103,11 +110,18 @@ def _run(logs, config, out, as_json) -> None:
     if out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
     inputs = {p.resolve() for p in [*logs, config]}
-    names = [FIT_JSON, LOAD_CSV, REPORT, *TABLES.values(), *FIGURES]
+    names = [FIT_JSON, LOAD_CSV, DATASHEET_CSV, REPORT, *TABLES.values(), *FIGURES]
     clash = [n for n in names if (out / n).resolve() in inputs]
     if clash:
         raise BadInput(f"--out {out}: writing {clash[0]} would overwrite an input file")
+    if datasheet is not None and not datasheet.is_file():
+        raise BadInput(f"--datasheet {datasheet}: no such file")
     settings = load_field_config(config)
+    sheet_model = None
+    if datasheet is not None:
+        from ..model import FrictionModel
+
+        sheet_model = FrictionModel.from_datasheet(datasheet)
     try:
         records = read_field_logs(logs, settings)
     except ImportError as exc:
@@ -131,8 +145,15 @@ def _run(logs, config, out, as_json) -> None:
             for p, r in zip(logs, records, strict=True)
         ],
         **fit.to_dict(),
+        "datasheet": None,
         "warnings": list(dict.fromkeys(str(w.message) for w in caught)),
     }
+    comparison = None
+    if sheet_model is not None:
+        from ..identify.field import compare_datasheet
+
+        comparison = compare_datasheet(fit, sheet_model)
+        document["datasheet"] = {"file": str(datasheet), **comparison}
     text = json.dumps(_plain(document), indent=2, allow_nan=False)
     make_folder(out)
     atomic_write_text(out / FIT_JSON, text + "\n")
@@ -145,6 +166,8 @@ def _run(logs, config, out, as_json) -> None:
     for key, rows in tables.items():
         atomic_write_text(out / TABLES[key], _csv_rows(rows))
     atomic_write_text(out / LOAD_CSV, _curves_csv(fit))
+    if comparison is not None:
+        atomic_write_text(out / DATASHEET_CSV, _csv_rows(comparison["points"]))
     figures = _figures(fit)
     for name, png in figures.items():
         atomic_write_bytes(out / name, png)
@@ -153,6 +176,11 @@ def _run(logs, config, out, as_json) -> None:
         console.print_json(text)
     else:
         _summary(fit, out)
+        if comparison is not None:
+            console.print(
+                terminal(f"against the datasheet: {comparison['verdict']}", markup=False),
+                markup=False,
+            )
 
 
 def _csv_rows(rows) -> str:
@@ -319,6 +347,13 @@ def _report(fit, document, figures) -> str:
         table(fit.bands),
         "<h2>Model-free cross-check</h2>",
         table(fit.cross_check),
+        "<h2>Against the datasheet</h2>",
+        (
+            f"<p>{h(str(document['datasheet']['verdict']))}</p>"
+            + table(document["datasheet"]["points"])
+            if document.get("datasheet")
+            else "<p>no datasheet given</p>"
+        ),
         "<h2>Trend per day</h2>",
         table(fit.days),
         f"<p>between-day scatter: {h(str(fit.reproducibility.get('source', '-')))}</p>",

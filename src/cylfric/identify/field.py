@@ -93,6 +93,8 @@ class FieldSignals:
     acceleration: np.ndarray  # [m/s^2]
     force: np.ndarray  # filtered piston force [N]
     pressure: np.ndarray  # filtered mean chamber pressure [Pa]
+    pressure_a: np.ndarray  # as logged [Pa]
+    pressure_b: np.ndarray  # as logged [Pa]
     stroke: np.ndarray  # stroke id (-1 at rest), global across logs after fit_field
     steady: np.ndarray  # bool
     usable: np.ndarray  # bool: chamber pressures valid here
@@ -254,6 +256,8 @@ def prepare_log(
         acceleration=acceleration,
         force=force,
         pressure=pressure,
+        pressure_a=record.pressure_a,
+        pressure_b=record.pressure_b,
         stroke=stroke,
         steady=steady,
         usable=usable,
@@ -363,7 +367,7 @@ def cross_check(signals: Sequence[FieldSignals], ranges, options) -> list[dict[s
     error by a delete-one-stroke jackknife. Rows: ``speed [m/s]`` (mean of the band),
     ``friction [N]``, ``stderr [N]``, ``cells``, ``strokes``."""
     nb = options["position_bins"]
-    speeds, logs, bins, dirs, forces, strokes = [], [], [], [], [], []
+    speeds, logs, bins, dirs, forces, strokes, chambers = [], [], [], [], [], [], []
     for k, s in enumerate(signals):
         idx = np.flatnonzero(s.steady)
         lo, hi = ranges[k]
@@ -374,6 +378,7 @@ def cross_check(signals: Sequence[FieldSignals], ranges, options) -> list[dict[s
         dirs.append((s.velocity[idx] > 0).astype(int))
         forces.append(s.force[idx])
         strokes.append(s.stroke[idx] + k * 10_000_000)
+        chambers.append(np.column_stack((s.pressure_a[idx], s.pressure_b[idx])))
     if not speeds:
         return []
     speed = np.concatenate(speeds)
@@ -381,6 +386,7 @@ def cross_check(signals: Sequence[FieldSignals], ranges, options) -> list[dict[s
         return []
     log, pbin, direction = np.concatenate(logs), np.concatenate(bins), np.concatenate(dirs)
     force, stroke = np.concatenate(forces), np.concatenate(strokes)
+    chamber = np.concatenate(chambers)
     out = []
     for lo_v, hi_v in _speed_bands(speed, options["band_ratio"], options["min_band_samples"]):
         sel = (speed >= lo_v) & (speed <= hi_v)
@@ -426,6 +432,8 @@ def cross_check(signals: Sequence[FieldSignals], ranges, options) -> list[dict[s
                 "stderr [N]": se,
                 "cells": int(cells),
                 "strokes": int(g),
+                "pressure_a [Pa]": float(np.median(chamber[sel, 0])),
+                "pressure_b [Pa]": float(np.median(chamber[sel, 1])),
             }
         )
     return out
@@ -948,3 +956,92 @@ def _reproducibility(days, o) -> dict[str, Any]:
         "within-day bands alone; state [fit] reproducibility to include it",
         "change level": o["change_level"],
     }
+
+
+def compare_datasheet(fit: FieldFit, model: Any, *, level: float | None = None) -> dict[str, Any]:
+    """The in-service friction against a seal datasheet at the machine's operating points.
+
+    Operating points: the cross-check's speed bands, each at the median logged chamber
+    pressures of its steady samples (combined by the datasheet's own pressure reference).
+    At each: the datasheet's friction and its session-scope prediction band (a new mount of
+    the seal, :meth:`cylfric.model.FrictionModel.prediction_band`), the in-service law and its
+    band, the difference and a verdict: ``"as the datasheet"`` when the difference is inside
+    the combined band, else ``"above the datasheet"`` / ``"below the datasheet"``.
+
+    Parameters
+    ----------
+    fit : FieldFit
+        An identified field fit.
+    model : cylfric.model.FrictionModel
+        The seal's datasheet (of this cylinder's size: the catalogue's size rule is not
+        applied here).
+    level : float, optional
+        Two-sided level of the bands [-] (default: the fit's).
+
+    Returns
+    -------
+    dict
+        ``points`` (one row per operating point), ``verdict`` (over the points) and ``notes``.
+    """
+    import warnings
+
+    level = level or fit.level
+    z = _normal_quantile(0.5 + level / 2)
+    points, notes = [], []
+    if not fit.identified or not fit.cross_check:
+        return {
+            "points": [],
+            "verdict": "not compared: the in-service friction is not identified",
+            "notes": notes,
+        }
+    for c in fit.cross_check:
+        v = c["speed [m/s]"]
+        pressure = float(model.operating_pressure(c["pressure_a [Pa]"], c["pressure_b [Pa]"]))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sheet = float(model.friction(v, pressure))
+            lower = upper = np.array([sheet])
+            for scope in ("session", "point"):  # a new mount of the seal; else a new point
+                try:
+                    lower, upper = model.prediction_band(
+                        np.array([v]), np.array([pressure]), level, scope=scope
+                    )
+                except ValueError as exc:  # a datasheet without scatter or covariance
+                    notes.append(f"no {scope}-scope band from the datasheet: {exc}")
+                    continue
+                break
+        if caught:
+            notes.append(f"at {1e3 * v:.3g} mm/s, {pressure / 1e5:.3g} bar: {caught[0].message}")
+        sheet_half = float(upper[0] - lower[0]) / 2
+        service, half = fit.friction_band(np.array([v]), level=level)
+        service_value, service_half = float(abs(service[0])), float(half[0])
+        difference = service_value - sheet
+        combined = math.hypot(sheet_half, service_half)
+        verdict = (
+            "as the datasheet"
+            if abs(difference) <= combined
+            else ("above the datasheet" if difference > 0 else "below the datasheet")
+        )
+        points.append(
+            {
+                "speed [m/s]": v,
+                "pressure [Pa]": pressure,
+                "datasheet [N]": sheet,
+                "datasheet band [N]": sheet_half,
+                "in service [N]": service_value,
+                "in service band [N]": service_half,
+                "difference [N]": difference,
+                "difference [%]": 100 * difference / sheet if sheet else math.nan,
+                "z [-]": z * difference / combined if combined > 0 else math.nan,
+                "verdict": verdict,
+            }
+        )
+    verdicts = {p["verdict"] for p in points}
+    overall = (
+        verdicts.pop()
+        if len(verdicts) == 1
+        else "mixed: "
+        + ", ".join(f"{p['verdict']} at {1e3 * p['speed [m/s]']:.3g} mm/s" for p in points)
+    )
+    notes = list(dict.fromkeys(notes))
+    return {"points": points, "verdict": overall, "notes": notes, "level": level}
