@@ -205,7 +205,7 @@ def test_generate_and_fit_field_end_to_end(tmp_path):
     assert document["friction"]["identified"]
     for name in ("friction_bands.csv", "cross_check.csv", "trend.csv", "changes.csv"):
         assert (out / name).stat().st_size > 0
-    for name in ("load.png", "friction.png", "mass.png", "trend.png", "report.html"):
+    for name in ("load.png", "friction.png", "mass.png", "force.png", "trend.png", "report.html"):
         assert (out / name).is_file()
     (change,) = document["trend"]["changes"]
     assert change["significant"] and abs(change["change [%]"] - 15) < 3

@@ -17,7 +17,7 @@ TABLES = {
     "days": "trend.csv",
     "changes": "changes.csv",
 }
-FIGURES = ("load.png", "friction.png", "mass.png", "trend.png")
+FIGURES = ("load.png", "friction.png", "mass.png", "force.png", "trend.png")
 REPORT = "report.html"
 LOAD_CSV = "load_curves.csv"
 DATASHEET_CSV = "datasheet_comparison.csv"
@@ -283,6 +283,22 @@ def _figures(fit) -> dict[str, bytes]:
     ax.legend(fontsize=7)
     fig.subplots_adjust(left=0.12, right=0.97, top=0.92, bottom=0.12)
     out["friction.png"] = _png(fig)
+
+    if fit.force_check:
+        fig = Figure(figsize=(6, 5))
+        ax = fig.add_subplot()
+        measured = 1e-3 * np.array(fit.force_check["measured [N]"])
+        predicted = 1e-3 * np.array(fit.force_check["predicted [N]"])
+        ax.plot(measured, predicted, ".", ms=2, alpha=0.4)
+        lims = [min(measured.min(), predicted.min()), max(measured.max(), predicted.max())]
+        ax.plot(lims, lims, "k", lw=0.8)
+        ax.set(
+            xlabel="measured piston force p_A A_A - p_B A_B [kN]",
+            ylabel="predicted force [kN]",
+            title=f"Measured against predicted (RMS {fit.rmse:.3g} N)",
+        )
+        fig.subplots_adjust(left=0.14, right=0.97, top=0.92, bottom=0.12)
+        out["force.png"] = _png(fig)
 
     fig = Figure(figsize=(7, 4.5))
     ax = fig.add_subplot()

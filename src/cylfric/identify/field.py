@@ -462,6 +462,7 @@ class FieldFit:
     reference_speed: float
     rmse: float
     identified: bool
+    force_check: dict[str, list[float]] = field(default_factory=dict)
 
     def friction(self, velocity, pressure=None) -> np.ndarray:
         """The identified friction law at ``velocity`` [m/s] (and mean pressure [Pa])."""
@@ -787,6 +788,7 @@ def _fit_field(records, config, options) -> FieldFit:
         level=o["level"],
         reference_speed=reference,
         rmse=float(np.sqrt(np.mean(residual**2))),
+        force_check=_force_sample(rows, residual),
         identified=True,
     )
     fit.loads, fit.masses = _curves(coef, cov, signals, ranges, o)
@@ -802,6 +804,15 @@ def _fit_field(records, config, options) -> FieldFit:
         if s.rate < 20:
             notes.append(f"{s.name}: logged at {s.rate:.3g} Hz; accelerations need >= 20 Hz")
     return fit
+
+
+def _force_sample(rows, residual, n=4000):
+    """Measured and predicted piston force [N] at up to ``n`` regression rows (evenly)."""
+    take = np.linspace(0, rows.force.size - 1, min(n, rows.force.size)).astype(int)
+    return {
+        "measured [N]": rows.force[take].tolist(),
+        "predicted [N]": (rows.force[take] - residual[take]).tolist(),
+    }
 
 
 def _curves(coef, cov, signals, ranges, o):
@@ -987,7 +998,8 @@ def compare_datasheet(fit: FieldFit, model: Any, *, level: float | None = None) 
 
     level = level or fit.level
     z = _normal_quantile(0.5 + level / 2)
-    points, notes = [], []
+    points: list[dict[str, Any]] = []
+    notes: list[str] = []
     if not fit.identified or not fit.cross_check:
         return {
             "points": [],
