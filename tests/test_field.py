@@ -264,3 +264,20 @@ def test_datasheet_comparison_at_the_operating_points(one_day):
     lower = compare_datasheet(fit, _sheet(0.7))
     assert lower["verdict"] == "above the datasheet"
     assert all(abs(p["difference [%]"] - 100 * (1 / 0.7 - 1)) < 2 for p in lower["points"])
+
+
+def test_a_position_that_counts_down_on_extension_gives_the_same_friction():
+    """[cylinder] extension = "position decreases": the log's position negated and offset
+    (a sensor counting down) gives the same law, the curves in the log's coordinate."""
+    from dataclasses import replace
+
+    records, _ = _records(SETTINGS, [1.0], duration=200.0, seed=21, logs_per_day=1)
+    flipped = [replace(r, position=1.0 - r.position) for r in records]
+    up = fit_field(records, CONFIG)
+    down = fit_field(flipped, replace(CONFIG, extension="position decreases"))
+    assert_allclose(down.parameters["F_c"], up.parameters["F_c"], rtol=1e-6)
+    assert_allclose(down.parameters["F_v"], up.parameters["F_v"], rtol=1e-6)
+    assert_allclose(
+        1.0 - np.array(down.loads[0]["position [m]"]), up.loads[0]["position [m]"], atol=1e-9
+    )
+    assert_allclose(down.loads[0]["load [N]"], up.loads[0]["load [N]"], rtol=1e-6)

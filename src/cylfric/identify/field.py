@@ -181,7 +181,9 @@ def prepare_log(
     dt = float(np.median(np.diff(record.time)))
     rate = 1.0 / dt
     cutoff = o["cutoff"]
-    x = record.position
+    # internally the position grows with extension (velocity > 0 extends); the curves are
+    # reported in the log's own coordinate (FieldFit: position_sign)
+    x = record.position if config.extension == "position increases" else -record.position
     # one zero-phase low-pass for position and force; the derivatives of the filtered
     # position by central differences, so that filter(m a) = m filter(a) holds exactly for
     # constant m (an own derivative filter would not match the force's filter at the
@@ -678,7 +680,10 @@ def _fit_field(records, config, options) -> FieldFit:
                 "samples": int(s.time.size),
                 "rate [Hz]": s.rate,
                 "steady": int(np.count_nonzero(s.steady)),
-                "position range [m]": list(ranges[k]),
+                "position range [m]": sorted(
+                    (1.0 if config.extension == "position increases" else -1.0) * r
+                    for r in ranges[k]
+                ),
             }
             for k, s in enumerate(signals)
         ],
@@ -791,7 +796,8 @@ def _fit_field(records, config, options) -> FieldFit:
         force_check=_force_sample(rows, residual),
         identified=True,
     )
-    fit.loads, fit.masses = _curves(coef, cov, signals, ranges, o)
+    sign = 1.0 if config.extension == "position increases" else -1.0
+    fit.loads, fit.masses = _curves(coef, cov, signals, ranges, o, sign)
     fit.bands = _bands(fit)
     _compare_cross_check(fit)
     fit.days, fit.changes, fit.reproducibility = _trend(signals, ranges, o, names, reference)
@@ -815,7 +821,7 @@ def _force_sample(rows, residual, n=4000):
     }
 
 
-def _curves(coef, cov, signals, ranges, o):
+def _curves(coef, cov, signals, ranges, o, sign=1.0):
     nl, nm = o["load_degree"] + 1, o["mass_degree"] + 1
     z = _normal_quantile(0.5 + o["level"] / 2)
     loads, masses = [], []
@@ -833,7 +839,7 @@ def _curves(coef, cov, signals, ranges, o):
         loads.append(
             {
                 "log": s.name,
-                "position [m]": x.tolist(),
+                "position [m]": (sign * x).tolist(),
                 "load [N]": load.tolist(),
                 "band [N]": (z * np.sqrt(np.maximum(var, 0))).tolist(),
             }
@@ -841,7 +847,7 @@ def _curves(coef, cov, signals, ranges, o):
         masses.append(
             {
                 "log": s.name,
-                "position [m]": x.tolist(),
+                "position [m]": (sign * x).tolist(),
                 "mass [kg]": mass.tolist(),
                 "band [kg]": (z * np.sqrt(np.maximum(mvar, 0))).tolist(),
             }

@@ -10,6 +10,7 @@ cylinder and the columns::
     bore = "125 mm"
     rod = "70 mm"
     orientation = "A extends"     # pressure_a acts on the piston side; or "B extends"
+    extension = "position increases"   # or "position decreases" (a sensor counting down)
 
     [columns]                     # role = column or variable name in the logs
     time = "time"
@@ -79,9 +80,10 @@ ROLES = {
 REQUIRED_ROLES = ("time", "position", "pressure_a", "pressure_b")
 SENSOR_PLACES = ("chamber", "valve side")
 ORIENTATIONS = ("A extends", "B extends")
+EXTENSIONS = ("position increases", "position decreases")
 H5PY_HINT = "pip install 'cylfric[field]' (or: pip install h5py)"
 _TABLE_KEYS = {
-    "cylinder": {"bore", "rod", "orientation"},
+    "cylinder": {"bore", "rod", "orientation", "extension"},
     "columns": set(ROLES),
     "units": set(ROLES) - {"valve"},
     "sensors": {"pressure_a", "pressure_b"},
@@ -107,6 +109,8 @@ class FieldConfig:
         Piston and rod diameters [m].
     orientation : str
         ``"A extends"`` (pressure_a on the piston side) or ``"B extends"``.
+    extension : str
+        ``"position increases"`` (default) or ``"position decreases"`` as the rod extends.
     columns : dict
         Role -> column or variable name.
     units : dict
@@ -125,6 +129,7 @@ class FieldConfig:
     bore: float
     rod: float
     orientation: str = "A extends"
+    extension: str = "position increases"
     columns: dict = field(default_factory=dict)
     units: dict = field(default_factory=dict)
     sensors: dict = field(
@@ -234,6 +239,9 @@ def load_field_config(path: StrPath) -> FieldConfig:
     orientation = cylinder.get("orientation", "A extends")
     if orientation not in ORIENTATIONS:
         raise fail("cylinder", "orientation", f"{orientation!r}; valid: {list(ORIENTATIONS)}")
+    extension = cylinder.get("extension", "position increases")
+    if extension not in EXTENSIONS:
+        raise fail("cylinder", "extension", f"{extension!r}; valid: {list(EXTENSIONS)}")
     columns = doc.get("columns", {})
     for role in REQUIRED_ROLES:
         if role not in columns:
@@ -265,6 +273,7 @@ def load_field_config(path: StrPath) -> FieldConfig:
         bore=sizes["bore"],
         rod=sizes["rod"],
         orientation=orientation,
+        extension=extension,
         columns=dict(columns),
         units=dict(units),
         sensors=sensors,
