@@ -75,6 +75,7 @@ DEFAULTS: dict[str, Any] = {
     "pressure_spread": 10e5,  # Pa: pressure independent of position needed for a slope
     "vif_limit": 10.0,
     "hold_time": 1.0,  # s at rest for a holding episode
+    "payload_step": 0.1,  # a held force changing by this share of the log's force: new payload
     "collapse_ratio": 0.3,  # valve-side check: held pressure below this share of moving
 }
 
@@ -267,6 +268,77 @@ def prepare_log(
         steps=n_steps,
         notes=notes,
     )
+
+
+def payload_segments(
+    signals: FieldSignals, *, hold_time: float = 1.0, step: float = 0.1
+) -> list[slice]:
+    """Split a log where its payload changes: while the rod holds still (``hold_time`` [s]
+    at ``|v| < 1 mm/s``) the piston force changes by more than ``step`` times the median
+    moving force (a load picked up or set down); cut in the middle of that hold. A log
+    whose pressures are not valid at rest (a valve-side sensor) is not split."""
+    n = signals.time.size
+    if not np.all(signals.usable):
+        return [slice(0, n)]
+    still = np.abs(signals.velocity) < 1e-3
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], still.view(np.int8), [0]))))
+    moving = signals.stroke >= 0
+    if not np.any(moving):
+        return [slice(0, n)]
+    scale = float(np.median(np.abs(signals.force[moving])))
+    n_hold = int(hold_time * signals.rate)
+    edge = max(1, int(0.3 * signals.rate))
+    cuts = []
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if b - a < n_hold:
+            continue
+        before = np.median(signals.force[a : a + edge])
+        after = np.median(signals.force[b - edge : b])
+        if abs(after - before) > step * scale:
+            cuts.append((a + b) // 2)
+    bounds = [0, *cuts, n]
+    return [slice(bounds[i], bounds[i + 1]) for i in range(len(bounds) - 1)]
+
+
+def _segment(signals: FieldSignals, part: slice) -> FieldSignals:
+    t = signals.time[part]
+    return FieldSignals(
+        name=f"{signals.name} [{t[0]:.6g}-{t[-1]:.6g} s]",
+        day=signals.day,
+        time=t,
+        position=signals.position[part],
+        velocity=signals.velocity[part],
+        acceleration=signals.acceleration[part],
+        force=signals.force[part],
+        pressure=signals.pressure[part],
+        pressure_a=signals.pressure_a[part],
+        pressure_b=signals.pressure_b[part],
+        stroke=signals.stroke[part],
+        steady=signals.steady[part],
+        usable=signals.usable[part],
+        rate=signals.rate,
+        steps=signals.steps,
+        notes=[],
+    )
+
+
+def _prepare_all(records, config, o, notes) -> list[FieldSignals]:
+    """prepare_log each record, split where the payload changes (one load curve each)."""
+    out = []
+    for record in records:
+        s = prepare_log(record, config, o)
+        parts = payload_segments(s, hold_time=o["hold_time"], step=o["payload_step"])
+        if len(parts) == 1:
+            out.append(s)
+            continue
+        if notes is not None:
+            notes.append(
+                f"{s.name}: the held force changes {len(parts) - 1} time(s) at rest (a payload "
+                f"picked up or set down): {len(parts)} segments, each with its own load curve "
+                "and mass"
+            )
+        out.extend(_segment(s, p) for p in parts)
+    return out
 
 
 def _legendre(xi, degree):
@@ -631,9 +703,9 @@ def fit_field(
 
 def _fit_field(records, config, options) -> FieldFit:
     o = {**DEFAULTS, **config.fit, **(options or {})}
-    signals = [prepare_log(r, config, o) for r in records]
-    flags = [n for s in signals for n in s.notes]
     notes: list[str] = []
+    signals = _prepare_all(records, config, o, notes)
+    flags = list(dict.fromkeys(n for s in signals for n in s.notes))
     ranges = []
     for s in signals:
         moving = s.position[(s.stroke >= 0) & s.usable]
@@ -759,11 +831,17 @@ def _fit_field(records, config, options) -> FieldFit:
     # systematic part: the same fit with a lower cut-off (0.7x); the change of the friction
     # coefficients is the filter's bias scale, added as a covariance outer(d, d)
     low = {**o, "cutoff": o["cutoff"] * o["cutoff_check"]}
-    signals_low = [prepare_log(r, config, low) for r in records]
-    rows_low = _rows(signals_low, ranges, low)
-    coef_low = _solve(rows_low, len(signals), ranges, low, names)[1]
-    systematic = coef[-nf:] - coef_low[-nf:]
-    del signals_low, rows_low
+    by_name = {s.name: s for s in _prepare_all(records, config, low, None)}
+    if all(s.name in by_name for s in signals):  # the same logs and segments
+        signals_low = [by_name[s.name] for s in signals]
+        rows_low = _rows(signals_low, ranges, low)
+        coef_low = _solve(rows_low, len(signals), ranges, low, names)[1]
+        systematic = coef[-nf:] - coef_low[-nf:]
+        del signals_low, rows_low
+    else:
+        systematic = np.zeros(nf)
+        notes.append("the filter's systematic part of the band is not computed (segments differ)")
+    del by_name
     friction_cov = friction_cov + np.outer(systematic, systematic)
     parameters: dict[str, float | None] = dict.fromkeys(("F_c", "F_v", "k_p"))
     stderr: dict[str, float | None] = dict.fromkeys(("F_c", "F_v", "k_p"))

@@ -200,13 +200,16 @@ class FieldLog:
     chamber_a: np.ndarray | None = None  # the true chamber pressure when the sensor is valve-side
 
 
-def _moves(settings: FieldSettings, stroke: float, duration: float, rng) -> np.ndarray:
-    """Reference position and velocity sampled at the integrator step: (n, 2)."""
+def _moves(
+    settings: FieldSettings, stroke: float, duration: float, rng, start: float | None = None
+) -> np.ndarray:
+    """Reference position and velocity sampled at the integrator step: (n, 2); from rest at
+    ``start`` [m] (default mid-stroke)."""
     dt = settings.step
     n = int(round(duration / dt))
     ref = np.empty((n, 2))
     lo, hi = settings.margin * stroke, (1 - settings.margin) * stroke
-    x = 0.5 * (lo + hi)
+    x = 0.5 * (lo + hi) if start is None else float(start)
     i = 0
     acc = settings.acceleration
     while i < n:
@@ -360,8 +363,12 @@ def simulate_log(
     payload: float,
     friction_scale: float = 1.0,
     seed: int | None = None,
+    start: float | None = None,
 ) -> FieldLog:
     """Simulate one log of ``duration`` seconds with ``payload`` [kg] at the boom tip.
+
+    The boom starts at rest at ``start`` [m] of rod position (default mid-stroke), its
+    chambers at the pressures that hold the load there.
 
     ``friction_scale`` multiplies F_c, F_v and k_p (a day's friction level). Returns the
     logged signals (noise and quantisation applied) and the truth: friction parameters,
@@ -375,7 +382,7 @@ def simulate_log(
     load = np.interp(grid, tables["x"], tables["load"])
     mass = np.interp(grid, tables["x"], tables["mass"])
     dmass = np.interp(grid, tables["x"], tables["dmass"])
-    ref = _moves(settings, stroke, duration, rng)
+    ref = _moves(settings, stroke, duration, rng, start)
     every = int(round(1 / (settings.rate * settings.step)))
     v_full = settings.valve_flow / crane.area_a  # speed at full opening, 35 bar drop
     kv = settings.valve_flow / math.sqrt(35e5)
