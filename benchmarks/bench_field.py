@@ -174,10 +174,10 @@ def main() -> None:
         result["change_and_accuracy"] = change_and_accuracy(args.draws)
     elif RESULTS.is_file():  # --draws 0: keep the last run's draws
         result["change_and_accuracy"] = json.loads(RESULTS.read_text())["change_and_accuracy"]
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     if not args.skip_day:
         result["one_day"] = one_day()
+    elif RESULTS.is_file() and "one_day" in json.loads(RESULTS.read_text()):
+        result["one_day"] = json.loads(RESULTS.read_text())["one_day"]  # the last run's
     RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     print(json.dumps(result, indent=2))

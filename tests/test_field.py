@@ -318,3 +318,25 @@ def test_a_payload_change_at_rest_splits_the_log():
         )
         > 0.2
     )
+
+
+def test_a_gap_in_the_log_is_named_and_bridged_without_bias():
+    from dataclasses import replace
+
+    records, _ = _records(SETTINGS, [1.0], duration=300.0, seed=41, logs_per_day=1)
+    (r,) = records
+    keep = np.ones(r.time.size, dtype=bool)
+    keep[10_000:10_700] = False  # 7 s the logger missed, perhaps mid-move
+    gapped = replace(
+        r,
+        time=r.time[keep],
+        position=r.position[keep],
+        pressure_a=r.pressure_a[keep],
+        pressure_b=r.pressure_b[keep],
+        valve=r.valve[keep],
+    )
+    fit = fit_field([gapped], CONFIG)
+    assert any("gap" in note for note in fit.flags)
+    for band in fit.bands:
+        truth = _true_friction(SETTINGS, band["speed [m/s]"])
+        assert abs(band["friction [N]"] / truth - 1) < 0.05, band

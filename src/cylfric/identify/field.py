@@ -127,6 +127,17 @@ def _strokes(velocity, min_speed):
     return ids
 
 
+def _renumber(stroke):
+    """Stroke ids 0..n-1 after samples were set to -1: each contiguous moving run its own."""
+    moving = stroke >= 0
+    out = np.full(stroke.size, -1, dtype=np.int64)
+    if np.any(moving):
+        # a new id wherever a moving run starts
+        start = moving & ~np.concatenate(([False], moving[:-1]))
+        out[moving] = (np.cumsum(start) - 1)[moving]
+    return out
+
+
 def holding_check(
     pressure: np.ndarray,
     velocity: np.ndarray,
@@ -224,6 +235,19 @@ def prepare_log(
     reach = int(o["rest_guard"] * rate / cutoff)
     near_rest = maximum_filter1d((stroke < 0).view(np.int8), 2 * reach + 1) > 0
     stroke[near_rest] = -1
+    # gaps in the log (the logger paused): the filter and the differences bridge them, so
+    # the samples within a few cut-off periods of a gap are not used
+    gaps = np.flatnonzero(np.diff(record.time) > 3 * dt)
+    if gaps.size:
+        reach_gap = int(3 * rate / cutoff) + 1
+        for g in gaps:
+            stroke[max(0, g - reach_gap) : g + reach_gap + 1] = -1
+        notes.append(
+            f"{record.name}: {gaps.size} gap(s) in time (longer than 3 sampling periods); "
+            "the samples next to them are not used"
+        )
+    if gaps.size or np.any(stroke >= 0):
+        stroke = _renumber(stroke)
     # valve steps: the command moving faster than step_rate (its range per second)
     steps = np.zeros(x.size, dtype=bool)
     n_steps = 0
