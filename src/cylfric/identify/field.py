@@ -750,9 +750,24 @@ def _fit_field(records, config, options) -> FieldFit:
     for s, r in zip(signals, ranges, strict=True):
         moving = s.stroke >= 0
         use = moving & s.usable
-        if np.any(s.velocity[use] > 0) and np.any(s.velocity[use] < 0):
-            kept.append(s)
-            ranges_kept.append(r)
+        ext, ret = use & (s.velocity > 0), use & (s.velocity < 0)
+        n_ext, n_ret = np.unique(s.stroke[ext]).size, np.unique(s.stroke[ret]).size
+        if min(n_ext, n_ret) >= o["min_strokes"]:
+            lo = max(np.min(s.position[ext]), np.min(s.position[ret]))
+            hi = min(np.max(s.position[ext]), np.max(s.position[ret]))
+            if hi - lo >= 0.5 * (r[1] - r[0]):
+                kept.append(s)
+                ranges_kept.append(r)
+            else:
+                dropped.append(
+                    f"{s.name}: extension and retraction overlap over {1e3 * max(hi - lo, 0):.3g}"
+                    f" mm of {1e3 * (r[1] - r[0]):.3g} mm (needs half the logged stroke)"
+                )
+        elif min(n_ext, n_ret) > 0:
+            dropped.append(
+                f"{s.name}: {n_ext} extension and {n_ret} retraction strokes with chamber "
+                f"pressures (needs {o['min_strokes']} each)"
+            )
         elif np.any(s.velocity[moving] > 0) and np.any(s.velocity[moving] < 0):
             dropped.append(
                 f"{s.name}: chamber pressures valid in one direction only (a sensor on the "
