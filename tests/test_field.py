@@ -161,20 +161,16 @@ def test_cross_check_is_model_free_and_within_5_percent(one_day):
 
 
 def test_effective_mass_and_load_curve_within_5_percent(one_day):
-    """The load within 5 % over the logged stroke (1-99 % of the moving positions); the mass
-    within 5 % over its central 90 %, and within 5 % plus its own band at the ends, where
-    few accelerations were logged (measured: up to 6.1 % at the retracted end of one log,
-    band 4.8 %)."""
+    """Both within 5 % over the logged stroke (1-99 % of the moving positions). The mass
+    needs the errors-in-variables correction: without it, it came out up to 6 % low at the
+    retracted end here (20 % in one log of the benchmark's draws)."""
     fit, truths = one_day
     for load, mass, truth in zip(fit.loads, fit.masses, truths, strict=True):
         x = np.array(load["position [m]"])
         true_load = np.interp(x, truth["position [m]"], truth["load [N]"])
         true_mass = np.interp(x, truth["position [m]"], truth["mass [kg]"])
         assert np.max(np.abs(np.array(load["load [N]"]) / true_load - 1)) < 0.05
-        error = np.abs(np.array(mass["mass [kg]"]) / true_mass - 1)
-        central = slice(2, -2)  # 41 points: the outer 5 % at each end left out
-        assert np.max(error[central]) < 0.05
-        assert np.all(error < 0.05 + np.array(mass["band [kg]"]) / true_mass)
+        assert np.max(np.abs(np.array(mass["mass [kg]"]) / true_mass - 1)) < 0.05
 
 
 def test_pressure_slope_not_identified_when_the_pressure_follows_the_load(one_day):
