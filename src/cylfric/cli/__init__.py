@@ -29,6 +29,9 @@ from . import fit  # noqa: F401
 from . import bench  # noqa: F401
 
 # isort: split
+from . import field  # noqa: F401  (fit-field, generate-field)
+
+# isort: split
 from . import axis  # noqa: F401  (identify-axis)
 
 # isort: split
