@@ -216,6 +216,14 @@ def test_generate_and_fit_field_end_to_end(tmp_path):
     assert all(0 < p["difference [%]"] < 15 for p in comparison["points"])
     days = {log["day"] for log in truth["logs"].values()}
     assert len(document["trend"]["days"]) == len(days) == 2
+    # the output folder is replaced whole (cylfric._outfolder): a file of the user's in it
+    # stops the next fit-field, named, and is kept
+    (out / "notes.txt").write_text("mine\n")
+    again = runner.invoke(
+        app, ["fit-field", *files, "--config", str(logs / "field.toml"), "--out", str(out)]
+    )
+    assert again.exit_code == 2 and "notes.txt" in again.output
+    assert (out / "notes.txt").read_text() == "mine\n" and (out / "field.json").is_file()
 
 
 def test_fit_field_bad_config_is_exit_2_without_traceback(tmp_path, log):

@@ -99,7 +99,7 @@ def _run(logs, config, out, as_json, datasheet=None) -> None:
     import json
     import warnings
 
-    from .._paths import make_folder, refuse_link
+    from .._paths import refuse_link
     from ..identify.field import fit_field
     from ..io.fieldlog import load_field_config, read_field_logs
     from ..io.writers import atomic_write_bytes, atomic_write_text
@@ -109,6 +109,9 @@ def _run(logs, config, out, as_json, datasheet=None) -> None:
     refuse_link(out)
     if out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
+    from .. import _outfolder
+
+    _outfolder.check_reusable(out)  # before the fit: the folder is replaced whole
     inputs = {p.resolve() for p in [*logs, config]}
     names = [FIT_JSON, LOAD_CSV, DATASHEET_CSV, REPORT, *TABLES.values(), *FIGURES]
     clash = [n for n in names if (out / n).resolve() in inputs]
@@ -155,23 +158,28 @@ def _run(logs, config, out, as_json, datasheet=None) -> None:
         comparison = compare_datasheet(fit, sheet_model)
         document["datasheet"] = {"file": str(datasheet), **comparison}
     text = json.dumps(_plain(document), indent=2, allow_nan=False)
-    make_folder(out)
-    atomic_write_text(out / FIT_JSON, text + "\n")
-    tables = {
-        "bands": fit.bands,
-        "cross_check": fit.cross_check,
-        "days": fit.days,
-        "changes": fit.changes,
-    }
-    for key, rows in tables.items():
-        atomic_write_text(out / TABLES[key], _csv_rows(rows))
-    atomic_write_text(out / LOAD_CSV, _curves_csv(fit))
-    if comparison is not None:
-        atomic_write_text(out / DATASHEET_CSV, _csv_rows(comparison["points"]))
     figures = _figures(fit)
-    for name, png in figures.items():
-        atomic_write_bytes(out / name, png)
-    atomic_write_text(out / REPORT, _report(fit, document, list(figures)))
+
+    def write(folder: Path) -> None:  # the staging folder, swapped in whole
+        atomic_write_text(folder / FIT_JSON, text + "\n")
+        tables = {
+            "bands": fit.bands,
+            "cross_check": fit.cross_check,
+            "days": fit.days,
+            "changes": fit.changes,
+        }
+        for key, rows in tables.items():
+            atomic_write_text(folder / TABLES[key], _csv_rows(rows))
+        atomic_write_text(folder / LOAD_CSV, _curves_csv(fit))
+        if comparison is not None:
+            atomic_write_text(folder / DATASHEET_CSV, _csv_rows(comparison["points"]))
+        for name, png in figures.items():
+            atomic_write_bytes(folder / name, png)
+        atomic_write_text(folder / REPORT, _report(fit, document, list(figures)))
+
+    from .. import _outfolder
+
+    _outfolder.staged(out, write)  # an out holding files cylfric did not write: refused
     if as_json:
         console.print_json(text)
     else:
