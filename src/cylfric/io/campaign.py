@@ -1076,6 +1076,7 @@ def _read_manifest(folder: Path) -> _Manifest:
             )
         if not row.get("file"):
             raise BenchFileError(path, "no file name; expected one in the 'file' column", number)
+        _check_row_path(row["file"], path, number)
         if row["file"] in rows:
             raise BenchFileError(
                 path, f"{row['file']} is listed twice; expected one row per file", line=number
@@ -1083,6 +1084,22 @@ def _read_manifest(folder: Path) -> _Manifest:
         rows[row["file"]] = (pressure, velocity, extra)
         rows.lines[row["file"]] = number
     return rows
+
+
+def _check_row_path(name: str, path: Path, number: int) -> None:
+    """Refuse a manifest row whose file is absolute or climbs out of the campaign folder
+    with ``..`` (the row and line named); links are checked when the runs are listed."""
+    text = name.replace("\\", "/")
+    absolute = text.startswith("/") or re.match(r"^[A-Za-z]:", text) is not None
+    if absolute or ".." in text.split("/"):
+        problem = "is absolute" if absolute else "climbs out of the campaign folder with '..'"
+        raise BenchFileError(
+            path,
+            f"file {name!r} {problem}; a manifest row names a run file by its path relative "
+            "to the campaign folder (run_01.txt, day1/run_01.txt): copy the file into the "
+            "folder",
+            line=number,
+        )
 
 
 def _manifest_temperature(row: dict, path: Path, number: int, delimiter: str = ",") -> float | None:
@@ -1154,17 +1171,19 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     )
     runs = []
     manifest_path = folder / MANIFEST_NAME
-    for path in _candidates(folder, config, manifest):
+    boundary = _Boundary(folder)
+    for path, key in _candidates(folder, config, manifest):
         _check_encodable(path)
         name = path.name
-        pressure, velocity, extra, source, nominal = _manifest_nominal(name, manifest)
+        line = manifest.lines.get(key)
+        boundary.check(path, manifest_path if line is not None else None, line)
+        pressure, velocity, extra, source, nominal = _manifest_nominal(key, manifest)
         if pattern is not None:
             match = pattern.search(name)
             if match:
                 pressure, velocity, extra = _name_pattern_nominal(
                     path, match, pressure, velocity, extra, source, nominal
                 )
-        line = manifest.lines.get(name)
         listed = manifest_path if line is not None else None
         session = session_of(path, folder, config.glob, extra)
         if session is not None:
@@ -1177,16 +1196,75 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     return runs
 
 
-def _candidates(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[Path]:
-    """The manifest's files matching the glob, in its order; without a manifest, the
-    folder's files matching the glob, sorted (hidden files and cylfric's own left out)."""
+def _candidates(
+    folder: Path, config: CampaignConfig, manifest: _Manifest
+) -> list[tuple[Path, str]]:
+    """(path, key) of the manifest's files matching the glob, in its order (the key: the
+    row's file as written, a path relative to the campaign folder); without a manifest, of
+    the folder's files matching the glob, sorted (the key: the path relative to the folder,
+    with ``/``; hidden files and cylfric's own left out)."""
     if manifest:  # a row for a missing file stops its run in read_run (skippable)
-        return [folder / name for name in fnmatch.filter(manifest, config.glob)]
-    return sorted(
+        return [(folder / name, name) for name in manifest if _glob_matches(name, config.glob)]
+    found = sorted(
         p
         for p in folder.glob(config.glob)
         if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
     )
+    return [(p, _relative(p, folder)) for p in found]
+
+
+def _glob_matches(name: str, glob: str) -> bool:
+    """Whether a manifest row's file (relative to the folder) matches the campaign's glob as
+    :meth:`pathlib.Path.glob` would find it: a leading ``**/`` also matches no folder."""
+    if fnmatch.fnmatchcase(name, glob):
+        return True
+    return glob.startswith("**/") and fnmatch.fnmatchcase(name, glob[3:])
+
+
+def _relative(path: Path, folder: Path) -> str:
+    """``path`` (found below ``folder``) relative to it, with ``/`` between the parts."""
+    text, prefix = str(path), os.path.join(str(folder), "")
+    if text.startswith(prefix):  # the glob's own paths: no path arithmetic
+        return text[len(prefix) :].replace(os.sep, "/")
+    return path.relative_to(folder).as_posix()
+
+
+class _Boundary:
+    """The campaign folder as a boundary: :meth:`check` refuses a run file that resolves
+    outside it (a symbolic link, a file in a linked subfolder, a manifest row that climbs
+    out). Each folder is resolved once; a file costs one ``lstat`` unless it is a link."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.real = os.path.realpath(folder)
+        self._parents: dict[str, str] = {}
+
+    def _real(self, path: Path) -> str:
+        if os.path.islink(path):
+            return os.path.realpath(path)
+        parent = os.path.dirname(path)
+        real = self._parents.get(parent)
+        if real is None:
+            real = self._parents[parent] = os.path.realpath(parent)
+        return os.path.join(real, os.path.basename(path))
+
+    def check(self, path: Path, manifest: Path | None, line: int | None) -> None:
+        """Raise BenchFileError when ``path`` resolves outside the campaign folder, naming
+        the manifest row (``manifest``, ``line``) or the file and where it leads."""
+        real = self._real(path)
+        if real == self.real or real.startswith(os.path.join(self.real, "")):
+            return
+        shown = path.relative_to(self.folder) if path.is_relative_to(self.folder) else path
+        what = (
+            f"lists {str(shown)!r}, which" if manifest is not None else f"run file {shown}"
+        )
+        raise BenchFileError(
+            manifest if manifest is not None else self.folder,
+            f"{what} resolves to {real}, outside the campaign folder {self.real} (through "
+            "a symbolic link or '..'); run files are read from the campaign folder only: "
+            "copy the file into it",
+            line=line,
+        )
 
 
 def _manifest_nominal(name: str, manifest: _Manifest):
@@ -1282,12 +1360,11 @@ def _unlisted(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     if not manifest:
         return []
     return sorted(
-        p.relative_to(folder).as_posix()
+        relative
         for p in folder.glob(config.glob)
-        if p.name not in manifest  # the names first: no stat and no path arithmetic for them
-        and p.name not in _SKIP_NAMES
+        if p.name not in _SKIP_NAMES
         and not p.name.startswith(".")
-        and p.relative_to(folder).as_posix() not in manifest
+        and (relative := _relative(p, folder)) not in manifest  # by path, not base name
         and p.is_file()
     )
 
