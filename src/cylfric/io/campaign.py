@@ -1255,9 +1255,7 @@ class _Boundary:
         if real == self.real or real.startswith(os.path.join(self.real, "")):
             return
         shown = path.relative_to(self.folder) if path.is_relative_to(self.folder) else path
-        what = (
-            f"lists {str(shown)!r}, which" if manifest is not None else f"run file {shown}"
-        )
+        what = f"lists {str(shown)!r}, which" if manifest is not None else f"run file {shown}"
         raise BenchFileError(
             manifest if manifest is not None else self.folder,
             f"{what} resolves to {real}, outside the campaign folder {self.real} (through "

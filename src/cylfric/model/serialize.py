@@ -447,7 +447,7 @@ def _unit_problem(sheet: dict) -> str | None:
         if table is None:
             continue
         if not isinstance(table, dict):
-            return f"{where}: expected an object of SI units, e.g. {{\"force\": \"N\"}}"
+            return f'{where}: expected an object of SI units, e.g. {{"force": "N"}}'
         for key, declared in table.items():
             expected = UNITS.get(key) or PARAMETER_UNITS.get(key)
             wrong = not _si_unit(declared, expected) if expected else _not_si(declared)
@@ -489,7 +489,9 @@ def validate(sheet: dict, *, source: str = "datasheet") -> dict:
     if found is not None:
         keys, number = found
         where = "/".join(reversed(keys))
-        shown = f"an integer of {len(str(abs(number)))} digits" if isinstance(number, int) else number
+        shown = number
+        if isinstance(number, int):
+            shown = f"an integer of {len(str(abs(number)))} digits"
         raise DatasheetError(
             f"{source}: {where}: {shown} is not finite; expected a finite number "
             f"(at most {float(_LARGEST_INT):.3g} in magnitude)"
