@@ -581,7 +581,10 @@ def load_config(folder, file=None) -> CampaignConfig:
         position_sign=float(fb.get("position_sign", 1)),
         moving_mass=moving_mass,
         force_source=force_source,
-        extraction=dict(doc.get("extraction", {})),
+        extraction={
+            key: int(value) if key in COUNT_KEYS else value
+            for key, value in doc.get("extraction", {}).items()
+        },
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
         oil=_oil(doc["oil"], path) if "oil" in doc else None,
@@ -640,6 +643,11 @@ def _oil(table: dict, path: Path) -> OilSettings:
 
 
 _QUANTITY_TEXT = {"type": "string", "minLength": 1}
+MAX_COUNT = 1_000_000_000
+"""Largest sample count ``[extraction]`` may give (a billion samples: hours of a 100 kHz
+record)."""
+COUNT_KEYS = ("min_samples", "median_window", "skip_start", "skip_end")
+"""``[extraction]`` keys that are counts of samples, passed on as ``int``."""
 FORCE_SOURCES = ("load_cell", "pressures")
 """Values of ``[force_balance] force``: a load-cell column, or the chamber pressures times the
 areas (a rig without a load cell, such as a valve-driven axis)."""
@@ -692,11 +700,12 @@ CONFIG_SCHEMA = {
             "type": "object",
             "properties": {
                 "method": {"type": "string"},
-                # counts of samples: whole numbers (10.0 is accepted as 10)
-                "min_samples": {"type": "integer", "minimum": 1},
-                "median_window": {"type": "integer", "minimum": 1},
-                "skip_start": {"type": "integer", "minimum": 0},
-                "skip_end": {"type": "integer", "minimum": 0},
+                # counts of samples: whole numbers (10.0 is accepted as 10), at most a
+                # billion (1e12 is a float TOML calls a number, not a count of samples)
+                "min_samples": {"type": "integer", "minimum": 1, "maximum": MAX_COUNT},
+                "median_window": {"type": "integer", "minimum": 1, "maximum": MAX_COUNT},
+                "skip_start": {"type": "integer", "minimum": 0, "maximum": MAX_COUNT},
+                "skip_end": {"type": "integer", "minimum": 0, "maximum": MAX_COUNT},
                 # thresholds [-] and the velocity window [s]: positive
                 **{
                     key: {"type": "number", "exclusiveMinimum": 0}
@@ -1037,7 +1046,7 @@ def _read_manifest(folder: Path) -> _Manifest:
             line=1,
         )
     known = {*_MANIFEST_COLUMNS, *TEMPERATURE_COLUMNS}  # the columns that are not labels
-    for number, row in enumerate(reader, start=2):
+    for number, row in _manifest_rows(reader, path):
         row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
         if not any(v for k, v in row.items() if k):  # a blank line
             continue
@@ -1100,6 +1109,35 @@ def _check_row_path(name: str, path: Path, number: int) -> None:
             "folder",
             line=number,
         )
+
+
+MANIFEST_ROWS = 200_000
+"""Most rows a manifest.csv may have (10x the largest campaign measured, 20,000 runs; a 25 MB
+manifest of missing files had taken 72 s and 2.7 GB)."""
+
+
+def _manifest_rows(reader: csv.DictReader, path: Path):
+    """(line number, row) of manifest.csv's rows after the header; a cell beyond the csv
+    module's field limit (128 KiB) or more than :data:`MANIFEST_ROWS` rows is a
+    BenchFileError naming the line."""
+    number = 1
+    try:
+        for number, row in enumerate(reader, start=2):
+            if number > MANIFEST_ROWS + 1:
+                raise BenchFileError(
+                    path,
+                    f"more than {MANIFEST_ROWS:,} rows; a manifest lists one run per row: "
+                    "split the campaign into folders (fit-many fits them one by one)",
+                    line=number,
+                )
+            yield number, row
+    except csv.Error as exc:
+        raise BenchFileError(
+            path,
+            f"not a CSV row cylfric reads ({exc}); expected short cells (file names, "
+            "numbers, labels)",
+            line=number + 1,
+        ) from None
 
 
 def _manifest_temperature(row: dict, path: Path, number: int, delimiter: str = ",") -> float | None:
