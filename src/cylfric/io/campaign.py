@@ -35,6 +35,7 @@ __all__ = [
     "CampaignConfig",
     "Duplicate",
     "find_duplicates",
+    "find_near_duplicates",
     "OilSettings",
     "RunInfo",
     "load_config",
@@ -345,7 +346,9 @@ def _label(value) -> str | None:
 
 
 class Duplicate(NamedTuple):
-    """A run file whose bytes equal an earlier run's (same SHA-256): not read, counted once.
+    """A run file whose bytes equal an earlier run's (same SHA-256), or whose samples do
+    with other header lines (``same_header`` False: :func:`find_near_duplicates`): not
+    read, counted once.
 
     ``file`` and ``original`` are relative to the campaign folder; ``seal`` is the label of
     ``file`` (None without one)."""
@@ -353,10 +356,16 @@ class Duplicate(NamedTuple):
     file: str
     original: str
     seal: str | None = None
+    same_header: bool = True
 
     @property
     def reason(self) -> str:
         """The line excluded.csv and the command line give for it."""
+        if not self.same_header:
+            return (
+                f"duplicate of {self.original} (the same samples, SHA-256 of the data block; "
+                "only the header lines differ): counted once, not read"
+            )
         return f"duplicate of {self.original} (the same bytes, SHA-256): counted once, not read"
 
 
@@ -434,6 +443,140 @@ def _copies_by_content(group: list[Path]) -> dict[Path, Path]:
     for path in group:
         try:
             digest = file_sha256(path)
+        except OSError:
+            continue
+        if digest in first:
+            copies[path] = first[digest]
+        else:
+            first[digest] = path
+    return copies
+
+
+HEAD_BYTES = 65536
+"""Most bytes read from the start of a text run to find where its header ends
+(:func:`find_near_duplicates`); a file whose header is longer is compared whole."""
+
+
+def _mark(byte: int) -> int:
+    """How :func:`_data_offset` sees a byte: ``0`` a digit, ``.`` a sign, separator or
+    letter of a number (e, NaN, inf), a space, a newline, or ``x`` anything else."""
+    char = chr(byte)
+    if char.isascii() and char.isdigit():
+        return ord("0")
+    if char in " \t\r":
+        return ord(" ")
+    if char == "\n":
+        return ord("\n")
+    return ord(".") if char in ".,;:+-eEnNaAiIfF" else ord("x")
+
+
+_MARKS = bytes(_mark(byte) for byte in range(256))
+_FIRST_ROW = re.compile(rb"^[ .]*0[0 .]*$", re.MULTILINE)
+"""A line of :data:`_MARKS` that is a row of numbers (at least one digit, nothing else)."""
+
+
+def _data_offset(head: bytes, whole: bool) -> int | None:
+    """Byte offset where the numeric block of a text run begins, from its first bytes
+    ``head`` (``whole``: the entire file): the start of the first line that is only numbers;
+    None for a binary file (NUL bytes) or a header longer than ``head``.
+
+    Everything from there on is compared, segment markers included, so a header misread
+    (a line of digits in it) can only make a near-duplicate go unfound, never make two
+    different runs one. A translation and one regular-expression search in C."""
+    if b"\x00" in head:
+        return None
+    if not whole:
+        head = head[: head.rfind(b"\n") + 1]  # a line cut off by the read is not judged
+    found = _FIRST_ROW.search(head.translate(_MARKS))
+    return None if found is None else found.start()
+
+
+def _data_key(path: Path, size: int) -> tuple[int, int, int] | None:
+    """(offset of the numeric block, its size, CRC-32 of its part within the first
+    :data:`EDGE_BYTES` bytes) of a text run, or None (binary, or no row of numbers within
+    :data:`HEAD_BYTES`). One open and, for a usual header, one read."""
+    import zlib
+
+    with open(path, "rb", buffering=0) as handle:
+        head = handle.read(min(size, EDGE_BYTES))
+        offset = _data_offset(head, whole=len(head) == size)
+        if offset is None and size > EDGE_BYTES:
+            head += handle.read(HEAD_BYTES - len(head))
+            offset = _data_offset(head, whole=len(head) == size)
+    if offset is None:
+        return None
+    return offset, size - offset, zlib.crc32(head[offset:])
+
+
+def _data_sha256(path: Path, offset: int) -> str:
+    """SHA-256 of a file's bytes from ``offset`` on (its numeric block), read in blocks."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        handle.seek(offset)
+        while block := handle.read(1 << 20):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _tail_crc(path: Path, size: int) -> int:
+    """CRC-32 of a file's last :data:`EDGE_BYTES` bytes."""
+    import zlib
+
+    with open(path, "rb", buffering=0) as handle:
+        handle.seek(max(size - EDGE_BYTES, 0))
+        return zlib.crc32(handle.read(EDGE_BYTES))
+
+
+def find_near_duplicates(paths) -> dict[Path, Path]:
+    """Text runs whose numeric block equals an earlier file's of ``paths`` while the header
+    lines may differ (a copy with a header line changed), each -> that first file.
+
+    Only the numbers are compared, never the header: each file's first 4 KiB are read to
+    find where its numbers begin (:func:`_data_offset`); files are grouped by the size of
+    that block and a CRC-32 of its first bytes, then by a CRC-32 of their last
+    :data:`EDGE_BYTES` bytes, and only files that share all three are hashed (SHA-256 of
+    the block). ``.mat`` files, binary files and headers longer than :data:`HEAD_BYTES` are
+    left to :func:`find_duplicates`. Byte-for-byte copies are found here too;
+    :class:`Campaign` asks :func:`find_duplicates` first and tells them apart.
+    """
+    groups: dict[tuple[int, int], list[tuple[Path, int, int]]] = {}
+    for path in paths:
+        path = path if isinstance(path, Path) else Path(path)
+        if path.suffix.lower() == ".mat":
+            continue
+        try:
+            size = os.stat(path).st_size
+            key = _data_key(path, size)
+        except OSError:
+            continue
+        if key is not None and key[1] > 0:
+            groups.setdefault(key[1:], []).append((path, key[0], size))
+    copies: dict[Path, Path] = {}
+    for group in groups.values():
+        if len(group) < 2:
+            continue
+        by_tail: dict[int, list[tuple[Path, int]]] = {}
+        for path, offset, size in group:
+            try:
+                by_tail.setdefault(_tail_crc(path, size), []).append((path, offset))
+            except OSError:
+                continue
+        for same in by_tail.values():
+            if len(same) > 1:
+                copies.update(_same_data(same))
+    return copies
+
+
+def _same_data(group: list[tuple[Path, int]]) -> dict[Path, Path]:
+    """Each file of ``group`` (path, offset of its numeric block) whose block's SHA-256
+    equals an earlier one's -> that earlier file."""
+    copies: dict[Path, Path] = {}
+    first: dict[str, Path] = {}
+    for path, offset in group:
+        try:
+            digest = _data_sha256(path, offset)
         except OSError:
             continue
         if digest in first:
@@ -1435,7 +1578,8 @@ class Campaign:
         Files matching the glob that ``manifest.csv`` does not list (not read;
         :func:`unlisted_files`).
     duplicates : tuple of Duplicate
-        Run files whose bytes equal an earlier run's (:func:`find_duplicates`): left out of
+        Run files whose bytes equal an earlier run's (:func:`find_duplicates`), or whose
+        samples do under other header lines (:func:`find_near_duplicates`): left out of
         ``runs`` (counted once), each with the file it repeats.
     """
 
@@ -1477,12 +1621,16 @@ class Campaign:
         manifest = _read_manifest(path)
         runs = _discover(path, config, manifest)
         copies = find_duplicates(info.path for info in runs)
+        near = find_near_duplicates(info.path for info in runs if info.path not in copies)
+        copies.update({copy: original for copy, original in near.items() if copy not in copies})
 
         def relative(file: Path) -> str:
             return file.relative_to(path).as_posix()
 
         duplicates = tuple(
-            Duplicate(relative(info.path), relative(copies[info.path]), info.seal)
+            Duplicate(
+                relative(info.path), relative(copies[info.path]), info.seal, info.path not in near
+            )
             for info in runs
             if info.path in copies
         )
