@@ -134,3 +134,30 @@ def test_a_file_in_a_subfolder_is_not_listed_by_a_top_level_row_of_its_base_name
     shutil.copy(first, folder / "sub" / first.name)
     campaign = Campaign.open(folder, glob="**/*.txt")
     assert campaign.unlisted == (f"sub/{first.name}",)
+
+
+@pytest.mark.parametrize(
+    ("text", "key", "line"),
+    [
+        ('[cylinder]\nbore = "25"\nrod = "12 mm"\n', "cylinder.bore", 2),
+        ('[cylinder]\nbore = "25 mm"\nrod = "12"\n', "cylinder.rod", 3),
+        ('[force_balance]\n\nmoving_mass = "12.5"\n', "force_balance.moving_mass", 3),
+    ],
+)
+def test_a_length_or_mass_without_its_unit_is_refused_with_the_line(tmp_path, text, key, line):
+    """Issue 39: ``bore = "25"`` was taken as 25 mm without a word (and "12.5" as kg)."""
+    from cylfric.io.campaign import load_config
+
+    (tmp_path / "campaign.toml").write_text(text)
+    with pytest.raises(BenchFileError, match=rf"line {line}: {key} = '[0-9.]+' has no unit"):
+        load_config(tmp_path)
+
+
+def test_values_with_units_and_a_bare_zero_are_read(tmp_path):
+    from cylfric.io.campaign import load_config
+
+    (tmp_path / "campaign.toml").write_text(
+        '[cylinder]\nbore = "25 mm"\nrod = "0.012 m"\n[force_balance]\nmoving_mass = "0"\n'
+    )
+    config = load_config(tmp_path)
+    assert config.area_a == pytest.approx(3.14159265 / 4 * (0.025**2 - 0.012**2))

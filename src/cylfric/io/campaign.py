@@ -646,6 +646,8 @@ def load_config(folder, file=None) -> CampaignConfig:
         )
     except ValueError as exc:
         raise BenchFileError(path, str(exc), line=_line_of(path, "pressure_reference")) from None
+    for table, key, example in _UNIT_REQUIRED:
+        _check_unit_given(doc.get(table, {}), table, key, example, path)
     if cyl:
         bore = _quantity(cyl.get("bore", "0 mm"), "length", "mm", path)
         rod = _quantity(cyl.get("rod", "0 mm"), "length", "mm", path)
@@ -733,6 +735,28 @@ def load_config(folder, file=None) -> CampaignConfig:
         oil=_oil(doc["oil"], path) if "oil" in doc else None,
         pressure_basis=pressure_basis,
     )
+
+
+_UNIT_REQUIRED = (
+    ("cylinder", "bore", "40 mm"),
+    ("cylinder", "rod", "28 mm"),
+    ("force_balance", "moving_mass", "12 kg"),
+)
+"""(table, key, example) of campaign.toml values that must carry their unit."""
+_BARE_NUMBER = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
+
+
+def _check_unit_given(table: dict, name: str, key: str, example: str, path: Path) -> None:
+    """Refuse ``key = "25"`` (a number without its unit, other than 0) in ``[name]``: mm or
+    m, kg or g cannot be guessed (a bore taken in the wrong one is 1000x off)."""
+    text = table.get(key)
+    if isinstance(text, str) and _BARE_NUMBER.match(text) and float(text) != 0:
+        raise BenchFileError(
+            path,
+            f"{name}.{key} = {text!r} has no unit; write the value with its unit, e.g. "
+            f'{key} = "{example}"',
+            line=_line_of(path, key),
+        )
 
 
 def _oil(table: dict, path: Path) -> OilSettings:
