@@ -292,7 +292,9 @@ class Catalog:
             objects = db.execute("SELECT type, name FROM sqlite_master").fetchall()
             columns = [row[1] for row in db.execute("PRAGMA table_info(seals)")]
         except sqlite3.DatabaseError as exc:
-            raise CatalogError(f"{refused} ({exc}); the file is left as it is") from None
+            raise CatalogError(
+                f"{self.path}: not a usable catalogue ({exc}); the file is left as it is"
+            ) from None
         finally:
             db.close()
         if version > SCHEMA_VERSION:
