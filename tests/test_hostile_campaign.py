@@ -161,3 +161,37 @@ def test_values_with_units_and_a_bare_zero_are_read(tmp_path):
     )
     config = load_config(tmp_path)
     assert config.area_a == pytest.approx(3.14159265 / 4 * (0.025**2 - 0.012**2))
+
+
+def _fit(folder, tmp_path):
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    return CliRunner().invoke(
+        app, ["fit", str(folder), "--out", str(tmp_path / "out"), "--no-report"]
+    )
+
+
+def test_an_infinite_pressure_from_the_file_name_is_named_not_an_svd_failure(bench, tmp_path):
+    folder = _copy(bench, tmp_path)
+    (folder / "manifest.csv").unlink()
+    first = _runs(folder)[0]
+    first.rename(folder / first.name.replace("p10bar", "pinfbar"))
+    (folder / "campaign.toml").write_text(
+        '[files]\nname_pattern = "_p(?P<pressure_bar>[a-z0-9.]+)bar"\n'
+    )
+    result = _fit(folder, tmp_path)
+    assert result.exit_code == 2, result.output
+    assert "name_pattern gives pressure_bar = 'inf'; expected a finite pressure" in result.output
+
+
+def test_an_infinite_pressure_in_a_header_line_is_named(bench, tmp_path):
+    folder = _copy(bench, tmp_path)
+    (folder / "manifest.csv").unlink()
+    first = _runs(folder)[0]
+    first.write_text(first.read_text().replace("Pressure: 10 bar", "Pressure: 1e400 bar"))
+    first.rename(folder / first.name.replace("_p10bar", ""))
+    result = _fit(folder, tmp_path)
+    assert result.exit_code == 2, result.output
+    assert "'1e400 bar' is not a finite pressure" in result.output

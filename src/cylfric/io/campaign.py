@@ -597,9 +597,12 @@ class _Manifest(dict):
 
 def _quantity(value, dimension, default_unit, where):
     try:
-        return parse_quantity(str(value), dimension, default_unit=default_unit)
+        number = parse_quantity(str(value), dimension, default_unit=default_unit)
     except UnitError as exc:
         raise BenchFileError(where, f"{exc}") from None
+    if not math.isfinite(number):  # '1e400 bar', 'inf bar': no law can be fitted to it
+        raise BenchFileError(where, f"{value!r} is not a finite {dimension}")
+    return number
 
 
 def load_config(folder, file=None) -> CampaignConfig:
@@ -1513,10 +1516,13 @@ def _name_pattern_nominal(path: Path, match, pressure, velocity, extra, source, 
         try:
             value = float(text.replace(",", ".")) * scale
         except ValueError:
+            value = math.nan
+        if not math.isfinite(value) or (quantity == "pressure" and value < 0):
             raise BenchFileError(
                 path,
-                f"campaign.toml name_pattern gives {key} = {text!r}; expected a number",
-            ) from None
+                f"campaign.toml name_pattern gives {key} = {text!r}; expected a finite "
+                + ("pressure >= 0 bar" if quantity == "pressure" else "speed in mm/s"),
+            )
         nominal[quantity]["campaign.toml name_pattern"] = (value, f"{key} = {text}")
         if quantity == "pressure" and math.isnan(pressure):
             pressure = value
