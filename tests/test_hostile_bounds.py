@@ -215,3 +215,23 @@ def test_mat_variables_that_are_not_vectors_of_one_length_are_named(tmp_path, va
     )
     with pytest.raises(BenchFileError, match=f"run.mat: .*{message}"):
         read_mat(path, variables=variables)
+
+
+# --------------------------------------------------------------- plan
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--candidate-pressures", "3000", "--candidate-speeds", "3000"], "9,000,000 candidates"),
+        (["--runs", "100000000"], "100,000,000 runs: expected 1 to 5,000"),
+    ],
+)
+def test_a_plan_too_large_for_memory_is_refused_at_once(tmp_path, options, message):
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    started = time.monotonic()
+    result = CliRunner().invoke(app, ["plan", "--out", str(tmp_path / "plan"), *options])
+    assert result.exit_code == 2, result.output
+    assert message in result.output
+    assert time.monotonic() - started < 20
