@@ -28,6 +28,10 @@ from __future__ import annotations
 
 import html
 import unicodedata
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "printable",
@@ -245,7 +249,7 @@ def csv_text(text: object) -> object:
     return "'" + text if text.startswith(CSV_FORMULA_START) else text
 
 
-def csv_frame(frame):
+def csv_frame(frame: pd.DataFrame) -> pd.DataFrame:
     """A copy of the DataFrame ``frame`` whose text cells went through :func:`csv_text`
     (each distinct text once: a points table repeats its few file names thousands of
     times); numeric columns untouched; ``frame`` itself when nothing changes."""

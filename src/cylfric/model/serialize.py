@@ -489,7 +489,7 @@ def validate(sheet: dict, *, source: str = "datasheet") -> dict:
     if found is not None:
         keys, number = found
         where = "/".join(reversed(keys))
-        shown = number
+        shown: object = number
         if isinstance(number, int):
             shown = f"an integer of {len(str(abs(number)))} digits"
         raise DatasheetError(
