@@ -121,10 +121,6 @@ def _check_name(name) -> str:
         raise CatalogError(
             f"catalogue name {name!r}: expected a non-empty text without leading or trailing spaces"
         )
-    if any(unicodedata.category(c)[0] == "C" for c in name):
-        raise CatalogError(
-            f"catalogue name {name!r}: holds control or format characters; expected printable text"
-        )
     return unicodedata.normalize("NFKC", name)
 
 
