@@ -104,7 +104,8 @@ def test_fit_many_lists_a_campaign_it_cannot_fit_and_fits_the_others(tmp_path):
     table = (tmp_path / "out" / "fit_many.csv").read_text()
     assert "good,ok" in table.replace('"', "")
     rows = {line.split(",")[0].strip('"'): line for line in table.splitlines()[1:]}
-    assert "failed" in rows["bad\tname"] and "control character" in rows["bad\tname"]
+    # the tab is written as a visible escape (escape.csv_text), not raw
+    assert "failed" in rows["bad\\x09name"] and "control character" in rows["bad\\x09name"]
     assert "failed" in rows["loop"] and "not fitted" in rows["loop"]
 
 

@@ -289,18 +289,86 @@ class Pending:
         return results
 
 
-def connect(address: str) -> Any:
-    """A ``dask.distributed.Client`` of the scheduler at ``address`` (``tcp://host:8786``).
+SCHEDULER_TIMEOUT = 30.0
+"""Seconds :func:`connect` waits in all for a scheduler: the connection, its first answer
+and the client's start (a server that accepts and never answers had hung ``fit
+--scheduler`` for more than 300 s)."""
 
-    Raises ValueError naming the address when it is not a scheduler address or no
-    scheduler answers there (within Dask's connect timeout,
-    ``distributed.comm.timeouts.connect``, 30 s by default), or when the scheduler has no
-    worker.
-    """
-    from dask.distributed import Client
+
+def _scheduler_host_port(address: str) -> tuple[str, str, int]:
+    """(scheme, host, port) of a scheduler address; ValueError naming it when it is not
+    one (a port outside 1-65535 among them)."""
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
 
     try:
-        client = Client(address)
+        if "://" not in address and ":" not in address:  # a word, not host:port
+            raise ValueError("no scheme and no port")
+        scheme, location = parse_address(address)
+        host, port = parse_host_port(location, default_port=8786)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(
+            f"scheduler {address!r}: not a Dask scheduler address ({exc}); expected e.g. "
+            "tcp://10.0.0.5:8786"
+        ) from None
+    if not 0 < int(port) < 65536:
+        raise ValueError(
+            f"scheduler {address!r}: port {port} is not a TCP port (1-65535); expected e.g. "
+            "tcp://10.0.0.5:8786"
+        )
+    return scheme, host, int(port)
+
+
+def _probe(address: str, host: str, port: int, deadline: float, timeout: float) -> None:
+    """Wait until ``deadline`` (time.monotonic) for the server at ``host:port`` to speak
+    first, as a Dask scheduler does (it sends its handshake when a connection opens); a
+    refused connection, silence or a closed connection is a ValueError naming the address."""
+    import socket
+    import time
+
+    def remaining() -> float:
+        return max(deadline - time.monotonic(), 0.001)
+
+    try:
+        with socket.create_connection((host, port), timeout=remaining()) as sock:
+            sock.settimeout(remaining())
+            greeting = sock.recv(1)
+    except TimeoutError:
+        raise ValueError(
+            f"scheduler {address}: no Dask scheduler answered within {timeout:g} s "
+            "(the server there accepts connections but says nothing); check the address"
+        ) from None
+    except OSError as exc:
+        raise ValueError(
+            f"scheduler {address}: no Dask scheduler answered ({exc.strerror or exc}); start "
+            "one there (`dask scheduler`) or check the address"
+        ) from None
+    if not greeting:
+        raise ValueError(
+            f"scheduler {address}: the server closed the connection without answering; "
+            "expected a Dask scheduler there (`dask scheduler`)"
+        )
+
+
+def connect(address: str, timeout: float = SCHEDULER_TIMEOUT) -> Any:
+    """A ``dask.distributed.Client`` of the scheduler at ``address`` (``tcp://host:8786``).
+
+    Raises ValueError naming the address when it is not a scheduler address (a port outside
+    1-65535), no scheduler answers there within ``timeout`` seconds in all (the TCP
+    connection, the scheduler's first answer and the client's start; a ``tcp://`` server is
+    first asked with a plain socket, so one that accepts and never answers cannot hold the
+    command), or when the scheduler has no worker.
+    """
+    import time
+
+    from dask.distributed import Client
+
+    deadline = time.monotonic() + timeout
+    scheme, host, port = _scheduler_host_port(address)
+    if scheme == "tcp":
+        _probe(address, host, port, deadline, timeout)
+    try:
+        client = Client(address, timeout=max(deadline - time.monotonic(), 1.0))
     except OSError as exc:  # TimeoutError, a refused connection
         raise ValueError(
             f"scheduler {address}: no Dask scheduler answered ({exc}); start one there "

@@ -28,6 +28,10 @@ from __future__ import annotations
 
 import html
 import unicodedata
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "printable",
@@ -43,6 +47,8 @@ __all__ = [
     "plot_text",
     "terminal",
     "identifier",
+    "csv_text",
+    "csv_frame",
     "COMMENT_LIMIT",
 ]
 
@@ -218,3 +224,49 @@ def identifier(name: object, *, default: str = "cylfric", max_length: int = 48) 
     if not text or not text[0].isalpha():
         text = f"{default}_{text}" if text else default
     return text[:max_length]
+
+
+CSV_FORMULA_START = ("=", "+", "-", "@")
+"""First characters that make a spreadsheet read a CSV cell as a formula (OWASP, "CSV
+injection"): such a cell is written with a leading ``'``."""
+
+
+def csv_text(text: object) -> object:
+    """A text cell of a CSV file cylfric writes: one line of printable characters
+    (:func:`printable`), and a leading ``'`` before ``= + - @`` so that a spreadsheet shows
+    ``=HYPERLINK(...)`` as text rather than running it. Anything but ``str`` (numbers,
+    None, NaN) is returned as it is.
+
+    >>> csv_text('=HYPERLINK(1)')
+    "'=HYPERLINK(1)"
+    >>> print(csv_text('run' + chr(27) + '[31m.txt'))
+    run\\x1b[31m.txt
+    """
+    if not isinstance(text, str):
+        return text
+    if not text.isprintable():  # C-fast test first: most names need nothing
+        text = printable(text)
+    return "'" + text if text.startswith(CSV_FORMULA_START) else text
+
+
+def csv_frame(frame: pd.DataFrame) -> pd.DataFrame:
+    """A copy of the DataFrame ``frame`` whose text cells went through :func:`csv_text`
+    (each distinct text once: a points table repeats its few file names thousands of
+    times); numeric columns untouched; ``frame`` itself when nothing changes."""
+    changed = {}
+    for name in frame.columns:
+        column = frame[name]
+        if column.dtype != object and str(column.dtype) not in ("string", "str"):
+            continue
+        texts = [v for v in column.unique() if isinstance(v, str)]
+        mapping = {v: csv_text(v) for v in texts}
+        if any(k != v for k, v in mapping.items()):
+            changed[name] = column.map(
+                lambda v, m=mapping: m.get(v, v) if isinstance(v, str) else v
+            )
+    if not changed:
+        return frame
+    out = frame.copy()
+    for name, column in changed.items():
+        out[name] = column
+    return out

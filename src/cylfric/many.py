@@ -389,14 +389,19 @@ def _run_jobs(jobs: list, order: list[int], scheduler: str | None, workers: int,
 
 def _summary_csv(rows) -> str:
     """``fit_many.csv``: a header of :data:`SUMMARY_COLUMNS`, one line per row; a missing
-    value or None is an empty field (what pandas reads as missing)."""
+    value or None is an empty field (what pandas reads as missing); text through
+    :func:`cylfric.escape.csv_text` (no formulas, no control characters)."""
+    from .escape import csv_text
+
     buffer = io.StringIO()
     writer = csv.DictWriter(
         buffer, fieldnames=SUMMARY_COLUMNS, restval="", extrasaction="ignore", lineterminator="\n"
     )
     writer.writeheader()
     for row in rows:
-        writer.writerow({key: "" if value is None else value for key, value in row.items()})
+        writer.writerow(
+            {key: "" if value is None else csv_text(value) for key, value in row.items()}
+        )
     return buffer.getvalue()
 
 

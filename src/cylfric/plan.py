@@ -304,6 +304,32 @@ def predicted_uncertainty(
     return Uncertainty(tuple(names), cov, stderr, band, float(logdet + 2 * np.log(scale).sum()))
 
 
+MAX_CANDIDATES = 20_000
+"""Most candidate runs (pressures x speeds) a plan is chosen from: the exchange holds a few
+(runs x candidates) arrays (3,000 x 3,000 candidates had taken 2.7 GB, then MemoryError);
+the default grid has 225."""
+MAX_RUNS = 5_000
+"""Most runs a plan may have (the thesis grid has 270)."""
+
+
+def _check_size(n_pressures: int, n_speeds: int, runs: int | None = None) -> None:
+    """ValueError naming the grid or the run count when a plan would not fit in memory or
+    time (:data:`MAX_CANDIDATES`, :data:`MAX_RUNS`)."""
+    if not (n_pressures >= 1 and n_speeds >= 2):
+        raise ValueError(
+            f"candidate grid {n_pressures} pressures x {n_speeds} speeds: expected at least "
+            "1 pressure and 2 speeds (--candidate-pressures, --candidate-speeds)"
+        )
+    if n_pressures * n_speeds > MAX_CANDIDATES:
+        raise ValueError(
+            f"candidate grid {n_pressures} pressures x {n_speeds} speeds = "
+            f"{n_pressures * n_speeds:,} candidates; at most {MAX_CANDIDATES:,} (the default "
+            "is 9 x 25): choose smaller --candidate-pressures and --candidate-speeds"
+        )
+    if runs is not None and not 1 <= runs <= MAX_RUNS:
+        raise ValueError(f"{runs:,} runs: expected 1 to {MAX_RUNS:,} runs (--runs)")
+
+
 def candidate_grid(
     pressure_range: tuple[float, float],
     speed_range: tuple[float, float],
@@ -313,6 +339,7 @@ def candidate_grid(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Candidate runs: ``n_pressures`` evenly spaced pressures [Pa] x ``n_speeds`` log-spaced
     speeds [m/s] over the ranges (rounded to 0.1 bar and 0.01 mm/s)."""
+    _check_size(n_pressures, n_speeds)
     p_lo, p_hi = pressure_range
     v_lo, v_hi = speed_range
     if not (0 <= p_lo <= p_hi and math.isfinite(p_hi)):
@@ -568,6 +595,7 @@ def make_plan(
     """
     from .simulate.bench import BenchSettings, run_plan
 
+    _check_size(n_pressures, n_speeds, int(runs))
     settings = settings or BenchSettings()
     model = model or FrictionModel()
     pressures, speeds = candidate_grid(

@@ -212,7 +212,9 @@ def compare(
 
     out = make_folder(out)  # a symbolic link is refused, not written through
     table = comparison_table(models, pressures, velocities, level)
-    paths = {"csv": atomic_write_text(out / "compare.csv", table.to_csv(index=False))}
+    from ..escape import csv_frame
+
+    paths = {"csv": atomic_write_text(out / "compare.csv", csv_frame(table).to_csv(index=False))}
     fig = _figure(models, pressures, velocities, level)
     for fmt in ("png", "svg"):
         buffer = io.BytesIO()

@@ -20,6 +20,7 @@ import math
 import os
 import sqlite3
 import sys
+import unicodedata
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -68,6 +69,11 @@ MIGRATIONS = (
 )
 """SQL that takes a catalogue from version ``i`` to ``i + 1`` (index ``i``)."""
 SCHEMA_VERSION = len(MIGRATIONS)
+_COLUMNS = (
+    ["name", "datasheet", "added"],
+    ["name", "datasheet", "added", "seal", "manufacturer", "bore", "rod", "fluid", "temperature"],
+)
+"""The columns of the table ``seals`` at each schema version (index: version - 1)."""
 
 METADATA = {
     "seal": ("seal", None),
@@ -91,8 +97,15 @@ def default_path() -> Path:
         return Path(env).expanduser()
     if sys.platform == "win32" and os.environ.get("LOCALAPPDATA"):
         base = Path(os.environ["LOCALAPPDATA"])
-    else:
-        base = Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share")
+    elif os.environ.get("XDG_DATA_HOME"):
+        base = Path(os.environ["XDG_DATA_HOME"])
+    elif os.environ.get("HOME") or sys.platform == "win32":
+        base = Path.home() / ".local" / "share"
+    else:  # a service or container: not the home the password database names
+        raise CatalogError(
+            f"no catalogue file given and HOME is not set; give --db FILE or set {ENV_VARIABLE}"
+            " (or XDG_DATA_HOME) to say where the catalogue is"
+        )
     return base / "cylfric" / "catalog.sqlite"
 
 
@@ -101,11 +114,19 @@ def _now() -> str:
 
 
 def _check_name(name) -> str:
+    """A catalogue name, normalised (Unicode NFKC): look-alike spellings (composed and
+    decomposed accents, full-width letters) are one name, so they cannot coexist and print
+    the same."""
     if not isinstance(name, str) or not name.strip() or name != name.strip():
         raise CatalogError(
             f"catalogue name {name!r}: expected a non-empty text without leading or trailing spaces"
         )
-    return name
+    return unicodedata.normalize("NFKC", name)
+
+
+def _key(name: object) -> object:
+    """A name as looked up: NFKC-normalised text (anything else as it is)."""
+    return unicodedata.normalize("NFKC", name) if isinstance(name, str) else name
 
 
 def _check_metadata(values: dict) -> dict:
@@ -122,9 +143,11 @@ def _check_metadata(values: dict) -> dict:
                 raise CatalogError(f"{key} = {value!r}: expected a text")
             out[key] = value
         else:
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise CatalogError(f"{key} = {value!r}: expected a number in {unit}")
             try:
                 number = float(value)
-            except (TypeError, ValueError):
+            except OverflowError:
                 raise CatalogError(f"{key} = {value!r}: expected a number in {unit}") from None
             if not math.isfinite(number) or number <= 0:
                 raise CatalogError(f"{key} = {value!r}: expected a positive number in {unit}")
@@ -144,19 +167,33 @@ def _check_metadata(values: dict) -> dict:
 
 
 def _load_datasheet(source, where=None) -> dict:
-    """A validated datasheet dict from a path (a file, or a fit folder) or a dict."""
-    from ..datasheet import read_datasheet, validate
+    """A validated datasheet dict from a path (a file, or a fit folder) or a dict, checked
+    by ``cylfric show``'s rules: the schema, and a model that can be built from it
+    (covariance shapes, numbers where numbers belong)."""
+    from ..datasheet import DatasheetError, read_datasheet, validate
+    from ..model import FrictionModel
 
     if isinstance(source, str | os.PathLike):
         path = Path(source)
         if path.is_dir():
             path = path / "datasheet.json"
-        return read_datasheet(path)
-    if isinstance(source, dict):
-        return validate(json.loads(json.dumps(source)), source=where or "datasheet")
-    raise CatalogError(
-        f"{type(source).__name__}: expected a datasheet path, a fit output folder or a dict"
-    )
+        sheet, where = read_datasheet(path), str(path)
+    elif isinstance(source, dict):
+        try:
+            copy = json.loads(json.dumps(source))
+        except (ValueError, TypeError, RecursionError) as exc:
+            raise CatalogError(f"{where or 'datasheet'}: not a JSON datasheet ({exc})") from None
+        sheet = validate(copy, source=where or "datasheet")
+    else:
+        raise CatalogError(
+            f"{type(source).__name__}: expected a datasheet path, a fit output folder or a dict"
+        )
+    try:
+        FrictionModel.from_datasheet(sheet)
+    except DatasheetError as exc:
+        message = str(exc).removeprefix("datasheet: ")
+        raise DatasheetError(f"{where or 'datasheet'}: {message}") from None
+    return sheet
 
 
 class Catalog:
@@ -185,6 +222,15 @@ class Catalog:
         self.path = Path(path).expanduser() if path is not None else default_path()
         if self.path.is_dir():
             raise CatalogError(f"{self.path}: is a folder; expected a catalogue file (.sqlite)")
+        for parent in self.path.parents:
+            if parent.exists() or parent.is_symlink():
+                if not parent.is_dir():
+                    raise CatalogError(
+                        f"{self.path}: {parent} is a file, not a folder; expected the "
+                        f"catalogue file's path (--db, {ENV_VARIABLE}) to lie in a folder"
+                    )
+                break
+        self._inspect()
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with self._connect() as db:
             self._migrate(db)
@@ -223,6 +269,48 @@ class Catalog:
                 db.execute("ROLLBACK")
                 raise
             db.execute("COMMIT")
+
+    def _inspect(self) -> None:
+        """Look at an existing file read-only before anything writes to it: an SQLite file
+        that is not a cylfric catalogue (other tables, views, indexes or triggers: a
+        trigger would run on :meth:`add`) or is not SQLite at all is refused, unchanged
+        (no WAL switch, no migration)."""
+        if not self.path.exists() or self.path.stat().st_size == 0:
+            return
+        uri = self.path.resolve().as_uri() + "?mode=ro"
+        refused = f"{self.path}: not a cylfric catalogue"
+        try:
+            db = sqlite3.connect(uri, uri=True, timeout=BUSY_TIMEOUT, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise CatalogError(f"{self.path}: cannot open the catalogue ({exc})") from None
+        try:
+            version = db.execute("PRAGMA user_version").fetchone()[0]
+            objects = db.execute("SELECT type, name FROM sqlite_master").fetchall()
+            columns = [row[1] for row in db.execute("PRAGMA table_info(seals)")]
+        except sqlite3.DatabaseError as exc:
+            raise CatalogError(
+                f"{self.path}: not a usable catalogue ({exc}); the file is left as it is"
+            ) from None
+        finally:
+            db.close()
+        if version > SCHEMA_VERSION:
+            raise CatalogError(
+                f"{self.path}: catalogue schema version {version} is newer than this cylfric "
+                f"knows ({SCHEMA_VERSION}); update cylfric"
+            )
+        known = {("table", "seals"), ("index", "sqlite_autoindex_seals_1")}
+        unknown = [f"{kind} {name!r}" for kind, name in objects if (kind, name) not in known]
+        if version == 0 and objects:
+            raise CatalogError(
+                f"{refused} (tables but no schema version); the file is left as it is"
+            )
+        if version and (unknown or columns != _COLUMNS[version - 1]):
+            found = ", ".join(unknown) if unknown else f"the columns {columns}"
+            raise CatalogError(
+                f"{refused}: it holds {found}, which a cylfric catalogue of schema version "
+                f"{version} does not (a trigger would run on every add); the file is left as "
+                "it is: use another --db, or export the entries you trust from it"
+            )
 
     def _migrate(self, db) -> None:
         version = db.execute("PRAGMA user_version").fetchone()[0]
@@ -332,7 +420,8 @@ class Catalog:
 
     def __contains__(self, name: object) -> bool:
         with self._connect() as db:
-            return db.execute("SELECT 1 FROM seals WHERE name = ?", (name,)).fetchone() is not None
+            found = db.execute("SELECT 1 FROM seals WHERE name = ?", (_key(name),)).fetchone()
+            return found is not None
 
     def __len__(self) -> int:
         with self._connect() as db:
@@ -341,7 +430,7 @@ class Catalog:
     def _row(self, name) -> sqlite3.Row:
         with self._connect() as db:
             db.row_factory = sqlite3.Row
-            row = db.execute("SELECT * FROM seals WHERE name = ?", (name,)).fetchone()
+            row = db.execute("SELECT * FROM seals WHERE name = ?", (_key(name),)).fetchone()
         if row is None:
             known = self.names()
             shown = ", ".join(repr(n) for n in known[:20]) + (" ..." if len(known) > 20 else "")
@@ -364,12 +453,21 @@ class Catalog:
         """The :class:`~cylfric.model.FrictionModel` of ``name``."""
         from ..model import FrictionModel
 
-        return FrictionModel.from_datasheet(self.get(name))
+        try:
+            sheet = self.get(name)
+            return FrictionModel.from_datasheet(sheet)
+        except (ValueError, TypeError, KeyError, RecursionError) as exc:
+            if isinstance(exc, CatalogError) and " is not in the catalogue " in str(exc):
+                raise
+            raise CatalogError(
+                f"catalogue entry {name!r} of {self.path} cannot be read ({exc}); remove or "
+                "replace it (catalog remove, catalog add --replace)"
+            ) from None
 
     def remove(self, name: str) -> None:
         """Remove ``name`` (an unknown name raises :class:`CatalogError`)."""
         with self._write() as db:
-            if not db.execute("DELETE FROM seals WHERE name = ?", (name,)).rowcount:
+            if not db.execute("DELETE FROM seals WHERE name = ?", (_key(name),)).rowcount:
                 raise CatalogError(f"{name!r} is not in the catalogue {self.path}")
 
     def list(self) -> pd.DataFrame:
@@ -390,18 +488,27 @@ class Catalog:
             rows = db.execute("SELECT * FROM seals ORDER BY name").fetchall()
         records = []
         for row in rows:
-            sheet = json.loads(row["datasheet"])
-            validity = sheet.get("validity") or {}
+            try:
+                sheet = json.loads(row["datasheet"])
+                if not isinstance(sheet, dict):
+                    raise ValueError("not a JSON object")
+                law = sheet["model"]["friction_law"]
+                rmse = sheet["fit"].get("rmse")
+                validity = sheet.get("validity") or {}
+            except (ValueError, TypeError, KeyError, AttributeError, RecursionError):
+                sheet, law, rmse, validity = {}, "unreadable", None, {}
+            if not isinstance(validity, dict):
+                validity = {}
             record = {"name": row["name"]}
             record.update({column: row[key] for key, (column, _) in METADATA.items()})
             record.update(
                 {
-                    "friction law": sheet["model"]["friction_law"],
+                    "friction law": law,
                     "pressure min [Pa]": validity.get("pressure_min", math.nan),
                     "pressure max [Pa]": validity.get("pressure_max", math.nan),
                     "velocity min [m/s]": validity.get("velocity_min", math.nan),
                     "velocity max [m/s]": validity.get("velocity_max", math.nan),
-                    "rmse [N]": sheet["fit"].get("rmse"),
+                    "rmse [N]": rmse,
                     "added": row["added"],
                 }
             )
@@ -460,9 +567,15 @@ class Catalog:
             raise CatalogError(f"pressure {pressure} Pa, velocity {velocity} m/s: not finite")
         if max_friction is not None and not max_friction > 0:
             raise CatalogError(f"max_friction = {max_friction} N: expected a positive force")
-        records = []
+        records, unreadable = [], {}
         for name in names if names is not None else self.names():
-            model = self.model(name)
+            try:
+                model = self.model(name)
+            except CatalogError as exc:
+                if names is not None:  # asked for by name: say so
+                    raise
+                unreadable[name] = str(exc)  # one bad entry does not hide the others
+                continue
             friction, lower, upper, inside = friction_with_band(
                 model, abs(velocity), pressure, level
             )
@@ -493,6 +606,7 @@ class Catalog:
             table = table[table["upper [N]"] <= max_friction]
         table = table.sort_values(["friction [N]", "name"], kind="stable").reset_index(drop=True)
         table.insert(0, "rank", range(1, len(table) + 1))
+        table.attrs["unreadable"] = unreadable
         return table
 
     def compare(

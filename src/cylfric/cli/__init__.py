@@ -71,6 +71,7 @@ def console_main() -> None:
     """
     code: str | int | None
     _arrow_system_pool()
+    _usable_streams()
     try:
         main()
         code = 0
@@ -78,6 +79,24 @@ def console_main() -> None:
         code = exc.code
     _freeze_for_exit()
     _exit_now(code)
+
+
+def _usable_streams():
+    """Standard output and error that cannot end a command in an unexpected error: a stream
+    the caller closed (``cylfric show x --json >&-``: Python's ``sys.stdout`` is None) is
+    discarded as rich discards it, and one whose encoding cannot hold a name
+    (``PYTHONIOENCODING=ascii``) writes what it cannot encode as backslash escapes."""
+    import os
+
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if stream is None:
+            setattr(sys, name, open(os.devnull, "w", encoding="utf-8"))  # noqa: SIM115
+        elif getattr(stream, "errors", None) == "strict" and hasattr(stream, "reconfigure"):
+            try:
+                "\u00e4\u2603".encode(stream.encoding or "ascii")
+            except (UnicodeEncodeError, LookupError):
+                stream.reconfigure(errors="backslashreplace")
 
 
 def _arrow_system_pool():

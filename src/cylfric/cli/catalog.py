@@ -17,6 +17,7 @@ from .common import (
     JSON_HELP,
     BadInput,
     console,
+    err_console,
     guarded,
     model_document,
     numbers,
@@ -274,6 +275,9 @@ def select(
     limit = _one(max_friction, "force", "N", "--max-friction")
     catalog = _db(db)
     ranked = catalog.select(p, v, max_friction=limit)
+    unreadable = ranked.attrs.get("unreadable", {})
+    for reason in unreadable.values():
+        err_console.print(terminal(f"warning: left out: {reason}"), highlight=False)
     if json_output:
         print_json(
             {
@@ -281,6 +285,7 @@ def select(
                 "velocity [m/s]": v,
                 "max friction [N]": limit,
                 "ranked": ranked.to_dict("records"),
+                "unreadable": unreadable,
             }
         )
         return

@@ -25,6 +25,7 @@ def _trend(source, label, out, order, campaign, quiet=False):
     if out is not None:
         import io
 
+        from ..escape import csv_frame
         from ..io.writers import atomic_write_bytes, atomic_write_text
 
         fig = figure_run_order(trend, title=f"{plot_text(label)}: friction against run order")
@@ -32,7 +33,9 @@ def _trend(source, label, out, order, campaign, quiet=False):
             buffer = io.BytesIO()
             fig.savefig(buffer, format=fmt, dpi=110)
             atomic_write_bytes(Path(out) / f"run_order_{label}.{fmt}", buffer.getvalue())
-        atomic_write_text(Path(out) / f"run_order_{label}.csv", trend.runs.to_csv(index=False))
+        atomic_write_text(
+            Path(out) / f"run_order_{label}.csv", csv_frame(trend.runs).to_csv(index=False)
+        )
     return trend
 
 

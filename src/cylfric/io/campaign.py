@@ -35,6 +35,7 @@ __all__ = [
     "CampaignConfig",
     "Duplicate",
     "find_duplicates",
+    "find_near_duplicates",
     "OilSettings",
     "RunInfo",
     "load_config",
@@ -349,7 +350,9 @@ def _label(value) -> str | None:
 
 
 class Duplicate(NamedTuple):
-    """A run file whose bytes equal an earlier run's (same SHA-256): not read, counted once.
+    """A run file whose bytes equal an earlier run's (same SHA-256), or whose samples do
+    with other header lines (``same_header`` False: :func:`find_near_duplicates`): not
+    read, counted once.
 
     ``file`` and ``original`` are relative to the campaign folder; ``seal`` is the label of
     ``file`` (None without one)."""
@@ -357,10 +360,16 @@ class Duplicate(NamedTuple):
     file: str
     original: str
     seal: str | None = None
+    same_header: bool = True
 
     @property
     def reason(self) -> str:
         """The line excluded.csv and the command line give for it."""
+        if not self.same_header:
+            return (
+                f"duplicate of {self.original} (the same samples, SHA-256 of the data block; "
+                "only the header lines differ): counted once, not read"
+            )
         return f"duplicate of {self.original} (the same bytes, SHA-256): counted once, not read"
 
 
@@ -447,6 +456,140 @@ def _copies_by_content(group: list[Path]) -> dict[Path, Path]:
     return copies
 
 
+HEAD_BYTES = 65536
+"""Most bytes read from the start of a text run to find where its header ends
+(:func:`find_near_duplicates`); a file whose header is longer is compared whole."""
+
+
+def _mark(byte: int) -> int:
+    """How :func:`_data_offset` sees a byte: ``0`` a digit, ``.`` a sign, separator or
+    letter of a number (e, NaN, inf), a space, a newline, or ``x`` anything else."""
+    char = chr(byte)
+    if char.isascii() and char.isdigit():
+        return ord("0")
+    if char in " \t\r":
+        return ord(" ")
+    if char == "\n":
+        return ord("\n")
+    return ord(".") if char in ".,;:+-eEnNaAiIfF" else ord("x")
+
+
+_MARKS = bytes(_mark(byte) for byte in range(256))
+_FIRST_ROW = re.compile(rb"^[ .]*0[0 .]*$", re.MULTILINE)
+"""A line of :data:`_MARKS` that is a row of numbers (at least one digit, nothing else)."""
+
+
+def _data_offset(head: bytes, whole: bool) -> int | None:
+    """Byte offset where the numeric block of a text run begins, from its first bytes
+    ``head`` (``whole``: the entire file): the start of the first line that is only numbers;
+    None for a binary file (NUL bytes) or a header longer than ``head``.
+
+    Everything from there on is compared, segment markers included, so a header misread
+    (a line of digits in it) can only make a near-duplicate go unfound, never make two
+    different runs one. A translation and one regular-expression search in C."""
+    if b"\x00" in head:
+        return None
+    if not whole:
+        head = head[: head.rfind(b"\n") + 1]  # a line cut off by the read is not judged
+    found = _FIRST_ROW.search(head.translate(_MARKS))
+    return None if found is None else found.start()
+
+
+def _data_key(path: Path, size: int) -> tuple[int, int, int] | None:
+    """(offset of the numeric block, its size, CRC-32 of its part within the first
+    :data:`EDGE_BYTES` bytes) of a text run, or None (binary, or no row of numbers within
+    :data:`HEAD_BYTES`). One open and, for a usual header, one read."""
+    import zlib
+
+    with open(path, "rb", buffering=0) as handle:
+        head = handle.read(min(size, EDGE_BYTES))
+        offset = _data_offset(head, whole=len(head) == size)
+        if offset is None and size > EDGE_BYTES:
+            head += handle.read(HEAD_BYTES - len(head))
+            offset = _data_offset(head, whole=len(head) == size)
+    if offset is None:
+        return None
+    return offset, size - offset, zlib.crc32(head[offset:])
+
+
+def _data_sha256(path: Path, offset: int) -> str:
+    """SHA-256 of a file's bytes from ``offset`` on (its numeric block), read in blocks."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        handle.seek(offset)
+        while block := handle.read(1 << 20):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _tail_crc(path: Path, size: int) -> int:
+    """CRC-32 of a file's last :data:`EDGE_BYTES` bytes."""
+    import zlib
+
+    with open(path, "rb", buffering=0) as handle:
+        handle.seek(max(size - EDGE_BYTES, 0))
+        return zlib.crc32(handle.read(EDGE_BYTES))
+
+
+def find_near_duplicates(paths) -> dict[Path, Path]:
+    """Text runs whose numeric block equals an earlier file's of ``paths`` while the header
+    lines may differ (a copy with a header line changed), each -> that first file.
+
+    Only the numbers are compared, never the header: each file's first 4 KiB are read to
+    find where its numbers begin (:func:`_data_offset`); files are grouped by the size of
+    that block and a CRC-32 of its first bytes, then by a CRC-32 of their last
+    :data:`EDGE_BYTES` bytes, and only files that share all three are hashed (SHA-256 of
+    the block). ``.mat`` files, binary files and headers longer than :data:`HEAD_BYTES` are
+    left to :func:`find_duplicates`. Byte-for-byte copies are found here too;
+    :class:`Campaign` asks :func:`find_duplicates` first and tells them apart.
+    """
+    groups: dict[tuple[int, int], list[tuple[Path, int, int]]] = {}
+    for path in paths:
+        path = path if isinstance(path, Path) else Path(path)
+        if path.suffix.lower() == ".mat":
+            continue
+        try:
+            size = os.stat(path).st_size
+            key = _data_key(path, size)
+        except OSError:
+            continue
+        if key is not None and key[1] > 0:
+            groups.setdefault(key[1:], []).append((path, key[0], size))
+    copies: dict[Path, Path] = {}
+    for group in groups.values():
+        if len(group) < 2:
+            continue
+        by_tail: dict[int, list[tuple[Path, int]]] = {}
+        for path, offset, size in group:
+            try:
+                by_tail.setdefault(_tail_crc(path, size), []).append((path, offset))
+            except OSError:
+                continue
+        for same in by_tail.values():
+            if len(same) > 1:
+                copies.update(_same_data(same))
+    return copies
+
+
+def _same_data(group: list[tuple[Path, int]]) -> dict[Path, Path]:
+    """Each file of ``group`` (path, offset of its numeric block) whose block's SHA-256
+    equals an earlier one's -> that earlier file."""
+    copies: dict[Path, Path] = {}
+    first: dict[str, Path] = {}
+    for path, offset in group:
+        try:
+            digest = _data_sha256(path, offset)
+        except OSError:
+            continue
+        if digest in first:
+            copies[path] = first[digest]
+        else:
+            first[digest] = path
+    return copies
+
+
 class _Manifest(dict):
     """Rows of manifest.csv, file -> (pressure [Pa], velocity [m/s], extra); ``lines``:
     file -> line number."""
@@ -458,9 +601,12 @@ class _Manifest(dict):
 
 def _quantity(value, dimension, default_unit, where):
     try:
-        return parse_quantity(str(value), dimension, default_unit=default_unit)
+        number = parse_quantity(str(value), dimension, default_unit=default_unit)
     except UnitError as exc:
         raise BenchFileError(where, f"{exc}") from None
+    if not math.isfinite(number):  # '1e400 bar', 'inf bar': no law can be fitted to it
+        raise BenchFileError(where, f"{value!r} is not a finite {dimension}")
+    return number
 
 
 def load_config(folder, file=None) -> CampaignConfig:
@@ -508,6 +654,8 @@ def load_config(folder, file=None) -> CampaignConfig:
         )
     except ValueError as exc:
         raise BenchFileError(path, str(exc), line=_line_of(path, "pressure_reference")) from None
+    for table, key, example in _UNIT_REQUIRED:
+        _check_unit_given(doc.get(table, {}), table, key, example, path)
     if cyl:
         bore = _quantity(cyl.get("bore", "0 mm"), "length", "mm", path)
         rod = _quantity(cyl.get("rod", "0 mm"), "length", "mm", path)
@@ -587,13 +735,38 @@ def load_config(folder, file=None) -> CampaignConfig:
         position_sign=float(fb.get("position_sign", 1)),
         moving_mass=moving_mass,
         force_source=force_source,
-        extraction=dict(doc.get("extraction", {})),
+        extraction={
+            key: int(value) if key in COUNT_KEYS else value
+            for key, value in doc.get("extraction", {}).items()
+        },
         source=str(path),
         roles={k: v for k, v in cols.items() if k in ROLES},
         oil=_oil(doc["oil"], path) if "oil" in doc else None,
         pressure_basis=pressure_basis,
         cylinder=cylinder,
     )
+
+
+_UNIT_REQUIRED = (
+    ("cylinder", "bore", "40 mm"),
+    ("cylinder", "rod", "28 mm"),
+    ("force_balance", "moving_mass", "12 kg"),
+)
+"""(table, key, example) of campaign.toml values that must carry their unit."""
+_BARE_NUMBER = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
+
+
+def _check_unit_given(table: dict, name: str, key: str, example: str, path: Path) -> None:
+    """Refuse ``key = "25"`` (a number without its unit, other than 0) in ``[name]``: mm or
+    m, kg or g cannot be guessed (a bore taken in the wrong one is 1000x off)."""
+    text = table.get(key)
+    if isinstance(text, str) and _BARE_NUMBER.match(text) and float(text) != 0:
+        raise BenchFileError(
+            path,
+            f"{name}.{key} = {text!r} has no unit; write the value with its unit, e.g. "
+            f'{key} = "{example}"',
+            line=_line_of(path, key),
+        )
 
 
 def _oil(table: dict, path: Path) -> OilSettings:
@@ -647,6 +820,11 @@ def _oil(table: dict, path: Path) -> OilSettings:
 
 
 _QUANTITY_TEXT = {"type": "string", "minLength": 1}
+MAX_COUNT = 1_000_000_000
+"""Largest sample count ``[extraction]`` may give (a billion samples: hours of a 100 kHz
+record)."""
+COUNT_KEYS = ("min_samples", "median_window", "skip_start", "skip_end")
+"""``[extraction]`` keys that are counts of samples, passed on as ``int``."""
 FORCE_SOURCES = ("load_cell", "pressures")
 """Values of ``[force_balance] force``: a load-cell column, or the chamber pressures times the
 areas (a rig without a load cell, such as a valve-driven axis)."""
@@ -699,11 +877,12 @@ CONFIG_SCHEMA = {
             "type": "object",
             "properties": {
                 "method": {"type": "string"},
-                # counts of samples: whole numbers (10.0 is accepted as 10)
-                "min_samples": {"type": "integer", "minimum": 1},
-                "median_window": {"type": "integer", "minimum": 1},
-                "skip_start": {"type": "integer", "minimum": 0},
-                "skip_end": {"type": "integer", "minimum": 0},
+                # counts of samples: whole numbers (10.0 is accepted as 10), at most a
+                # billion (1e12 is a float TOML calls a number, not a count of samples)
+                "min_samples": {"type": "integer", "minimum": 1, "maximum": MAX_COUNT},
+                "median_window": {"type": "integer", "minimum": 1, "maximum": MAX_COUNT},
+                "skip_start": {"type": "integer", "minimum": 0, "maximum": MAX_COUNT},
+                "skip_end": {"type": "integer", "minimum": 0, "maximum": MAX_COUNT},
                 # thresholds [-] and the velocity window [s]: positive
                 **{
                     key: {"type": "number", "exclusiveMinimum": 0}
@@ -1044,7 +1223,7 @@ def _read_manifest(folder: Path) -> _Manifest:
             line=1,
         )
     known = {*_MANIFEST_COLUMNS, *TEMPERATURE_COLUMNS}  # the columns that are not labels
-    for number, row in enumerate(reader, start=2):
+    for number, row in _manifest_rows(reader, path):
         row = {k: (v.strip() if isinstance(v, str) else v) for k, v in row.items()}
         if not any(v for k, v in row.items() if k):  # a blank line
             continue
@@ -1083,6 +1262,7 @@ def _read_manifest(folder: Path) -> _Manifest:
             )
         if not row.get("file"):
             raise BenchFileError(path, "no file name; expected one in the 'file' column", number)
+        _check_row_path(row["file"], path, number)
         if row["file"] in rows:
             raise BenchFileError(
                 path, f"{row['file']} is listed twice; expected one row per file", line=number
@@ -1090,6 +1270,51 @@ def _read_manifest(folder: Path) -> _Manifest:
         rows[row["file"]] = (pressure, velocity, extra)
         rows.lines[row["file"]] = number
     return rows
+
+
+def _check_row_path(name: str, path: Path, number: int) -> None:
+    """Refuse a manifest row whose file is absolute or climbs out of the campaign folder
+    with ``..`` (the row and line named); links are checked when the runs are listed."""
+    text = name.replace("\\", "/")
+    absolute = text.startswith("/") or re.match(r"^[A-Za-z]:", text) is not None
+    if absolute or ".." in text.split("/"):
+        problem = "is absolute" if absolute else "climbs out of the campaign folder with '..'"
+        raise BenchFileError(
+            path,
+            f"file {name!r} {problem}; a manifest row names a run file by its path relative "
+            "to the campaign folder (run_01.txt, day1/run_01.txt): copy the file into the "
+            "folder",
+            line=number,
+        )
+
+
+MANIFEST_ROWS = 200_000
+"""Most rows a manifest.csv may have (10x the largest campaign measured, 20,000 runs; a 25 MB
+manifest of missing files had taken 72 s and 2.7 GB)."""
+
+
+def _manifest_rows(reader: csv.DictReader, path: Path):
+    """(line number, row) of manifest.csv's rows after the header; a cell beyond the csv
+    module's field limit (128 KiB) or more than :data:`MANIFEST_ROWS` rows is a
+    BenchFileError naming the line."""
+    number = 1
+    try:
+        for number, row in enumerate(reader, start=2):
+            if number > MANIFEST_ROWS + 1:
+                raise BenchFileError(
+                    path,
+                    f"more than {MANIFEST_ROWS:,} rows; a manifest lists one run per row: "
+                    "split the campaign into folders (fit-many fits them one by one)",
+                    line=number,
+                )
+            yield number, row
+    except csv.Error as exc:
+        raise BenchFileError(
+            path,
+            f"not a CSV row cylfric reads ({exc}); expected short cells (file names, "
+            "numbers, labels)",
+            line=number + 1,
+        ) from None
 
 
 def _manifest_temperature(row: dict, path: Path, number: int, delimiter: str = ",") -> float | None:
@@ -1161,17 +1386,19 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     )
     runs = []
     manifest_path = folder / MANIFEST_NAME
-    for path in _candidates(folder, config, manifest):
+    boundary = _Boundary(folder)
+    for path, key in _candidates(folder, config, manifest):
         _check_encodable(path)
         name = path.name
-        pressure, velocity, extra, source, nominal = _manifest_nominal(name, manifest)
+        line = manifest.lines.get(key)
+        boundary.check(path, manifest_path if line is not None else None, line)
+        pressure, velocity, extra, source, nominal = _manifest_nominal(key, manifest)
         if pattern is not None:
             match = pattern.search(name)
             if match:
                 pressure, velocity, extra = _name_pattern_nominal(
                     path, match, pressure, velocity, extra, source, nominal
                 )
-        line = manifest.lines.get(name)
         listed = manifest_path if line is not None else None
         session = session_of(path, folder, config.glob, extra)
         if session is not None:
@@ -1184,16 +1411,73 @@ def _discover(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     return runs
 
 
-def _candidates(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list[Path]:
-    """The manifest's files matching the glob, in its order; without a manifest, the
-    folder's files matching the glob, sorted (hidden files and cylfric's own left out)."""
+def _candidates(
+    folder: Path, config: CampaignConfig, manifest: _Manifest
+) -> list[tuple[Path, str]]:
+    """(path, key) of the manifest's files matching the glob, in its order (the key: the
+    row's file as written, a path relative to the campaign folder); without a manifest, of
+    the folder's files matching the glob, sorted (the key: the path relative to the folder,
+    with ``/``; hidden files and cylfric's own left out)."""
     if manifest:  # a row for a missing file stops its run in read_run (skippable)
-        return [folder / name for name in fnmatch.filter(manifest, config.glob)]
-    return sorted(
+        return [(folder / name, name) for name in manifest if _glob_matches(name, config.glob)]
+    found = sorted(
         p
         for p in folder.glob(config.glob)
         if p.is_file() and p.name not in _SKIP_NAMES and not p.name.startswith(".")
     )
+    return [(p, _relative(p, folder)) for p in found]
+
+
+def _glob_matches(name: str, glob: str) -> bool:
+    """Whether a manifest row's file (relative to the folder) matches the campaign's glob as
+    :meth:`pathlib.Path.glob` would find it: a leading ``**/`` also matches no folder."""
+    if fnmatch.fnmatchcase(name, glob):
+        return True
+    return glob.startswith("**/") and fnmatch.fnmatchcase(name, glob[3:])
+
+
+def _relative(path: Path, folder: Path) -> str:
+    """``path`` (found below ``folder``) relative to it, with ``/`` between the parts."""
+    text, prefix = str(path), os.path.join(str(folder), "")
+    if text.startswith(prefix):  # the glob's own paths: no path arithmetic
+        return text[len(prefix) :].replace(os.sep, "/")
+    return path.relative_to(folder).as_posix()
+
+
+class _Boundary:
+    """The campaign folder as a boundary: :meth:`check` refuses a run file that resolves
+    outside it (a symbolic link, a file in a linked subfolder, a manifest row that climbs
+    out). Each folder is resolved once; a file costs one ``lstat`` unless it is a link."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.real = os.path.realpath(folder)
+        self._parents: dict[str, str] = {}
+
+    def _real(self, path: Path) -> str:
+        if os.path.islink(path):
+            return os.path.realpath(path)
+        parent = os.path.dirname(path)
+        real = self._parents.get(parent)
+        if real is None:
+            real = self._parents[parent] = os.path.realpath(parent)
+        return os.path.join(real, os.path.basename(path))
+
+    def check(self, path: Path, manifest: Path | None, line: int | None) -> None:
+        """Raise BenchFileError when ``path`` resolves outside the campaign folder, naming
+        the manifest row (``manifest``, ``line``) or the file and where it leads."""
+        real = self._real(path)
+        if real == self.real or real.startswith(os.path.join(self.real, "")):
+            return
+        shown = path.relative_to(self.folder) if path.is_relative_to(self.folder) else path
+        what = f"lists {str(shown)!r}, which" if manifest is not None else f"run file {shown}"
+        raise BenchFileError(
+            manifest if manifest is not None else self.folder,
+            f"{what} resolves to {real}, outside the campaign folder {self.real} (through "
+            "a symbolic link or '..'); run files are read from the campaign folder only: "
+            "copy the file into it",
+            line=line,
+        )
 
 
 def _manifest_nominal(name: str, manifest: _Manifest):
@@ -1239,10 +1523,13 @@ def _name_pattern_nominal(path: Path, match, pressure, velocity, extra, source, 
         try:
             value = float(text.replace(",", ".")) * scale
         except ValueError:
+            value = math.nan
+        if not math.isfinite(value) or (quantity == "pressure" and value < 0):
             raise BenchFileError(
                 path,
-                f"campaign.toml name_pattern gives {key} = {text!r}; expected a number",
-            ) from None
+                f"campaign.toml name_pattern gives {key} = {text!r}; expected a finite "
+                + ("pressure >= 0 bar" if quantity == "pressure" else "speed in mm/s"),
+            )
         nominal[quantity]["campaign.toml name_pattern"] = (value, f"{key} = {text}")
         if quantity == "pressure" and math.isnan(pressure):
             pressure = value
@@ -1289,12 +1576,11 @@ def _unlisted(folder: Path, config: CampaignConfig, manifest: _Manifest) -> list
     if not manifest:
         return []
     return sorted(
-        p.relative_to(folder).as_posix()
+        relative
         for p in folder.glob(config.glob)
-        if p.name not in manifest  # the names first: no stat and no path arithmetic for them
-        and p.name not in _SKIP_NAMES
+        if p.name not in _SKIP_NAMES
         and not p.name.startswith(".")
-        and p.relative_to(folder).as_posix() not in manifest
+        and (relative := _relative(p, folder)) not in manifest  # by path, not base name
         and p.is_file()
     )
 
@@ -1329,7 +1615,8 @@ class Campaign:
         Files matching the glob that ``manifest.csv`` does not list (not read;
         :func:`unlisted_files`).
     duplicates : tuple of Duplicate
-        Run files whose bytes equal an earlier run's (:func:`find_duplicates`): left out of
+        Run files whose bytes equal an earlier run's (:func:`find_duplicates`), or whose
+        samples do under other header lines (:func:`find_near_duplicates`): left out of
         ``runs`` (counted once), each with the file it repeats.
     """
 
@@ -1371,12 +1658,16 @@ class Campaign:
         manifest = _read_manifest(path)
         runs = _discover(path, config, manifest)
         copies = find_duplicates(info.path for info in runs)
+        near = find_near_duplicates(info.path for info in runs if info.path not in copies)
+        copies.update({copy: original for copy, original in near.items() if copy not in copies})
 
         def relative(file: Path) -> str:
             return file.relative_to(path).as_posix()
 
         duplicates = tuple(
-            Duplicate(relative(info.path), relative(copies[info.path]), info.seal)
+            Duplicate(
+                relative(info.path), relative(copies[info.path]), info.seal, info.path not in near
+            )
             for info in runs
             if info.path in copies
         )

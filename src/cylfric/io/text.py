@@ -17,6 +17,7 @@ from __future__ import annotations
 import codecs
 import hashlib
 import re
+from collections import Counter
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -530,14 +531,27 @@ def _header_before(previous, text_lines, delim, ncols):
     return None
 
 
+MAX_COLUMNS = 10_000
+"""Most columns a run file may have (a bench records tens; 30,000 took 4 s to read)."""
+
+
 def _column_roles(names, roles, path, line):
     """Quantity of each column: the ``roles`` map first, else :func:`canonical_name`.
 
-    Raises BenchFileError when a role names no column, or when two columns are measured
-    candidates for one quantity and no role chooses.
+    Raises BenchFileError when a role names no column, when two columns are measured
+    candidates for one quantity and no role chooses, or for more than :data:`MAX_COLUMNS`
+    columns.
     """
+    if len(names) > MAX_COLUMNS:
+        raise BenchFileError(
+            path,
+            f"{len(names):,} columns; a run file has at most {MAX_COLUMNS:,} (time, position, "
+            "force, pressures and a few more): export the channels of the test only",
+            line=line,
+        )
     labels = _column_labels(names)
-    repeated = {n for n in names if names.count(n) > 1}
+    counts = Counter(names)  # one pass: names.count per column was quadratic (30,000: 25 s)
+    repeated = {n for n, k in counts.items() if k > 1}
     for quantity, column in roles.items():
         if column in repeated:
             options = " or ".join(
@@ -545,7 +559,7 @@ def _column_roles(names, roles, path, line):
             )
             raise BenchFileError(
                 path,
-                f"campaign.toml [columns] {quantity} = {column!r} names {names.count(column)} "
+                f"campaign.toml [columns] {quantity} = {column!r} names {counts[column]} "
                 f"columns of that name; choose one by its place: {quantity} = {options}",
                 line=line,
             )
@@ -582,8 +596,9 @@ def _column_labels(names):
     ... by its place (``Axial Force#2``, as campaign.toml ``[columns]`` may name it)."""
     seen: dict[str, int] = {}
     labels = []
+    counts = Counter(names)
     for name in names:
-        if names.count(name) > 1:
+        if counts[name] > 1:
             seen[name] = seen.get(name, 0) + 1
             labels.append(f"{name}#{seen[name]}")
         else:

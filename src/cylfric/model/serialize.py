@@ -263,6 +263,10 @@ def _coefficient_names(parameters, default_law):
     return names
 
 
+_LARGEST_INT = 2**1023
+"""Largest integer a datasheet may hold (about 9e307, below the largest float)."""
+
+
 def _first_nonfinite(value: Any) -> tuple[list[str], float] | None:
     """(keys, number) of the first NaN or infinity in a nested JSON value, or None.
 
@@ -286,9 +290,11 @@ def _first_nonfinite(value: Any) -> tuple[list[str], float] | None:
             if found is not None:
                 found[0].append(str(index))
                 return found
-    elif isinstance(value, int | float) and not isinstance(value, bool):
-        if not math.isfinite(value):
+    elif isinstance(value, int) and not isinstance(value, bool):
+        if abs(value) > _LARGEST_INT:  # JSON allows 400 digits; a float does not
             return [], value
+    elif isinstance(value, float) and not math.isfinite(value):
+        return [], value
     return None
 
 
@@ -394,6 +400,75 @@ def _schema_problem(sheet: Any) -> str | None:
     return f"{where}: {first.message}"
 
 
+def _si_unit(declared: Any, expected: str) -> bool:
+    """Whether a declared unit names the SI unit ``expected`` (the same spelling up to
+    spaces and ``*``/``·``, or a unit of :mod:`cylfric.units` of the same dimension and
+    factor 1: ``"N s/m"`` is ``"N*s/m"``, ``"kN"`` is not ``"N"``)."""
+    from ..units import UnitError, _lookup
+
+    if not isinstance(declared, str):
+        return False
+
+    def spelled(unit: str) -> str:
+        return unit.replace(" ", "").replace("·", "*")
+
+    if spelled(declared) == spelled(expected):
+        return True
+    try:
+        found, wanted = _lookup(declared), _lookup(expected)
+    except (KeyError, UnitError):
+        return False
+    return found[0] == wanted[0] and found[1] == 1.0 == wanted[1]
+
+
+def _not_si(declared: Any) -> bool:
+    """Whether ``declared`` is a unit cylfric knows with a factor to SI other than 1 (an
+    engineering unit: kN, bar, mm/s, N/mm)."""
+    from ..units import UnitError, _lookup
+
+    if not isinstance(declared, str):
+        return True
+    try:
+        return _lookup(declared)[1] != 1.0
+    except (KeyError, UnitError):
+        return False
+
+
+def _unit_problem(sheet: dict) -> str | None:
+    """``"path: message"`` of the first declared unit that is not the SI unit the values are
+    read in, or None. A datasheet holds SI values (:data:`UNITS`); one that declares
+    ``"force": "kN"`` or ``dynamic.sigma_0.unit = "N/mm"`` is refused rather than read
+    1000x off."""
+    tables = [("units", sheet.get("units"))]
+    dynamic_fit = sheet.get("dynamic_fit")
+    if isinstance(dynamic_fit, dict):
+        tables.append(("dynamic_fit/units", dynamic_fit.get("units")))
+    for where, table in tables:
+        if table is None:
+            continue
+        if not isinstance(table, dict):
+            return f'{where}: expected an object of SI units, e.g. {{"force": "N"}}'
+        for key, declared in table.items():
+            expected = UNITS.get(key) or PARAMETER_UNITS.get(key)
+            wrong = not _si_unit(declared, expected) if expected else _not_si(declared)
+            if wrong:
+                shown = f"the SI unit {expected!r}" if expected else "an SI unit"
+                return (
+                    f"{where}/{key}: {declared!r} is not {shown}; cylfric reads a datasheet's "
+                    "values in SI (N, Pa, m/s, N/m, N*s/m) and does not convert them: "
+                    "convert the values to SI and declare the SI unit"
+                )
+    for name, entry in (sheet.get("dynamic") or {}).items():
+        expected = PARAMETER_UNITS.get(name)
+        if isinstance(entry, dict) and expected and not _si_unit(entry.get("unit"), expected):
+            return (
+                f"dynamic/{name}/unit: {entry.get('unit')!r} is not the SI unit {expected!r}; "
+                f"cylfric reads {name} in {expected} and does not convert it: convert the "
+                "value to SI and declare the SI unit"
+            )
+    return None
+
+
 def validate(sheet: dict, *, source: str = "datasheet") -> dict:
     """Raise :class:`DatasheetError` naming the first problem; return ``sheet``.
 
@@ -401,14 +476,26 @@ def validate(sheet: dict, *, source: str = "datasheet") -> dict:
     of the model over its validity range (F_c >= 0, F_s >= F_c, sigma_2 >= 0, forces below
     1e8 N).
     """
-    problem = _schema_problem(sheet)
+    try:
+        problem = _schema_problem(sheet)
+    except RecursionError:
+        problem = "(top level): arrays or objects nested too deeply to read"
     if problem:
         raise DatasheetError(f"{source}: {problem}")
-    found = _first_nonfinite({k: sheet[k] for k in sheet if k != "per_pressure"})
+    problem = _unit_problem(sheet)
+    if problem:
+        raise DatasheetError(f"{source}: {problem}")
+    found = _first_nonfinite(sheet)
     if found is not None:
         keys, number = found
         where = "/".join(reversed(keys))
-        raise DatasheetError(f"{source}: {where}: {number} is not finite; expected a number")
+        shown: object = number
+        if isinstance(number, int):
+            shown = f"an integer of {len(str(abs(number)))} digits"
+        raise DatasheetError(
+            f"{source}: {where}: {shown} is not finite; expected a finite number "
+            f"(at most {float(_LARGEST_INT):.3g} in magnitude)"
+        )
     val = sheet.get("validity")
     if val:
         for quantity, unit, scale in (("pressure", "bar", 1e5), ("velocity", "mm/s", 1e-3)):
@@ -433,8 +520,20 @@ def read_datasheet(path: StrPath) -> dict[str, Any]:
         raise DatasheetError(f"{path}: cannot read ({exc.strerror})") from None
     except UnicodeDecodeError as exc:
         raise DatasheetError(f"{path}: not UTF-8 text ({exc})") from None
+    return validate(load_json(text, str(path), DatasheetError), source=str(path))
+
+
+def load_json(text: str, source: str, error: type[ValueError] = ValueError) -> Any:
+    """JSON text parsed, or ``error`` naming ``source``: invalid JSON, arrays or objects
+    nested too deeply for the parser (100,000 levels), or a number with more digits than
+    Python converts (``int_max_str_digits``)."""
     try:
-        sheet = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as exc:
-        raise DatasheetError(f"{path}: not valid JSON ({exc})") from None
-    return validate(sheet, source=str(path))
+        raise error(f"{source}: not valid JSON ({exc})") from None
+    except RecursionError:
+        raise error(
+            f"{source}: not a datasheet: arrays or objects nested too deeply to read"
+        ) from None
+    except ValueError as exc:  # 'Exceeds the limit (4300 digits) for integer string ...'
+        raise error(f"{source}: not valid JSON here ({exc})") from None
