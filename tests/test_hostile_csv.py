@@ -66,3 +66,30 @@ def test_fit_many_summary_holds_no_formula(tmp_path):
 
     text = _summary_csv([{"campaign": "=cmd|'/C calc'!A0", "status": "ok"}])
     assert "'=cmd" in text
+
+
+def test_fit_tables_hold_no_formula(tmp_path):
+    """excluded.csv names run files relative to the campaign: a file named like a formula
+    (listed by the gate as unlisted or a duplicate) must not become one in a spreadsheet."""
+    import shutil
+
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+    from cylfric.simulate.bench import BenchSettings, generate_campaign
+
+    runner = CliRunner()
+
+    folder = tmp_path / "c"
+    generate_campaign(
+        folder, BenchSettings(pressures_bar=(10, 159), speeds_mm_s=(2, 5, 10, 20, 50, 100), seed=2)
+    )
+    first = sorted(folder.glob("*.txt"))[0]
+    shutil.copy(first, folder / "=HYPERLINK(1).txt")
+    out = tmp_path / "out"
+    done = runner.invoke(app, ["fit", str(folder), "--out", str(out), "--no-report"])
+    assert done.exit_code == 0, done.output
+    text = (out / "excluded.csv").read_text()
+    assert "'=HYPERLINK(1).txt" in text
+    cells = pd.read_csv(out / "excluded.csv")["file"].astype(str)
+    assert not cells.str.startswith(("=", "+", "-", "@")).any()

@@ -105,3 +105,33 @@ def test_nan_in_per_pressure_is_refused(tmp_path, sheet):
     path.write_text(json.dumps(sheet))  # NaN, as Python's json writes it
     with pytest.raises(DatasheetError, match="per_pressure/0/F_c: nan is not finite"):
         read_datasheet(path)
+
+
+def test_show_prints_a_per_pressure_row_without_a_level(tmp_path):
+    """A per_pressure row with F_c null (a pressure whose level was not fitted) crashed
+    `cylfric show` with an unexpected TypeError."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+    from cylfric.model import FrictionModel
+
+    sheet = FrictionModel(
+        validity={
+            "pressure_min": 1e5,
+            "pressure_max": 1e7,
+            "velocity_min": 1e-3,
+            "velocity_max": 0.1,
+        }
+    ).to_datasheet()
+    names = ("F_c", "F_s", "sigma_2", "v_r", "alpha")
+    row = {name: None for name in names} | {f"{name}_stderr": None for name in names}
+    sheet["per_pressure"] = [
+        {**row, "pressure": 5e5, "stribeck_velocity": None, "rmse": 0.0, "n_points": 0}
+    ]
+    path = tmp_path / "sheet.json"
+    path.write_text(json.dumps(sheet))
+    done = CliRunner().invoke(app, ["show", str(path)])
+    assert done.exit_code == 0, done.output
+    assert "Per pressure" in done.output

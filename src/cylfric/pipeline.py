@@ -298,7 +298,12 @@ def _csv(path, frame: pd.DataFrame, rows: int = 2048):
     """``frame`` as CSV at ``path``, ``rows`` at a time (the same text as one to_csv: pandas
     writes each value by itself; a large table is never held whole as text). 2,048 rows
     take as long as 8,192 and hold a quarter of the text and of pandas' formatted values
-    (the forked writer's peak: about 13 MB less at 40,000 points)."""
+    (the forked writer's peak: about 13 MB less at 40,000 points). Text cells go through
+    :func:`cylfric.escape.csv_frame` (control characters shown, a leading ``= + - @`` made
+    text: a run named ``=HYPERLINK(...)`` is not a formula in a spreadsheet)."""
+    from .escape import csv_frame
+
+    frame = csv_frame(frame)
 
     def chunks():
         for start in range(0, max(len(frame), 1), rows):

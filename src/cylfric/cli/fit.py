@@ -478,10 +478,10 @@ def show(
             table.add_row(
                 f"{r['pressure'] / 1e5:.3g}",
                 "-" if r["F_s"] is None else f"{r['F_s']:.1f}",
-                f"{r['F_c']:.1f}",
+                "-" if r.get("F_c") is None else f"{r['F_c']:.1f}",
                 "-" if r["sigma_2"] is None else f"{r['sigma_2'] / 1e3:.3f}",
                 "-" if vs is None else f"{vs * 1e3:.1f}",
-                f"{r['rmse']:.2f}",
+                "-" if r.get("rmse") is None else f"{r['rmse']:.2f}",
                 str(r["n_points"]),
             )
         print_table(table)
