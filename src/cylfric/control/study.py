@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._atomic import atomic_write_bytes, atomic_write_text
 from ..escape import html_text
+from ..model.names import IDENTIFY_ADVICE
 from .axis import DEFAULT_AXIS, Axis
 from .loop import (
     COMPENSATORS,
@@ -53,12 +54,6 @@ SIGMA_0_FACTORS = (0.1, 0.3, 1.0, 3.0, 10.0)
 """Factors on the datasheet's sigma_0 of the plants of the sensitivity study [-]."""
 LEVEL_FACTORS = (0.8, 1.0, 1.2)
 """Factors on the friction level (F_c, F_s, sigma_2) of the sensitivity study [-]."""
-IDENTIFY_ADVICE = (
-    "identify them from presliding and breakaway runs in the campaign (cylfric fit with "
-    "presliding tests, docs/dynamic.md) or from a short logged motion of the axis itself "
-    "(small sine around a reversal and a slow ramp)"
-)
-"""How to identify an assumed sigma_0 / sigma_1 (said wherever they are used)."""
 
 
 def dynamic_parameters(model: FrictionModel) -> dict[str, dict[str, Any]]:

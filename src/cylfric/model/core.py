@@ -48,6 +48,7 @@ from .names import (
     DYNAMIC_PARAMETERS,
     DYNAMIC_STATUS,
     FRICTION_LAWS,
+    IDENTIFY_ADVICE,
     PARAMETER_BOUNDS,
     PARAMETER_UNITS,
     PRESSURE_DEPENDENT,
@@ -578,8 +579,7 @@ class FrictionModel:
             f"assumed, not identified: {'; '.join(assumed)}. They set the presliding "
             "stiffness and damping: what a LuGre compensator, a friction observer or a "
             "simulation does at reversals, in stick-slip and at breakaway depends on them. "
-            "Identify them from presliding tests (cylfric fit with presliding runs) or from "
-            "a short logged motion of the axis itself: docs/dynamic_parameters.md"
+            f"To make them right: {IDENTIFY_ADVICE}"
         ]
 
     def __str__(self) -> str:

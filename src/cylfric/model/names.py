@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 __all__ = [
+    "IDENTIFY_ADVICE",
     "STEADY_PARAMETERS",
     "DYNAMIC_PARAMETERS",
     "PRESSURE_DEPENDENT",
@@ -65,6 +66,14 @@ reduced laws are eq. 2.7 with ``F_s = F_c`` (no Stribeck term) and, for ``coulom
 
 DYNAMIC_STATUS = ("identified", "assumed")
 """Status of ``sigma_0`` and ``sigma_1``: identified from data, or assumed (a default)."""
+
+IDENTIFY_ADVICE = (
+    "identify them from presliding runs in the campaign (cylfric fit with presliding tests) "
+    "or on the axis itself from a 10 s logged motion, a small sine around a reversal and a "
+    "slow ramp (cylfric identify-axis; docs/dynamic_parameters.md)"
+)
+"""How to identify an assumed sigma_0 / sigma_1: said wherever they are used (the model's
+:meth:`~cylfric.model.FrictionModel.assumptions`, ``cylfric control`` and its exports)."""
 
 _DEFAULT_DYNAMIC = {
     "sigma_0": (1e6, "typical of hydraulic seals (presliding F_s/sigma_0 of about 0.1 mm)"),
