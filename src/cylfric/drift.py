@@ -111,10 +111,11 @@ def fit_labels(*sources: FrictionModel | dict[str, Any] | StrPath) -> list[str]:
     for i, name in enumerate(names):
         if names.count(name) > 1:
             labels[i] = name if fallbacks[i] == name else f"{name}_{fallbacks[i]}"
-    for i, label in enumerate(labels):
-        if labels.count(label) > 1:
-            labels[i] = f"{label}-{chr(ord('a') + i)}"
-    return labels
+    shared = [labels.count(label) > 1 for label in labels]
+    return [
+        f"{label}-{chr(ord('a') + i)}" if twice else label
+        for i, (label, twice) in enumerate(zip(labels, shared, strict=True))
+    ]
 
 
 def _safe(text: str) -> str:
