@@ -905,6 +905,9 @@ class FrictionModel:
         residuals the scatter was estimated from (the curve adds its leverage on the
         scatter that is new). For "session": the cluster-robust ``se`` (each point's
         effective dof) and the Student-t quantile: a new mount shares nothing with the fit.
+        A fit whose covariance is not clustered by run (no ``influence``: the friction level
+        against pressure) has ``se`` at least the runs' share of its curve,
+        :func:`level_offset_covariance` with the run component (on its dof).
         A model without ``covariance_nonrobust`` (an older datasheet) keeps the
         cluster-robust ``se`` and the Student-t quantile for every scope. The lack of fit
         is not added: it is already in s_res and s_run (docs/uncertainty.md). A model
@@ -955,14 +958,14 @@ class FrictionModel:
                 np.where(use, part["between_dof"], np.inf),
             ),
         ]
-        mean_dof = None
+        runs_dof: np.ndarray | None = None
         if scope == "session" and self.influence is None:
             # a covariance without the runs as clusters treats the points as independent:
             # the fitted curve's share of the runs' offsets is then not in se (each level's
             # runs average them, s_run^2 / runs, spread over the law)
             runs_se = _level_offset_se(self, velocity, pressure, run=part["run"])
             if runs_se is not None:
-                mean_dof = np.where(runs_se > se, part["run_dof"], np.nan)
+                runs_dof = np.where(runs_se > se, part["run_dof"], np.nan)
                 se = np.maximum(se, runs_se)
         variance = se**2 + sum(t for t, _ in terms)
         if same_mount:  # one scale, the residuals': their dof (the point band's)
@@ -975,8 +978,8 @@ class FrictionModel:
                 else (np.inf if fit_dof is None else fit_dof),
                 dtype=float,
             )
-            if mean_dof is not None:
-                band_dof = np.where(np.isfinite(mean_dof), mean_dof, band_dof)
+            if runs_dof is not None:
+                band_dof = np.where(np.isfinite(runs_dof), runs_dof, band_dof)
             with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
                 denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
                 dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
