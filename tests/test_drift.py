@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -316,3 +318,127 @@ def test_the_command_prints_the_note(tmp_path):
     result = CliRunner().invoke(app, ["drift", str(first), str(second)])
     assert result.exit_code == 0, result.output
     assert "note: pressure laws of F_c differ" in " ".join(result.output.split())
+
+
+# --- issue 39.6: the scope a change is judged against, on the shared real data -------------
+
+REPEATABILITY = (
+    Path(__file__).resolve().parents[1] / "examples" / "zillen2021" / "repeatability.toml"
+)
+BORE = 25.7e-3  # [m] examples/zillen2021/repeatability.toml
+
+
+def _raise_friction(source: Path, target: Path, factor: float) -> None:
+    """Copy the Zillen run files of ``source`` into ``target`` with the friction times
+    ``factor``: the force column rewritten so that ``p A - F`` (friction sign(v) plus the
+    load cell's offset, the recipe's force balance) grows by ``factor`` about its offset, the
+    offset being the middle of the two directions' medians while the rod moves."""
+    area = np.pi * (BORE / 2) ** 2
+    target.mkdir(parents=True)
+    for path in sorted(source.glob("*.csv")):
+        data = np.loadtxt(path)
+        balance = data[:, 5] * 1e5 * area - data[:, 6]  # p A - F [N]
+        speed = np.gradient(-data[:, 4], data[:, 0])  # the laser grows while the rod retracts
+        moving = np.abs(speed) > 0.5 * np.percentile(np.abs(speed), 90)
+        offset = 0.5 * (
+            np.median(balance[moving & (speed > 0)]) + np.median(balance[moving & (speed < 0)])
+        )
+        data[:, 6] = data[:, 5] * 1e5 * area - (offset + factor * (balance - offset))
+        np.savetxt(target / path.name, data, fmt="%.3f", delimiter="\t")
+    shutil.copy(REPEATABILITY, target / "campaign.toml")
+
+
+@pytest.fixture(scope="module")
+def session_fits(shared_data, tmp_path_factory):
+    """Fit folders of O-ring257 sessions 1 and 3 (each alone) and of session 1 with its
+    friction raised by 30 %, through the pipeline with the repeatability recipe."""
+    import warnings
+
+    from cylfric.io.campaign import Campaign
+    from cylfric.options import FitOptions
+    from cylfric.pipeline import fit_campaign
+
+    data = shared_data / "zillen2021-pneumatic-seals" / "repeatability"
+    root = tmp_path_factory.mktemp("drift39")
+    folders = {}
+    for session in ("1", "3"):
+        folders[session] = root / f"session{session}"
+        folders[session].mkdir()
+        for path in data.glob(f"{session}_*.csv"):
+            shutil.copy(path, folders[session] / path.name)
+        shutil.copy(REPEATABILITY, folders[session] / "campaign.toml")
+    folders["raised"] = root / "raised"
+    _raise_friction(folders["1"], folders["raised"], 1.3)
+    outputs = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, folder in folders.items():
+            outputs[name] = root / f"out-{name}"
+            fit_campaign(Campaign.open(folder), outputs[name], FitOptions(report=False))
+    return outputs
+
+
+def test_two_sessions_of_one_seal_are_judged_against_the_session_scatter(session_fits):
+    # on main: "significant" slope change z = -2.62 and 10 of 25 points marked
+    table = drift(session_fits["1"] / "datasheet.json", session_fits["3"] / "datasheet.json")
+    assert table.attrs["scope"] == "session"
+    assert "sessions 1 and 3" in table.attrs["scope_reason"]
+    assert not table.attrs["verdict"]["significant"]
+    assert not table["significant"].any()
+    # the friction rows: one speed per pressure (Coulomb law on both sides), no repeats
+    friction = table[table["kind"] == "friction"]
+    assert friction["velocity [m/s]"].nunique() == 1 and friction["pressure [Pa]"].is_unique
+    # the same pair judged against the fits' standard errors alone marks the change
+    alone = drift(session_fits["1"], session_fits["3"], scope="repeatability")
+    assert alone["significant"].any()
+
+
+def test_friction_raised_by_30_percent_is_a_significant_change(session_fits):
+    table = drift(session_fits["1"], session_fits["raised"])
+    friction = table[table["kind"] == "friction"]
+    assert_allclose(friction["b"] / friction["a"], 1.3, rtol=0.03)  # the raise as made
+    # the same session (session name 1 in both): the repeatability scope
+    assert table.attrs["scope"] == "repeatability"
+    assert table.attrs["verdict"]["significant"]
+    assert friction["significant"].all()
+
+
+def test_the_command_labels_each_fit_by_its_datasheet_name(session_fits, tmp_path):
+    from typer.testing import CliRunner
+
+    from cylfric.cli import app
+
+    out = tmp_path / "drift"
+    a, b = session_fits["1"] / "datasheet.json", session_fits["3"] / "datasheet.json"
+    result = CliRunner().invoke(app, ["drift", str(a), str(b), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    assert "judged against reproducibility" in text
+    assert "no significant change at the session scope" in text
+    names = [json.loads(p.read_text())["name"] for p in (a, b)]
+    assert names[0] != names[1]
+    for name in names:  # on main: run_order_datasheet.csv, the first overwritten
+        assert (out / f"run_order_{name}.csv").exists()
+    assert not (out / "run_order_datasheet.csv").exists()
+    summary = json.loads((out / "drift.json").read_text())
+    assert summary["scope"] == "session" and summary["verdict"]["significant"] is False
+    assert summary["points"] == 5  # 5 pressures x one speed (Coulomb)
+
+
+def test_labels_are_distinct_and_a_model_without_scatter_is_judged_by_its_errors(tmp_path):
+    from cylfric.drift import fit_labels
+
+    for folder in ("monday", "tuesday"):
+        (tmp_path / folder).mkdir()
+        sheet = dict(_model().to_datasheet(), name="seal A/1")
+        (tmp_path / folder / "datasheet.json").write_text(json.dumps(sheet))
+    first, second = tmp_path / "monday" / "datasheet.json", tmp_path / "tuesday" / "datasheet.json"
+    assert fit_labels(first, second) == ["seal_A_1_monday", "seal_A_1_tuesday"]
+    assert fit_labels(first, first) == ["seal_A_1_monday-a", "seal_A_1_monday-b"]
+    table = drift(first, second)
+    assert table.attrs["scope"] == "repeatability"
+    assert "no scatter components" in table.attrs["scope_reason"]
+    with pytest.raises(ValueError, match="no scatter components.*scope 'repeatability'"):
+        drift(first, second, scope="session")
+    with pytest.raises(ValueError, match="scope = 'day': unknown"):
+        drift(first, second, scope="day")

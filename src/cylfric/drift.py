@@ -6,11 +6,19 @@ fits carry:
 
 * :func:`drift` - between two datasheets (or fit output folders) of the same cylinder: per
   coefficient and at a grid of operating points in the common validity range, the change
-  ``b - a`` and its z-score ``(b - a) / sqrt(se_a^2 + se_b^2)`` (the two fits are
-  independent). ``|z|`` above the two-sided normal quantile of ``level`` (1.96 at 95 %)
-  is marked significant. Over a grid of many points a few marks are expected by chance
-  even without drift (the points are correlated, so not exactly ``(1 - level)`` of them):
-  look at the pattern and the largest ``|z|``.
+  ``b - a`` and its z-score ``(b - a) / sqrt(u_a^2 + u_b^2)`` (the two fits are
+  independent), judged against the scope that applies. Two datasheets of *different
+  sessions* (remounted, reconnected, another day): ``u^2`` is each fit's standard error
+  plus what its sessions' offsets leave in its curve (``fit.scatter``: the session
+  component over the sessions fitted, and the runs' offsets where the fit's covariance does
+  not hold them), so a change must exceed the reproducibility (ISO 5725-6 sec. 4.2.3: the
+  critical difference of two laboratories' results); the quantile is Student-t's on the
+  session components' degrees of freedom. Two datasheets of the *same session* (the same
+  session names): ``u`` is each fit's standard error (repeatability), the quantile the
+  normal one. Over a grid of many points a few marks are expected by chance even without
+  drift: the verdict is one joint test of the coefficients' changes (Wald, F on the
+  session dof), or, when the coefficients do not compare, the largest ``|z|`` against a
+  Bonferroni quantile.
 * :func:`run_order_trend` - within one campaign: the residuals of the points against the
   campaign's own model, against run order (the ``run`` column: the order of
   ``manifest.csv`` or of the file names; or the files' modification times). The trend
@@ -45,6 +53,7 @@ if TYPE_CHECKING:
     from .model import FrictionModel
 
 __all__ = [
+    "DRIFT_SCOPES",
     "drift",
     "load_fit",
     "run_order_trend",
@@ -53,6 +62,12 @@ __all__ = [
 ]
 
 _ORDERS = ("run", "mtime")
+
+DRIFT_SCOPES = ("auto", "session", "repeatability")
+"""Scopes :func:`drift` judges a change against: ``"session"`` (the datasheets are of
+different sessions: reproducibility), ``"repeatability"`` (the same session: the fits'
+standard errors), ``"auto"`` (the same session when both datasheets name the same sessions,
+else different sessions; the fits' standard errors when a datasheet has no scatter record)."""
 
 
 def load_fit(
@@ -82,6 +97,33 @@ def load_fit(
     return model, points, label
 
 
+def fit_labels(*sources: FrictionModel | dict[str, Any] | StrPath) -> list[str]:
+    """Each fit's label for titles and file names: the datasheet's ``name`` (else the fit
+    folder's or the file's name), made distinct (the folder's name, else ``-a``, ``-b``, ...
+    added to a name two fits share) and safe as a file name (letters, digits, ``. _ -``)."""
+    names, fallbacks = [], []
+    for source in sources:
+        model, _, fallback = load_fit(source)
+        name = model.record.get("name") if isinstance(model.record.get("name"), str) else None
+        names.append(_safe(name or fallback))
+        fallbacks.append(_safe(fallback))
+    labels = list(names)
+    for i, name in enumerate(names):
+        if names.count(name) > 1:
+            labels[i] = name if fallbacks[i] == name else f"{name}_{fallbacks[i]}"
+    shared = [labels.count(label) > 1 for label in labels]
+    return [
+        f"{label}-{chr(ord('a') + i)}" if twice else label
+        for i, (label, twice) in enumerate(zip(labels, shared, strict=True))
+    ]
+
+
+def _safe(text: str) -> str:
+    """``text`` as a file-name part: other characters than letters, digits, ``. _ -`` as _."""
+    cleaned = "".join(ch if ch.isascii() and (ch.isalnum() or ch in "._-") else "_" for ch in text)
+    return cleaned.strip(".") or "fit"
+
+
 def _z(change, se_a, se_b):
     se = np.hypot(np.asarray(se_a, dtype=float), np.asarray(se_b, dtype=float))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -97,6 +139,7 @@ def drift(
     velocities: Sequence[float] | None = None,
     n: int = 5,
     level: float = 0.95,
+    scope: str = "auto",
 ) -> pd.DataFrame:
     """Change of friction between two fits of the same cylinder, with z-scores.
 
@@ -112,6 +155,11 @@ def drift(
         Grid size per axis when the points are not given.
     level : float
         Two-sided confidence level of the significance mark [-].
+    scope : {"auto", "session", "repeatability"}
+        What the change is judged against (:data:`DRIFT_SCOPES`): ``"session"`` the
+        between-session scatter each datasheet states (``fit.scatter``), ``"repeatability"``
+        the fits' standard errors only; ``"auto"``: the same session when both datasheets
+        name the same sessions, else different sessions.
 
     Returns
     -------
@@ -119,8 +167,11 @@ def drift(
         One row per coefficient (``kind`` = ``"parameter"``) and per operating point
         (``kind`` = ``"friction"``): ``quantity``, ``unit``, ``velocity [m/s]``,
         ``pressure [Pa]`` (NaN for coefficients), ``a``, ``b``, ``change``, ``stderr``
-        (of the change), ``z [-]`` and ``significant``. SI units (``unit``).
-        ``attrs["notes"]`` says which coefficients were left out and why.
+        (of the change, in the scope's sense), ``z [-]`` and ``significant``. SI units
+        (``unit``). A Coulomb law on both sides (no speed dependence) gets one speed per
+        pressure. ``attrs``: ``notes`` (which coefficients were left out and why),
+        ``scope`` and ``scope_reason``, ``level``, ``z_critical``, ``dof``, ``verdict``
+        (``significant``, ``test``, ``statistic``, ``critical``, ``p_value``).
 
     Raises
     ------
@@ -144,11 +195,21 @@ def drift(
 
     if not 0 < level < 1:
         raise ValueError(f"level = {level}: expected 0 < level < 1")
+    if scope not in DRIFT_SCOPES:
+        raise ValueError(f"scope = {scope!r}: unknown; valid: {list(DRIFT_SCOPES)}")
     model_a, _, label_a = load_fit(a)
     model_b, _, label_b = load_fit(b)
     names = (_described(a, model_a, label_a), _described(b, model_b, label_b))
     comparable, notes = _comparable(model_a, model_b, names)
-    z_crit = _normal_quantile(0.5 + level / 2)
+    scope, reason = _scope(model_a, model_b, scope, names)
+    between = {
+        "a": _session_covariance(model_a) if scope == "session" else None,
+        "b": _session_covariance(model_b) if scope == "session" else None,
+    }
+    dof = math.inf
+    if scope == "session":  # the session components' dof: the smaller of the two
+        dof = min(_session_dof(model_a), _session_dof(model_b))
+    z_crit = _quantile(0.5 + level / 2, dof)
     rows = []
     for name, pa in model_a.parameters.items():
         pb = model_b.parameters.get(name)
@@ -158,8 +219,8 @@ def drift(
             continue
         if pa.parameter in ("sigma_0", "sigma_1"):
             continue  # bristle parameters: assumed in most datasheets, not fitted
-        se_a = math.nan if pa.stderr is None else pa.stderr
-        se_b = math.nan if pb.stderr is None else pb.stderr
+        se_a = _parameter_se(model_a, name, pa.stderr, between["a"])
+        se_b = _parameter_se(model_b, name, pb.stderr, between["b"])
         change = pb.value - pa.value
         se, z = _z(change, se_a, se_b)
         rows.append(
@@ -177,6 +238,9 @@ def drift(
             }
         )
     p_grid, v_grid = _common_grid(model_a, model_b, pressures, velocities, n)
+    if velocities is None and v_grid.size > 1 and _speed_free(model_a) and _speed_free(model_b):
+        # no speed dependence on either side: one speed (the geometric middle) per pressure
+        v_grid = np.array([math.sqrt(v_grid[0] * v_grid[-1])])
     v: np.ndarray
     p: np.ndarray
     v, p = np.meshgrid(v_grid, p_grid, indexing="ij")
@@ -184,8 +248,8 @@ def drift(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ValidityWarning)
         f_a, f_b = model_a.friction(v, p), model_b.friction(v, p)
-        se_a = _friction_se(model_a, v, p)
-        se_b = _friction_se(model_b, v, p)
+        se_a = _friction_se(model_a, v, p, between["a"])
+        se_b = _friction_se(model_b, v, p, between["b"])
     se, z = _z(f_b - f_a, se_a, se_b)
     for i in range(v.size):
         rows.append(
@@ -206,8 +270,194 @@ def drift(
     table["significant"] = np.abs(table["z [-]"]) > z_crit
     table.attrs["level"] = level
     table.attrs["z_critical"] = z_crit
+    table.attrs["dof"] = None if math.isinf(dof) else dof
+    table.attrs["scope"] = scope
+    table.attrs["scope_reason"] = reason
+    table.attrs["verdict"] = _verdict(model_a, model_b, comparable, between, table, level, dof)
     table.attrs["notes"] = notes
     return table
+
+
+SCOPE_WORDS = {
+    "session": (
+        "reproducibility: the datasheets are of different sessions; each fit's standard error "
+        "and what its sessions' offsets leave in its curve (fit.scatter)"
+    ),
+    "repeatability": "repeatability: each fit's standard error only (the same session)",
+}
+"""What each scope of :func:`drift` judges a change against, as the outputs say it."""
+
+
+def _scope(model_a, model_b, scope: str, names) -> tuple[str, str]:
+    """(scope, why) of a comparison: ``"session"`` or ``"repeatability"``."""
+    sessions = [tuple((m.scatter or {}).get("session_names") or ()) for m in (model_a, model_b)]
+    missing = [name for name, m in zip(names, (model_a, model_b), strict=True) if not m.scatter]
+    if scope == "session":
+        if missing:
+            raise ValueError(
+                f"{missing[0]}: no scatter components (fit.scatter: a datasheet of an older "
+                "cylfric or a hand-made model), so the between-session scatter is not known; "
+                "refit the campaign, or compare with scope 'repeatability'"
+            )
+        return "session", "asked for (scope 'session')"
+    if scope == "repeatability":
+        return "repeatability", "asked for (scope 'repeatability')"
+    if missing:
+        return "repeatability", (
+            f"{missing[0]} has no scatter components (fit.scatter), so the between-session "
+            "scatter is not known: judged against the fits' standard errors only"
+        )
+    if sessions[0] and sessions[0] == sessions[1]:
+        return "repeatability", (
+            f"both datasheets are of session(s) {', '.join(sessions[0])} (the campaigns' "
+            "session names): the same session; give scope 'session' if they are not"
+        )
+    files = [_run_files(m) for m in (model_a, model_b)]
+    if not (sessions[0] and sessions[1]) and files[0] and files[0] == files[1]:
+        return "repeatability", (
+            f"both datasheets are of the same {len(files[0])} run files (by name): the same "
+            "session; give scope 'session' if they are not"
+        )
+    said = [", ".join(s) if s else "not named" for s in sessions]
+    return "session", (
+        f"different sessions (sessions {said[0]} and {said[1]}); give scope 'repeatability' "
+        "for two fits of the same session"
+    )
+
+
+def _run_files(model) -> tuple[str, ...]:
+    """The names of the run files a datasheet was fitted to (``fit.source.files``), sorted."""
+    files = ((model.record.get("fit") or {}).get("source") or {}).get("files") or []
+    return tuple(sorted(str(f.get("name")) for f in files if isinstance(f, dict)))
+
+
+def _session_parts(model) -> tuple[float, float, int]:
+    """(run, session, sessions) of a fit's scatter: the relative s.d. of its runs' offsets
+    that its covariance does not hold (0 when the covariance is cluster-robust by run: it
+    holds them), of its sessions' shared offset, and the number of sessions fitted."""
+    c = model.scatter["components"]
+    run = c["run"]["std_percent"] / 100.0 if model.influence is None else 0.0
+    return run, c["session"]["std_percent"] / 100.0, max(int(model.scatter.get("sessions") or 1), 1)
+
+
+def _session_covariance(model) -> np.ndarray | None:
+    """Coefficient covariance [covariance names] of what a fit's sessions (and its runs, where
+    the covariance does not hold them) leave in its curve: the sessions' shared offset over
+    the sessions fitted, each level's runs' offsets averaged, spread over the law
+    (:func:`cylfric.model.core.level_offset_covariance`); without the levels, one offset
+    shared by every level (the level-scaling coefficients F_c, F_s, sigma_2 in proportion)."""
+    from .model.core import level_offset_covariance
+
+    if model.covariance is None:
+        return None
+    run, session, sessions = _session_parts(model)
+    covariance = level_offset_covariance(model, run=run, session=session, sessions=sessions)
+    if covariance is not None:
+        return covariance
+    names = model.covariance[0]
+    values = np.array(
+        [
+            model.parameters[n].value if n.partition(".")[0] in ("F_c", "F_s", "sigma_2") else 0.0
+            for n in names
+        ],
+        dtype=float,
+    )
+    return np.outer(values, values) * (run**2 + session**2 / sessions)
+
+
+def _session_dof(model) -> float:
+    """Degrees of freedom [-] of a fit's between-session scatter (prior and estimate)."""
+    dof = model.scatter["components"]["session"].get("dof")
+    return float(dof) if dof else math.inf
+
+
+def _parameter_se(model, name, stderr, between) -> float:
+    """Standard error [SI] of coefficient ``name`` in the comparison's scope."""
+    se = math.nan if stderr is None else float(stderr)
+    if between is None or model.covariance is None or name not in model.covariance[0]:
+        return se
+    i = list(model.covariance[0]).index(name)
+    return math.sqrt((0.0 if math.isnan(se) else se**2) + max(float(between[i, i]), 0.0))
+
+
+def _speed_free(model) -> bool:
+    """Whether the model's friction does not depend on the speed (a Coulomb law)."""
+    return model.friction_law == "coulomb"
+
+
+def _quantile(q: float, dof: float) -> float:
+    """Student-t quantile on ``dof`` [-] (normal for infinite dof)."""
+    if math.isinf(dof):
+        return _normal_quantile(q)
+    from scipy.stats import t
+
+    return float(t.ppf(q, dof))
+
+
+def _verdict(model_a, model_b, comparable, between, table, level, dof) -> dict[str, Any]:
+    """One test of the whole change: Wald on the comparable coefficients (chi-square, or F on
+    the session dof), else the largest friction |z| against a Bonferroni quantile."""
+    from scipy import stats
+
+    names = _joint_names(model_a, model_b, comparable)
+    if names:
+        index_a = [list(model_a.covariance[0]).index(n) for n in names]
+        index_b = [list(model_b.covariance[0]).index(n) for n in names]
+        cov = (
+            model_a.covariance[1][np.ix_(index_a, index_a)]
+            + model_b.covariance[1][np.ix_(index_b, index_b)]
+        )
+        for side, index in (("a", index_a), ("b", index_b)):
+            if between[side] is not None:
+                cov = cov + between[side][np.ix_(index, index)]
+        delta = np.array([model_b.parameters[n].value - model_a.parameters[n].value for n in names])
+        scale = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+        scaled = cov / np.outer(scale, scale)
+        statistic = float(delta / scale @ np.linalg.pinv(scaled) @ (delta / scale))
+        k = len(names)
+        if math.isinf(dof):
+            p_value = float(stats.chi2.sf(statistic, k))
+            critical = float(stats.chi2.ppf(level, k))
+            test = f"Wald chi-square on {k} coefficients ({', '.join(names)})"
+        else:
+            p_value = float(stats.f.sf(statistic / k, k, dof))
+            critical = float(k * stats.f.ppf(level, k, dof))
+            test = f"Wald F on {k} coefficients ({', '.join(names)}), {dof:.3g} session dof"
+        return {
+            "significant": bool(statistic > critical),
+            "test": test,
+            "statistic": statistic,
+            "critical": critical,
+            "p_value": p_value,
+        }
+    friction = table[table["kind"] == "friction"]
+    z = np.abs(friction["z [-]"].to_numpy(dtype=float))
+    m = max(int(np.isfinite(z).sum()), 1)
+    critical = _quantile(1.0 - (1.0 - level) / (2 * m), dof)
+    largest = float(np.nanmax(z)) if np.isfinite(z).any() else math.nan
+    return {
+        "significant": bool(largest > critical),
+        "test": f"largest |z| of {m} operating points against Bonferroni's quantile",
+        "statistic": largest,
+        "critical": critical,
+        "p_value": None,
+    }
+
+
+def _joint_names(model_a, model_b, comparable) -> list[str]:
+    """Coefficients both fits estimated (in both covariances) that mean the same in both."""
+    if model_a.covariance is None or model_b.covariance is None:
+        return []
+    names_b = set(model_b.covariance[0])
+    return [
+        n
+        for n in model_a.covariance[0]
+        if n in names_b
+        and n.partition(".")[0] in comparable
+        and n.partition(".")[0] not in ("sigma_0", "sigma_1")
+        and model_a.parameters[n].value is not None
+        and model_b.parameters[n].value is not None
+    ]
 
 
 def _described(source, model, label) -> str:
@@ -249,10 +499,17 @@ def _comparable(model_a, model_b, names) -> tuple[set, list[str]]:
     return comparable, notes
 
 
-def _friction_se(model, v, p):
+def _friction_se(model, v, p, between=None):
+    """Standard error [N] of a fit's friction at (v [m/s], p [Pa]) in the comparison's scope:
+    the fit's own, plus its sessions' offsets (``between``, a coefficient covariance)."""
     if model.covariance is None:
         return np.full(v.shape, np.nan)
-    return model.standard_error(v, p)
+    se = model.standard_error(v, p)
+    if between is None:
+        return se
+    jac = model._jacobian(v, p)
+    extra = np.einsum("...i,ij,...j->...", jac, between, jac)
+    return np.sqrt(se**2 + np.clip(extra, 0.0, None))
 
 
 def _common_grid(model_a, model_b, pressures, velocities, n):
@@ -473,8 +730,13 @@ def write_drift(table: pd.DataFrame, out: StrPath) -> Path:
     friction = table[table["kind"] == "friction"]
     z = np.abs(friction["z [-]"].to_numpy(dtype=float))
     summary = {
+        "scope": table.attrs.get("scope"),
+        "judged_against": SCOPE_WORDS.get(table.attrs.get("scope", ""), None),
+        "scope_reason": table.attrs.get("scope_reason"),
+        "verdict": table.attrs.get("verdict"),
         "level": table.attrs.get("level"),
         "z_critical": table.attrs.get("z_critical"),
+        "dof": table.attrs.get("dof"),
         "significant_points": int(friction["significant"].sum()),
         "points": int(len(friction)),
         "max_abs_z": None if np.isnan(z).all() else float(np.nanmax(z)),  # None: no stderr

@@ -53,15 +53,28 @@ def register(app) -> None:
         campaign: Path = typer.Option(
             None, "--campaign", help="Raw-file folder of A (for --order mtime)."
         ),
+        scope: str = typer.Option(
+            "auto",
+            "--scope",
+            help="Judge the change against: session (different sessions: reproducibility), "
+            "repeatability (the same session), auto (same session names: repeatability).",
+        ),
         json_output: bool = typer.Option(False, "--json", help=JSON_HELP),
     ):
         """Change of friction between two fits (z-scores), and friction against run order.
 
-        Coefficients are compared only when both fits have the same friction law and the
-        coefficient's pressure law is the same; otherwise only the friction at operating
-        points is (a note says why). Fits whose pressure laws see different pressures
-        (reference a, b, sum, mean, max) are refused (exit 2).
+        Two fits of different sessions are judged against the between-session scatter
+        their datasheets state (reproducibility), two fits of the same session against
+        their standard errors (repeatability); the output says which. Coefficients are
+        compared only when both fits have the same friction law and the coefficient's
+        pressure law is the same; otherwise only the friction at operating points is (a
+        note says why). Fits whose pressure laws see different pressures (reference a, b,
+        sum, mean, max) are refused (exit 2).
         """
+        from ..drift import DRIFT_SCOPES
+
+        if scope not in DRIFT_SCOPES:
+            raise BadInput(f"--scope {scope}: unknown; valid: {', '.join(DRIFT_SCOPES)}")
         for path in (a, b):
             if path is not None and not path.exists():
                 raise BadInput(f"{path}: not found; expected a datasheet.json or a fit folder")
@@ -70,19 +83,19 @@ def register(app) -> None:
 
             make_folder(out)  # a symbolic link is refused (exit 2), not written through
         if b is None:
+            if scope != "auto":
+                raise BadInput("--scope applies to two fits (cylfric drift A B --scope ...)")
             _one_fit(a, out, order, campaign, json_output)
         else:
-            _two_fits(a, b, out, level, order, campaign, json_output)
-
-
-def _label(source: Path) -> str:
-    """A fit's name in titles and file names: the datasheet's stem or the folder's name."""
-    return source.stem if source.is_file() else source.name
+            _two_fits(a, b, out, level, order, campaign, json_output, scope)
 
 
 def _one_fit(a: Path, out, order: str, campaign, json_output: bool) -> None:
     """``cylfric drift A``: the run-order trend of one fit."""
-    trend = _trend(a, _label(a), out, order, campaign, quiet=json_output)
+    from ..drift import fit_labels
+
+    (label,) = fit_labels(a)
+    trend = _trend(a, label, out, order, campaign, quiet=json_output)
     if trend is None:
         raise BadInput(
             f"{a}: no points.csv beside the datasheet; the run-order trend needs a fit "
@@ -102,17 +115,20 @@ def _one_fit(a: Path, out, order: str, campaign, json_output: bool) -> None:
         )
 
 
-def _two_fits(a: Path, b: Path, out, level: float, order: str, campaign, json_output: bool):
+def _two_fits(
+    a: Path, b: Path, out, level: float, order: str, campaign, json_output: bool, scope: str
+):
     """``cylfric drift A B``: the change between two fits, then each fit's run-order trend."""
+    from ..drift import SCOPE_WORDS, fit_labels, write_drift
     from ..drift import drift as compute
-    from ..drift import write_drift
 
     if order != "run" or campaign is not None:
         raise BadInput(
             "--order and --campaign apply to one campaign (cylfric drift A --order mtime "
             "--campaign RAW); with two fits the run-order trends use the run order"
         )
-    table = compute(a, b, level=level)
+    table = compute(a, b, level=level, scope=scope)
+    labels = fit_labels(a, b)
     if json_output:
         if out is not None:
             write_drift(table, out)
@@ -120,24 +136,42 @@ def _two_fits(a: Path, b: Path, out, level: float, order: str, campaign, json_ou
             {
                 "a": a,
                 "b": b,
+                "labels": labels,
+                "scope": table.attrs["scope"],
+                "judged_against": SCOPE_WORDS[table.attrs["scope"]],
+                "scope_reason": table.attrs["scope_reason"],
+                "verdict": table.attrs["verdict"],
                 "level": level,
                 "z_critical": table.attrs.get("z_critical"),
+                "dof": table.attrs.get("dof"),
                 "notes": list(table.attrs.get("notes", [])),
                 "rows": table.to_dict("records"),
             }
         )
         return
-    _print_coefficients(table, a, b)
-    _print_friction(table, level)
+    _print_scope(table)
+    _print_coefficients(table, labels)
+    _print_friction(table, level, labels)
     if out is not None:
         write_drift(table, out)
-    for source in (a, b):
-        _trend(source, _label(source), out, "run", None)
+    for source, label in zip((a, b), labels, strict=True):
+        _trend(source, label, out, "run", None)
     if out is not None:
         console.print(terminal(f"outputs in {out}"), highlight=False)
 
 
-def _print_coefficients(table, a: Path, b: Path) -> None:
+def _print_scope(table) -> None:
+    """What the change is judged against, and why."""
+    from rich.markup import escape
+
+    from ..drift import SCOPE_WORDS
+
+    words = escape(SCOPE_WORDS[table.attrs["scope"]])
+    reason = escape(terminal(table.attrs["scope_reason"]))
+    console.print(f"[bold]judged against {words}[/bold] ({reason})", highlight=False)
+
+
+def _print_coefficients(table, labels) -> None:
     """The table of the coefficients' changes (in engineering units), then the notes."""
     from rich.markup import escape
     from rich.table import Table
@@ -145,8 +179,9 @@ def _print_coefficients(table, a: Path, b: Path) -> None:
     from ..model.core import engineering_unit
 
     params = table[table["kind"] == "parameter"]
-    view = Table(title=terminal(f"Change of the coefficients, {b.name} - {a.name}"))
-    for column in ("coefficient", "unit", "a", "b", "change", "z", "sig."):
+    first, second = labels
+    view = Table(title=terminal(f"Change of the coefficients, {second} - {first}"))
+    for column in ("coefficient", "unit", first, second, "change", "z", "sig."):
         view.add_column(escape(column), justify="right", no_wrap=True)
     for row in params.to_dict("records"):
         unit, k = engineering_unit(row["quantity"])
@@ -165,14 +200,17 @@ def _print_coefficients(table, a: Path, b: Path) -> None:
         console.print(f"[yellow]note:[/yellow] {escape(note)}", highlight=False)
 
 
-def _print_friction(table, level: float) -> None:
-    """The table of the friction's changes [N] at the operating points, and their count."""
+def _print_friction(table, level: float, labels) -> None:
+    """The table of the friction's changes [N] at the operating points, their count and the
+    verdict."""
     from rich.markup import escape
     from rich.table import Table
 
     friction = table[table["kind"] == "friction"]
     view = Table(title="Change of the friction over the common validity range")
-    for column in ("p [bar]", "v [mm/s]", "a [N]", "b [N]", "change [N]", "z", "sig."):
+    first, second = labels
+    columns = ("p [bar]", "v [mm/s]", f"{first} [N]", f"{second} [N]", "change [N]", "z", "sig.")
+    for column in columns:
         view.add_column(escape(column), justify="right")
     for row in friction.to_dict("records"):
         view.add_row(
@@ -185,9 +223,19 @@ def _print_friction(table, level: float) -> None:
             "yes" if row["significant"] else "no",
         )
     print_table(view)
+    dof = table.attrs.get("dof")
+    quantile = "normal" if dof is None else f"Student-t, {dof:.3g} dof"
     console.print(
         f"{int(friction['significant'].sum())} of {len(friction)} operating points changed "
         f"more than their uncertainty (|z| > {table.attrs['z_critical']:.2f}, "
-        f"{level:.0%} two-sided); largest |z| = {friction['z [-]'].abs().max():.2f}",
+        f"{level:.0%} two-sided, {quantile}); largest |z| = {friction['z [-]'].abs().max():.2f}",
+        highlight=False,
+    )
+    verdict = table.attrs["verdict"]
+    word = "a significant change" if verdict["significant"] else "no significant change"
+    p_value = "" if verdict["p_value"] is None else f", p = {verdict['p_value']:.3g}"
+    console.print(
+        f"[bold]{word}[/bold] at the {table.attrs['scope']} scope ({escape(verdict['test'])}: "
+        f"{verdict['statistic']:.3g} against {verdict['critical']:.3g}{p_value})",
         highlight=False,
     )

@@ -15,12 +15,15 @@ between-"laboratory" part, here between sessions: ``s_L^2 = s_run^2 + s_session^
 One session cannot show its own offset: the between-session part ``s_L`` is then a stated
 prior, :data:`SESSION_PRIOR`, calibrated on the shared real repeatability data (Zillen et
 al. 2021, three sessions of one O-ring). From two sessions on, the estimate and the prior are
-pooled as a scaled-inverse-chi-square prior updated by the estimate's degrees of freedom
-(Gelman et al., *Bayesian Data Analysis*, 3rd ed., sec. 3.3 / 5.7):
+pooled by their evidence, a scaled-inverse-chi-square prior updated by the estimate
+(Gelman et al., *Bayesian Data Analysis*, 3rd ed., sec. 3.3 / 5.7), the estimate from ``n``
+sessions on ``n - 1`` degrees of freedom (n sessions are n draws of the session effects,
+however many runs each holds):
 
-    s_L^2 = (nu0 P^2 + nu s_hat_L^2) / (nu0 + nu)
+    s_L^2 = (nu0 P^2 + (n - 1) s_hat_L^2) / (nu0 + n - 1),   dof nu0 + n - 1
 
-so that with many sessions the estimate decides. ``s_L`` is never below the run-to-run part
+so that two or three sessions that happen to agree move the prior by their weight only, and
+with many sessions the estimate decides. ``s_L`` is never below the run-to-run part
 the data show (a variance component is not negative), and the session component is what
 ``s_L`` adds to it: ``s_session^2 = s_L^2 - s_run^2``.
 
@@ -46,6 +49,8 @@ __all__ = [
     "scatter_note",
     "residual_strata",
     "residual_function",
+    "SESSION_KINDS",
+    "session_kinds",
 ]
 
 SESSION_PRIOR: dict[str, Any] = {
@@ -61,6 +66,27 @@ SESSION_PRIOR: dict[str, Any] = {
 }
 """The stated prior of the between-session scatter of a level mean, relative [%], with its
 degrees of freedom ``nu0`` [-] and basis (docs/uncertainty.md)."""
+
+SESSION_KINDS: dict[str, str] = {
+    "rerun": "re-run on the same mount (nothing taken apart)",
+    "reconnect": "rig reconnected (hoses, sensors, controller), seal left mounted",
+    "remount": "seal or cylinder taken out and mounted again",
+    "rig": "another rig (or another cylinder of the same design)",
+}
+"""The kinds of session a campaign may state (manifest.csv column ``session_kind``, or a
+``session_kind`` group of ``name_pattern``), least to most changed; the datasheet says which
+kinds the session band has seen (``fit.scatter.session_kinds``)."""
+
+_KIND_ALIASES = {
+    "rerun": "rerun",
+    "reconnect": "reconnect",
+    "reconnected": "reconnect",
+    "remount": "remount",
+    "remounted": "remount",
+    "rig": "rig",
+    "anotherrig": "rig",
+    "otherrig": "rig",
+}
 
 METHOD = (
     "linear mixed model, REML (statsmodels MixedLM): relative residuals about the fitted "
@@ -229,10 +255,11 @@ def scatter_components(
     nu0 = float(prior["dof"])
     estimated_session = math.sqrt(session_var) if sessions >= 2 else None
     if sessions >= 2:
-        # Satterthwaite dof of s_hat_L^2 = s_session^2 + s_run^2 (sessions - 1 and the runs')
+        # s_hat_L^2 = s_session^2 + s_run^2 from n sessions: n - 1 degrees of freedom (the
+        # runs' many dof are of the run-to-run part only; an earlier version took their
+        # Satterthwaite dof, and three agreeing sessions outweighed the prior)
         estimate = session_var + run_var
-        terms = session_var**2 / (sessions - 1) + run_var**2 / run_dof
-        nu = estimate**2 / terms if terms > 0 else float(sessions - 1)
+        nu = float(sessions - 1)
         between = (nu0 * prior_var + nu * estimate) / (nu0 + nu)
         between_dof = nu0 + nu
         source = "estimated+prior"
@@ -242,6 +269,7 @@ def scatter_components(
     session_var = between - run_var
     repeat, run, session = (math.sqrt(v) for v in (repeat_var, run_var, session_var))
     reproducibility = math.sqrt(repeat_var + between)
+    kinds = session_kinds(points)
     return {
         "method": METHOD if sessions >= 2 else METHOD_ONE_SESSION,
         "relative": True,
@@ -270,6 +298,79 @@ def scatter_components(
             "std_percent": 100.0 * reproducibility,
             "std_N": reproducibility * reference,
         },
+        "session_names": sorted(set(table["session"]) - {"(none)"}),
+        "session_kinds": kinds,
+        "levels": _levels(points),
+    }
+
+
+def session_kinds(points: pd.DataFrame) -> dict[str, Any]:
+    """Which kinds of session (:data:`SESSION_KINDS`) the fitted points hold.
+
+    Read from the points' ``session_kind`` column (manifest.csv or a ``name_pattern`` group);
+    each session must state one kind. Returns ``sessions`` (kind -> number of sessions; an
+    unstated kind is ``"unstated"``) and ``seen`` (the stated kinds, least to most changed).
+    Raises ValueError naming the session for an unknown kind or two kinds in one session.
+    """
+    session = (
+        points["session"].where(points["session"].notna(), "(none)").astype(str)
+        if "session" in points
+        else pd.Series("(none)", index=points.index)
+    )
+    if "session_kind" not in points:
+        stated = pd.Series(None, index=points.index, dtype=object)
+    else:
+        stated = points["session_kind"]
+    counts: dict[str, int] = {}
+    for name, group in stated.groupby(session, sort=True, dropna=False):
+        values = {str(v).strip() for v in group if v is not None and not pd.isna(v) and str(v)}
+        if len(values) > 1:
+            raise ValueError(
+                f"session {name!r}: session_kind {sorted(values)}; expected one kind per "
+                f"session (valid: {list(SESSION_KINDS)})"
+            )
+        kind = "unstated"
+        if values:
+            text = values.pop()
+            key = "".join(ch for ch in text.lower() if ch.isalnum())
+            if key not in _KIND_ALIASES:
+                raise ValueError(
+                    f"session {name!r}: session_kind {text!r} is unknown; valid: "
+                    + "; ".join(f"{k} ({v})" for k, v in SESSION_KINDS.items())
+                )
+            kind = _KIND_ALIASES[key]
+        counts[kind] = counts.get(kind, 0) + 1
+    seen = [kind for kind in SESSION_KINDS if kind in counts]
+    return {"sessions": counts, "seen": seen}
+
+
+def _levels(points: pd.DataFrame) -> dict[str, Any] | None:
+    """The pressure levels of the fitted points: ``pressure_Pa`` (each level's mean [Pa]) and
+    ``runs`` (distinct runs at each level [-]); the bands spread the runs' and the sessions'
+    relative offsets over them (:func:`cylfric.model.core.level_offset_covariance`)."""
+    if "pressure [Pa]" not in points:
+        return None
+    table = points[np.isfinite(points["friction [N]"].to_numpy(dtype=float))]
+    pressure = table["pressure [Pa]"].to_numpy(dtype=float)
+    if "level" in table:
+        key = table["level"].to_numpy()
+    else:  # the nominal levels as the pressures to 1 kPa
+        key = np.round(pressure / 1e3)
+    run = table["run"].astype(str).to_numpy() if "run" in table else np.arange(len(table))
+    session = table["session"].astype(str).to_numpy() if "session" in table else ["-"] * len(table)
+    frame = pd.DataFrame(
+        {"key": key, "p": pressure, "run": [f"{s}/{r}" for s, r in zip(session, run, strict=True)]}
+    )
+    frame = frame[np.isfinite(frame["p"])]
+    if frame.empty:
+        return None
+    grouped = frame.groupby("key", sort=True)
+    means = grouped["p"].mean()
+    runs = grouped["run"].nunique()
+    order = np.argsort(means.to_numpy())
+    return {
+        "pressure_Pa": [float(x) for x in means.to_numpy()[order]],
+        "runs": [int(x) for x in runs.to_numpy()[order]],
     }
 
 
@@ -283,6 +384,17 @@ def scatter_note(record: dict[str, Any]) -> str:
         f"({c['session']['source']}); reproducibility "
         f"{record['reproducibility']['std_percent']:.3g} % (ISO 5725-2)"
     )
+    kinds = record.get("session_kinds") or {}
+    if kinds.get("seen"):
+        text += (
+            "; the session band has seen sessions of kind "
+            + ", ".join(f"{k} ({kinds['sessions'][k]})" for k in kinds["seen"])
+            + (
+                f" and {kinds['sessions']['unstated']} of unstated kind"
+                if kinds["sessions"].get("unstated")
+                else ""
+            )
+        )
     if c["session"]["source"] == "prior":
         text += (
             f"; ASSUMPTION: one session cannot show the between-session scatter, taken as "

@@ -974,6 +974,9 @@ class FrictionModel:
         residuals the scatter was estimated from (the curve adds its leverage on the
         scatter that is new). For "session": the cluster-robust ``se`` (each point's
         effective dof) and the Student-t quantile: a new mount shares nothing with the fit.
+        A fit whose covariance is not clustered by run (no ``influence``: the friction level
+        against pressure) has ``se`` at least the runs' share of its curve,
+        :func:`level_offset_covariance` with the run component (on its dof).
         A model without ``covariance_nonrobust`` (an older datasheet) keeps the
         cluster-robust ``se`` and the Student-t quantile for every scope. The lack of fit
         is not added: it is already in s_res and s_run (docs/uncertainty.md). A model
@@ -1024,6 +1027,15 @@ class FrictionModel:
                 np.where(use, part["between_dof"], np.inf),
             ),
         ]
+        runs_dof: np.ndarray | None = None
+        if scope == "session" and self.influence is None:
+            # a covariance without the runs as clusters treats the points as independent:
+            # the fitted curve's share of the runs' offsets is then not in se (each level's
+            # runs average them, s_run^2 / runs, spread over the law)
+            runs_se = _level_offset_se(self, velocity, pressure, run=part["run"])
+            if runs_se is not None:
+                runs_dof = np.where(runs_se > se, part["run_dof"], np.nan)
+                se = np.maximum(se, runs_se)
         variance = se**2 + sum(t for t, _ in terms)
         if same_mount:  # one scale, the residuals': their dof (the point band's)
             dof = np.full(np.shape(variance), float(n_dof))
@@ -1035,6 +1047,8 @@ class FrictionModel:
                 else (np.inf if fit_dof is None else fit_dof),
                 dtype=float,
             )
+            if runs_dof is not None:
+                band_dof = np.where(np.isfinite(runs_dof), runs_dof, band_dof)
             with np.errstate(invalid="ignore", divide="ignore"):  # Welch-Satterthwaite
                 denominator = se**4 / band_dof + sum(t**2 / d for t, d in terms)
                 dof = np.where(denominator > 0, variance**2 / denominator, 1e9)
@@ -1207,7 +1221,60 @@ def _band_parts(scatter: Mapping, scope: str) -> dict[str, float]:
         "repeat_dof": float(c["repeatability"].get("dof") or np.inf),
         "between": between,
         "between_dof": between_dof,
+        "run": run,
+        "run_dof": float(c["run"].get("dof") or np.inf),
     }
+
+
+def level_offset_covariance(
+    model: FrictionModel, *, run: float, session: float, sessions: int = 1
+) -> np.ndarray | None:
+    """Covariance of the fitted coefficients [covariance names] from relative offsets of the
+    fitted pressure levels: each run's ``run`` [-] (s.d.; a level's runs average theirs) and
+    each session's ``session`` [-] (shared by every level; ``sessions`` of them averaged).
+
+    The datasheet's levels (``fit.scatter.levels``: each level's pressure and number of
+    runs) at speeds over the validity range are the design; an offset ``b_i`` of level i
+    scales the friction there, ``F(v, p_i) (1 + b_i)``, and the law's least-squares map
+    ``G = J^+`` (J the jacobian in the coefficients at the design) carries it to the
+    coefficients: ``G D Sigma_b D^T G^T``, ``D`` the design's friction on its level,
+    ``Sigma_b = diag(run^2 / runs_i) + session^2 / sessions``. None without the levels or a
+    covariance (an older datasheet, a hand-made model).
+    """
+    levels = (model.scatter or {}).get("levels") or {}
+    if model.covariance is None or not levels.get("pressure_Pa"):
+        return None
+    pressures = np.asarray(levels["pressure_Pa"], dtype=float)
+    runs = np.maximum(np.asarray(levels.get("runs") or [1] * pressures.size, dtype=float), 1.0)
+    validity = model.validity
+    if validity and validity.get("velocity_max", 0) > 0:
+        low = max(float(validity.get("velocity_min") or 0.0), 1e-6)
+        high = max(float(validity["velocity_max"]), low)
+        speeds = np.geomspace(low, high, 5) if high > low else np.array([high])
+    else:
+        speeds = np.array([0.01])
+    v, p = (a.ravel() for a in np.meshgrid(speeds, pressures, indexing="xy"))
+    level = np.repeat(np.arange(pressures.size), speeds.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        jac = model._jacobian(v, p)
+        force = np.abs(model._friction(v, p, model.coefficients(), checked=False))
+    spread = np.zeros((v.size, pressures.size))
+    spread[np.arange(v.size), level] = force
+    sigma = np.diag(run**2 / runs) + session**2 / max(int(sessions), 1)
+    mapped = np.linalg.pinv(jac) @ spread
+    return mapped @ sigma @ mapped.T
+
+
+def _level_offset_se(model, velocity, pressure, *, run: float) -> np.ndarray | None:
+    """Standard error [N] of the fitted curve from its runs' relative offsets (s.d. ``run``
+    [-]), :func:`level_offset_covariance` propagated to (velocity [m/s], pressure [Pa])."""
+    covariance = level_offset_covariance(model, run=run, session=0.0)
+    if covariance is None:
+        return None
+    v, p = np.broadcast_arrays(np.asarray(velocity, dtype=float), np.asarray(pressure, dtype=float))
+    jac = model._jacobian(np.abs(v), p)
+    return np.sqrt(np.clip(np.einsum("...i,ij,...j->...", jac, covariance, jac), 0.0, None))
 
 
 def _normal_quantile(q):
