@@ -121,7 +121,12 @@ def fit_labels(*sources: FrictionModel | dict[str, Any] | StrPath) -> list[str]:
 def _safe(text: str) -> str:
     """``text`` as a file-name part: other characters than letters, digits, ``. _ -`` as _."""
     cleaned = "".join(ch if ch.isascii() and (ch.isalnum() or ch in "._-") else "_" for ch in text)
-    return cleaned.strip(".") or "fit"
+    return cleaned.strip(".")[:LABEL_LENGTH] or "fit"
+
+
+LABEL_LENGTH = 80
+"""Longest label [characters]: a file name (``run_order_<label>.svg``) stays well below the
+file systems' 255 bytes, whatever the datasheet's name."""
 
 
 def _z(change, se_a, se_b):
@@ -726,7 +731,9 @@ def write_drift(table: pd.DataFrame, out: StrPath) -> Path:
     from .io.writers import atomic_write_text
 
     out = make_folder(out)  # a symbolic link is refused, not written through
-    path = atomic_write_text(out / "drift.csv", table.to_csv(index=False))
+    from .escape import csv_frame
+
+    path = atomic_write_text(out / "drift.csv", csv_frame(table).to_csv(index=False))
     friction = table[table["kind"] == "friction"]
     z = np.abs(friction["z [-]"].to_numpy(dtype=float))
     summary = {
