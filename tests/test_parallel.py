@@ -323,3 +323,26 @@ def test_release_free_memory_gives_freed_heap_pages_back():
     assert before - after > 150  # about 490 MB allocated, then half, then all but one freed
     assert freed - after > 100  # the freed pages were still resident before the call
     assert kept.sum() == 499500.0 and blocks[0].sum() == 1024.0
+
+
+def test_a_missing_dask_is_named_with_the_extra_to_install(monkeypatch):
+    """Dask is the optional extra 'cluster' (issue 42.7): without it, --scheduler and
+    fit-many's cluster schedulers say what to install instead of an ImportError."""
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",
+        lambda name, *a, **k: None if name == "distributed" else real(name, *a, **k),
+    )
+    from cylfric.many import _run_distributed
+
+    with pytest.raises(
+        ValueError, match=r"local-cluster needs Dask.*pip install 'cylfric\[cluster\]'"
+    ):
+        _run_distributed([], "local-cluster", 1, print)
+    from cylfric._parallel import connect
+
+    with pytest.raises(ValueError, match=r"pip install 'cylfric\[cluster\]'"):
+        connect("tcp://127.0.0.1:8786", timeout=1)

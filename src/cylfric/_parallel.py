@@ -295,9 +295,23 @@ and the client's start (a server that accepts and never answers had hung ``fit
 --scheduler`` for more than 300 s)."""
 
 
+def require_dask(what: str) -> None:
+    """ValueError naming ``what`` and the install command when Dask's distributed scheduler
+    (the optional extra ``cluster``) is not installed: only ``--scheduler`` and fit-many's
+    ``local-cluster`` / ``tcp://`` schedulers need it."""
+    import importlib.util
+
+    if importlib.util.find_spec("distributed") is None:
+        raise ValueError(
+            f"{what} needs Dask's distributed scheduler, which is not installed; install the "
+            "extra: pip install 'cylfric[cluster]'"
+        )
+
+
 def _scheduler_host_port(address: str) -> tuple[str, str, int]:
     """(scheme, host, port) of a scheduler address; ValueError naming it when it is not
     one (a port outside 1-65535 among them)."""
+    require_dask(f"scheduler {address!r}")
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
 

@@ -425,6 +425,9 @@ def _add_to_catalog(db, out: Path, name: str) -> str:
 
 
 def _run_distributed(jobs, scheduler, workers, done) -> str:
+    from ._parallel import require_dask
+
+    require_dask(f"fit-many --scheduler {scheduler}")
     from dask.distributed import Client, LocalCluster, as_completed
 
     if scheduler == "local-cluster":
