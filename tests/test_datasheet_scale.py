@@ -162,7 +162,7 @@ def test_a_non_finite_number_in_the_influence_matrix_is_named_with_its_row_and_c
     sheet["fit"]["influence"]["matrix"][345][3] = bad
     with pytest.raises(
         DatasheetError,
-        match=rf"^big\.json: fit/influence/matrix/345/3: {bad} is not finite; expected a number",
+        match=rf"^big\.json: fit/influence/matrix/345/3: {bad} is not finite; expected a finite number",
     ):
         validate(sheet, source="big.json")
 

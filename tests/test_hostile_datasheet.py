@@ -73,7 +73,11 @@ def test_arrays_nested_100000_deep_are_refused_not_a_recursion_error(tmp_path):
     path.write_text('{"notes": ' + "[" * 100_000 + "]" * 100_000 + "}")
     result = runner.invoke(app, ["show", str(path)])
     assert result.exit_code == 2, result.output
-    assert "deep.json: not a datasheet: arrays or objects nested too deeply" in result.output
+    assert "deep.json" in result.output and "unexpected" not in result.output
+    # where the parser meets Python's recursion limit: named as too deep; in a process that
+    # raised the limit (another test, a library) the JSON parses and the schema refuses it
+    said = " ".join(result.output.split())
+    assert "nested too deeply" in said or "is a required property" in said
 
 
 def test_a_400_digit_integer_is_refused_by_its_field(tmp_path, sheet):

@@ -14,7 +14,7 @@ def test_readme_tour_runs(tmp_path):
     from cylfric.simulate.bench import BenchSettings, generate_campaign
 
     text = README.read_text(encoding="utf-8")
-    tour = text.split("## A short tour in Python", 1)[1]
+    tour = text.split("## The Python route", 1)[1]
     code = re.search(r"```python\n(.*?)```", tour, re.S).group(1)
     generate_campaign(
         tmp_path / "my_campaign",

@@ -340,7 +340,17 @@ def test_progress_on_every_presliding_fit_and_breakaway_ramp(monkeypatch):
         rows = []
         for record in records:
             if record.test == "breakaway":
-                rows.append({"file": record.file, "measured [N]": 1.0, "simulated [N]": 1.0})
+                rows.append(  # validate_breakaway's columns (identify_dynamic's notes read them)
+                    {
+                        "file": record.file,
+                        "force_rate [N/s]": 50.0,
+                        "measured [N]": 1.0,
+                        "simulated [N]": 1.0,
+                        "ramp_length [s]": 2.0,
+                        "travel_reached [m]": 1e-3,
+                        "ramp_needed [s]": 0.02,
+                    }
+                )
                 if progress is not None:
                     progress(record.file)
         return pd.DataFrame(rows)
@@ -372,8 +382,15 @@ def test_validate_breakaway_reports_each_ramp(monkeypatch):
         pressure: float = 1e6
         time: np.ndarray = None  # type: ignore[assignment]
         force: np.ndarray = None  # type: ignore[assignment]
+        displacement: np.ndarray = None  # type: ignore[assignment]
+
+    from cylfric.model import FrictionModel
 
     seen = []
-    ramps = [Ramp("a.txt", time=np.arange(3.0)), Ramp("b.txt", time=np.arange(3.0))]
-    table = module.validate_breakaway(None, ramps, progress=seen.append)
+    travel = np.array([0.0, 5e-4, 1e-3])  # the rod reached the 1 mm that marks breakaway
+    ramps = [
+        Ramp("a.txt", time=np.arange(3.0), displacement=travel),
+        Ramp("b.txt", time=np.arange(3.0), displacement=travel),
+    ]
+    table = module.validate_breakaway(FrictionModel(), ramps, progress=seen.append)
     assert seen == ["a.txt", "b.txt"] and len(table) == 2

@@ -66,8 +66,7 @@ def hostile_sheet(payload: str) -> dict:
     }
     sheet["not_identified"] = {k: payload for k in sheet["not_identified"]}
     for entry in sheet["dynamic"].values():
-        entry["reason"] = payload
-        entry["unit"] = payload
+        entry["reason"] = payload  # (a unit is not free text: a non-SI one is refused, issue 43)
     component = {"std_percent": 3.0, "std_N": 2.7, "source": payload, "dof": 10}
     sheet["fit"]["scatter"] = {  # issue 22: the scatter record's texts reach every export
         "method": payload,
@@ -315,10 +314,12 @@ def test_fit_of_a_hostile_campaign_folder_exports_text_as_data(tmp_path):
     )
     assert result.exit_code == 0, result.output
     texts = _text_files(out)
-    # CSV tables hold the names verbatim as quoted fields: data, read back as they were
+    # CSV tables hold the names as data with their control characters shown (issue 43:
+    # escape.csv_text), so a spreadsheet or a terminal shows the name, not a new row
     import pandas as pd
 
     points = pd.read_csv(out / "points.csv")
-    assert any(f"run\n{MARKER}_r();" in str(name) for name in points["file"])
+    assert any(f"run\\x0a{MARKER}_r();" in str(name) for name in points["file"])
+    assert not any("\n" in str(name) for name in points["file"])
     _assert_payload_is_data({n: t for n, t in texts.items() if not n.endswith(".csv")})
     assert "<script" not in texts["report.html"].lower()

@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numba import njit
 
+from ..friction.laws import lugre_force, lugre_g
 from ..simulate.kernels import g_function, z_step
 
 if TYPE_CHECKING:
@@ -472,10 +473,12 @@ def fit_axis_lugre(
 
     def friction(values):
         s0, s1, level = math.exp(values[0]), math.exp(values[1]), values[3]
-        z, rate = bristle_trajectory(
-            velocity, h, s0, level * law["F_c"], level * law["F_s"], law["v_r"], law["alpha"]
+        F_c, F_s = level * law["F_c"], level * law["F_s"]
+        z, _ = bristle_trajectory(velocity, h, s0, F_c, F_s, law["v_r"], law["alpha"])
+        force = lugre_force(  # thesis eq. 2.5, the friction library's
+            velocity, z, s0, s1, level * law["sigma_2"], F_c, F_s, law["v_r"], alpha=law["alpha"]
         )
-        return s0 * z + s1 * rate + level * law["sigma_2"] * velocity, z
+        return np.asarray(force, dtype=float), z
 
     def residual(theta):
         values = expand(theta)
@@ -520,9 +523,9 @@ def fit_axis_lugre(
     }
     model_friction, z = friction(theta)
     level = theta[3]
-    speed = np.abs(velocity)  # g(v) of eq. 2.5 at the fitted level
-    decay = np.exp(-((speed / law["v_r"]) ** law["alpha"]))
-    g = level * (law["F_c"] + (law["F_s"] - law["F_c"]) * decay)
+    g = level * np.asarray(  # g(v) of eq. 2.5 at the fitted level
+        lugre_g(velocity, law["F_c"], law["F_s"], law["v_r"], alpha=law["alpha"]), dtype=float
+    )
     moving = np.abs(np.diff(position, prepend=position[0])) > 0.0
     unsaturated = np.abs(z) * s0 < PRESLIDING_SATURATION * g
     presliding = unsaturated & moving & (np.abs(velocity) > 1e-7)
