@@ -15,7 +15,6 @@ import argparse
 import json
 import math
 import os
-import platform
 import shutil
 import sys
 import tempfile
@@ -157,30 +156,47 @@ def one_day(keep: bool = False) -> dict:
             shutil.rmtree(folder, ignore_errors=True)
 
 
+def bench_field(draws: int | None = None, skip_day: bool = False) -> dict:
+    """The ``field`` section of ``make bench`` (``benchmarks/run.py field``): ``draws``
+    (default ``CYLFRIC_FIELD_DRAWS`` or 20) pairs of days, then one day of logs, on one core
+    (the affinity is put back after); writes benchmarks/results/field.json."""
+    from run import _save
+
+    if draws is None:
+        draws = int(os.environ.get("CYLFRIC_FIELD_DRAWS", "20"))
+    earlier = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    affinity = os.sched_getaffinity(0) if hasattr(os, "sched_setaffinity") else None
+    if affinity is not None:
+        os.sched_setaffinity(0, {sorted(affinity)[0]})  # one core
+    try:
+        result = {
+            "python": sys.version.split()[0],
+            "cores used": 1,
+            "truth": {"F_c [N]": SETTINGS.F_c, "F_v [N*s/m]": SETTINGS.F_v},
+        }
+        if draws:
+            result["change_and_accuracy"] = change_and_accuracy(draws)
+        elif "change_and_accuracy" in earlier:  # draws 0: keep the last run's draws
+            result["change_and_accuracy"] = earlier["change_and_accuracy"]
+        if not skip_day:
+            result["one_day"] = one_day()
+        elif "one_day" in earlier:
+            result["one_day"] = earlier["one_day"]  # the last run's
+    finally:
+        if affinity is not None:
+            os.sched_setaffinity(0, affinity)
+    return _save("field", result)
+
+
+SECTIONS = {"field": bench_field}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--draws", type=int, default=20)
     parser.add_argument("--skip-day", action="store_true")
     args = parser.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
-    result = {
-        "python": sys.version.split()[0],
-        "machine": platform.machine(),
-        "cores used": 1,
-        "truth": {"F_c [N]": SETTINGS.F_c, "F_v [N*s/m]": SETTINGS.F_v},
-    }
-    if args.draws:
-        result["change_and_accuracy"] = change_and_accuracy(args.draws)
-    elif RESULTS.is_file():  # --draws 0: keep the last run's draws
-        result["change_and_accuracy"] = json.loads(RESULTS.read_text())["change_and_accuracy"]
-    if not args.skip_day:
-        result["one_day"] = one_day()
-    elif RESULTS.is_file() and "one_day" in json.loads(RESULTS.read_text()):
-        result["one_day"] = json.loads(RESULTS.read_text())["one_day"]  # the last run's
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
-    print(json.dumps(result, indent=2))
+    print(json.dumps(bench_field(args.draws, args.skip_day), indent=2))
 
 
 if __name__ == "__main__":
