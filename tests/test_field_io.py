@@ -216,6 +216,12 @@ def test_generate_and_fit_field_end_to_end(tmp_path):
     assert all(0 < p["difference [%]"] < 15 for p in comparison["points"])
     days = {log["day"] for log in truth["logs"].values()}
     assert len(document["trend"]["days"]) == len(days) == 2
+    # the summary states its units (field.json is SI; the terminal engineering units)
+    shown = runner.invoke(
+        app, ["fit-field", *files, "--config", str(logs / "field.toml"), "--out", str(out)]
+    )
+    assert shown.exit_code == 0, shown.output
+    assert " N\n" in shown.output and "N*s/mm" in shown.output
     # the output folder is replaced whole (cylfric._outfolder): a file of the user's in it
     # stops the next fit-field, named, and is kept
     (out / "notes.txt").write_text("mine\n")

@@ -389,13 +389,18 @@ def _report(fit, document, figures) -> str:
     return "\n".join(parts) + "\n"
 
 
+SUMMARY_UNITS = {"F_c": ("N", 1.0), "F_v": ("N*s/mm", 1e-3), "k_p": ("N/bar", 1e5)}
+"""The summary's engineering units and factors from SI (N, N*s/m, N/Pa): field.json is SI."""
+
+
 def _summary(fit, out) -> None:
-    for name in ("F_c", "F_v", "k_p"):
+    for name, (unit, factor) in SUMMARY_UNITS.items():
         value, se = fit.parameters[name], fit.stderr[name]
         if value is None:
             console.print(terminal(f"{name}: {fit.status[name]}", markup=False), markup=False)
         else:
-            console.print(f"{name} = {value:.5g} ± {se:.2g}")
+            shown = f"{name} = {value * factor:.5g} ± {se * factor:.2g} {unit}"
+            console.print(terminal(shown, markup=False), markup=False)
     for c in fit.cross_check:
         console.print(
             f"cross-check at {1e3 * c['speed [m/s]']:.3g} mm/s: {c['friction [N]']:.4g} ± "
