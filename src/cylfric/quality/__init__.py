@@ -427,11 +427,20 @@ def _transients(
     ]
     keys = ["_p", "_v", "direction [-]", *labels]
     cells = cells.assign(**{k: cells[k].astype(str) for k in keys})
+    # the cells numbered in key order, as groupby iterates them; only those with min_points
+    # windows can be judged, and one pass of numpy slices visits them (a pandas group per
+    # cell cost about 1 ms: seconds at a campaign of 20,000 runs with one window per cell)
+    codes = cells.groupby(keys, dropna=False).ngroup().to_numpy()
+    judged = np.flatnonzero(np.bincount(codes)[codes] >= min_points)
+    if judged.size == 0:
+        return []
+    order = judged[np.argsort(codes[judged], kind="stable")]  # each cell's rows in order
+    all_friction = cells["friction [N]"].to_numpy(float)
+    all_duration = (cells["window_end [s]"] - cells["window_start [s]"]).to_numpy(float)
+    all_index = cells.index.to_numpy()
     found = []
-    for _, cell in cells.groupby(keys, dropna=False):
-        friction = cell["friction [N]"].to_numpy(float)
-        duration = (cell["window_end [s]"] - cell["window_start [s]"]).to_numpy(float)
-        index = cell.index.to_numpy()
+    for rows in np.split(order, np.flatnonzero(np.diff(codes[order])) + 1):
+        friction, duration, index = all_friction[rows], all_duration[rows], all_index[rows]
         keep = np.isfinite(friction)
         while keep.sum() >= min_points:
             values = friction[keep]
