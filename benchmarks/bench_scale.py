@@ -1,9 +1,12 @@
 """Benchmark ``cylfric fit`` at scale (issue 27): 1,000 / 5,000 / 20,000 runs.
 
 Campaigns: 200 distinct virtual-bench runs (10 pressures x 20 speeds, the clean bench)
-replicated to the size wanted; each copy gets its own ``Test Run Name`` header line, so no
-two files have the same bytes (cylfric leaves SHA-256 duplicates out) while every size has
-the same mixture of runs (per-run costs comparable across sizes).
+replicated to the size wanted; each copy gets its own ``Test Run Name`` header line and its
+own closing status line (``Test run ended (copy N)``), so no two files have the same bytes
+nor the same data block (cylfric leaves exact and near-duplicates out: same samples under
+another header) while every size has the same mixture of runs (per-run costs comparable
+across sizes). Until 2026-12-06 only the header differed; a cylfric with the near-duplicate
+check then fitted the 200 distinct runs alone.
 
 Measured per size, each command a fresh process, in one run (ratios at one machine load):
 
@@ -74,6 +77,9 @@ def make_campaign(folder: Path, n: int, base: list[tuple[bytes, float, float]]) 
         name = f"run_{index:05d}_p{pressure:g}bar_v{speed:g}mms.txt"
         head, rest = data.split(b"Test Run Name: ", 1)
         rest = rest.split(b"\n", 1)[1]
+        # the closing status line carries the copy's number too: a copy whose samples and
+        # closing line equal another's is a near-duplicate cylfric leaves out (issue 43)
+        rest = rest.replace(b"Test run ended", f"Test run ended (copy {index})".encode(), 1)
         text = head + f"Test Run Name: {name[:-4]}\n".encode() + rest
         (folder / name).write_bytes(text)
         total += len(text)
