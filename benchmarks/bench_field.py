@@ -24,8 +24,14 @@ from pathlib import Path
 import numpy as np
 
 from cylfric.identify.field import fit_field
-from cylfric.io.fieldlog import FieldConfig, FieldRecord, load_field_config, read_field_logs
-from cylfric.simulate.field_bench import FieldSettings, field_toml, simulate_log, write_log
+from cylfric.io.fieldlog import FieldConfig, load_field_config, read_field_logs
+from cylfric.simulate.field_bench import (
+    FieldSettings,
+    field_records,
+    field_toml,
+    simulate_log,
+    write_log,
+)
 
 RESULTS = Path(__file__).parent / "results" / "field.json"
 SETTINGS = FieldSettings()
@@ -33,30 +39,7 @@ CONFIG = FieldConfig(bore=SETTINGS.crane.bore, rod=SETTINGS.crane.rod)
 
 
 def _records(scales, seed, duration=300.0, logs_per_day=2):
-    records, truths = [], []
-    for d, scale in enumerate(scales):
-        for j in range(logs_per_day):
-            log = simulate_log(
-                SETTINGS,
-                duration=duration,
-                payload=SETTINGS.payloads[j % len(SETTINGS.payloads)],
-                friction_scale=scale,
-                seed=seed + 10 * d + j,
-            )
-            records.append(
-                FieldRecord(
-                    f"d{d}l{j}",
-                    f"day{d}",
-                    log.time,
-                    log.position,
-                    log.pressure_a,
-                    log.pressure_b,
-                    log.valve,
-                    {"kind": "memory"},
-                )
-            )
-            truths.append(log.truth)
-    return records, truths
+    return field_records(SETTINGS, scales, duration=duration, seed=seed, logs_per_day=logs_per_day)
 
 
 def _truth(speed, scale=1.0):

@@ -17,14 +17,7 @@ import numpy as np
 import pytest
 
 from cylfric.control.axis import load_axis
-from cylfric.control.kernel import (
-    COMPENSATOR_CODES,
-    COMPENSATOR_STATE,
-    REFERENCE_CODES,
-    compensator_step,
-    friction_table,
-)
-from cylfric.control.loop import compensator_constants, make_reference, simulate_loop
+from cylfric.control.loop import compensator_function, make_reference, simulate_loop
 from cylfric.control.reference_loop import (
     ReferenceAxis,
     ReferenceSeal,
@@ -56,21 +49,6 @@ def _model(seal: dict) -> FrictionModel:
     return FrictionModel(coefficients, reference="sum")
 
 
-def _step(model, axis):
-    """cylfric's compensator step (kind lugre) as a per-sample callable."""
-    table, rule = friction_table(model), REFERENCE_CODES[model.reference]
-    ctrl, vector = compensator_constants(model, axis), axis.vector()
-    state = np.zeros(len(COMPENSATOR_STATE))
-
-    def step(x, pa, pb, x_ref, v_ref):
-        return compensator_step(
-            COMPENSATOR_CODES["lugre"], table, rule, ctrl, vector, state, x, pa, pb, x_ref,
-            v_ref, 0.0,
-        )  # fmt: skip
-
-    return step
-
-
 def _both(axis, seal: dict, duration: float = 3.0) -> dict[str, tuple[float, float]]:
     model = _model(seal)
     reference = make_reference("sine", axis, duration=duration)
@@ -84,7 +62,7 @@ def _both(axis, seal: dict, duration: float = 3.0) -> dict[str, tuple[float, flo
     for name in ("none", "oracle", "lugre"):
         run = simulate_loop(model, name, axis=axis, reference=reference, tuning=tuning)
         ours = float(np.sqrt(np.mean(run.error**2)))
-        compensator = _step(model, axis) if name == "lugre" else name
+        compensator = compensator_function(model, axis) if name == "lugre" else name
         theirs = run_reference(
             ref_axis, ref_seal, reference.position, reference.velocity,
             compensator=compensator, tuning=ref_tuning,

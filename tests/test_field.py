@@ -22,6 +22,7 @@ from cylfric.simulate.field_bench import (
     Crane,
     FieldSettings,
     crane_geometry,
+    field_records,
     simulate_log,
 )
 
@@ -31,30 +32,7 @@ CONFIG = FieldConfig(bore=SETTINGS.crane.bore, rod=SETTINGS.crane.rod)
 
 def _records(settings, days, duration=300.0, seed=0, logs_per_day=2):
     """days: friction scale per day; returns (records, truths)."""
-    records, truths = [], []
-    for d, scale in enumerate(days):
-        for j in range(logs_per_day):
-            log = simulate_log(
-                settings,
-                duration=duration,
-                payload=settings.payloads[j % len(settings.payloads)],
-                friction_scale=scale,
-                seed=seed + 10 * d + j,
-            )
-            records.append(
-                FieldRecord(
-                    f"d{d}l{j}",
-                    f"day{d}",
-                    log.time,
-                    log.position,
-                    log.pressure_a,
-                    log.pressure_b,
-                    log.valve,
-                    {"kind": "memory"},
-                )
-            )
-            truths.append(log.truth)
-    return records, truths
+    return field_records(settings, days, duration=duration, seed=seed, logs_per_day=logs_per_day)
 
 
 def _true_friction(settings, speed, scale=1.0):

@@ -16,14 +16,12 @@ from pathlib import Path
 import numpy as np
 
 from cylfric.control.axis import load_axis
-from cylfric.control.kernel import (
-    COMPENSATOR_CODES,
-    COMPENSATOR_STATE,
-    REFERENCE_CODES,
-    compensator_step,
-    friction_table,
+from cylfric.control.loop import (
+    PlantFriction,
+    compensator_function,
+    make_reference,
+    simulate_loop,
 )
-from cylfric.control.loop import PlantFriction, compensator_constants, make_reference, simulate_loop
 from cylfric.control.reference_loop import (
     ReferenceAxis,
     ReferenceSeal,
@@ -51,19 +49,6 @@ def model_of(seal, sigma_0=None, sigma_1=None):
     )  # fmt: skip
 
 
-def step_of(model, axis, force_filter=0.0):
-    table, rule = friction_table(model), REFERENCE_CODES[model.reference]
-    ctrl = compensator_constants(model, axis, force_filter=force_filter)
-    vector = axis.vector()
-    state = np.zeros(len(COMPENSATOR_STATE))
-
-    def step(x, pa, pb, x_ref, v_ref):
-        return compensator_step(COMPENSATOR_CODES["lugre"], table, rule, ctrl, vector, state,
-                                x, pa, pb, x_ref, v_ref, 0.0)  # fmt: skip
-
-    return step
-
-
 def rows(axis, seconds, datasheet, level=1.0, force_filter=0.0):
     model = model_of(SEAL)  # the plant
     ref = make_reference("sine", axis, duration=seconds)
@@ -86,7 +71,11 @@ def rows(axis, seconds, datasheet, level=1.0, force_filter=0.0):
     cases = (("none", "none", "force"), ("oracle", "oracle", "force"),
              ("lugre", None, "force"), ("lugre command", None, "command"))  # fmt: skip
     for name, comp, path in cases:
-        comp = step_of(datasheet, axis, force_filter) if comp is None else comp
+        comp = (
+            compensator_function(datasheet, axis, force_filter=force_filter)
+            if comp is None
+            else comp
+        )
         theirs[name] = run_reference(rax, rseal, ref.position, ref.velocity, compensator=comp,
                                      path=path, tuning=rt).rms_error  # fmt: skip
     return ours, theirs

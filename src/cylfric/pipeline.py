@@ -205,13 +205,8 @@ class FitResult:
             staging, outputs = _outfolder.staged(
                 out, lambda staging: self._write_into(staging, **how), locked=locked
             )
-        except ExportFailed as failure:  # name the campaign and the (untouched) output folder
-            kept = "keeps its earlier contents" if out.exists() else "was not created"
-            raise ExportFailed(
-                f"{folder}: {failure}. Nothing was written (--out {out} {kept}); fit without "
-                f"--export {failure.target} to get the datasheet and the other outputs",
-                failure.target,
-            ) from failure.__cause__
+        except ExportFailed as failure:
+            raise failure.named(folder, out) from failure.__cause__
         return _moved(staging, outputs, out, out)
 
     def _write_into(
@@ -488,6 +483,16 @@ class ExportFailed(ValueError):
 
     def __str__(self):
         return self.args[0]
+
+    def named(self, folder, out: Path) -> ExportFailed:
+        """This failure naming the campaign ``folder`` and what became of ``out`` (nothing
+        was written: it keeps its earlier contents, or was not created)."""
+        kept = "keeps its earlier contents" if out.exists() else "was not created"
+        return ExportFailed(
+            f"{folder}: {self}. Nothing was written (--out {out} {kept}); fit without "
+            f"--export {self.target} to get the datasheet and the other outputs",
+            self.target,
+        )
 
 
 def _sign_settings(folder, config=None) -> str:
@@ -891,12 +896,7 @@ def fit_seals(
     try:
         staging, (results, summary) = _outfolder.staged(out, write)
     except ExportFailed as failure:
-        kept = "keeps its earlier contents" if out.exists() else "was not created"
-        raise ExportFailed(
-            f"{folder}: {failure}. Nothing was written (--out {out} {kept}); fit without "
-            f"--export {failure.target} to get the datasheet and the other outputs",
-            failure.target,
-        ) from failure.__cause__
+        raise failure.named(folder, out) from failure.__cause__
     fits = {
         name: _moved(staging, result, out, out / folders[name]) for name, result in results.items()
     }

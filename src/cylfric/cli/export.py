@@ -58,13 +58,14 @@ def register(app) -> None:
         _check_out(out, target)
         import warnings
 
+        from ..model import FrictionModel
+
         options = _export_options(target, name, element)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            result = export(datasheet, target, out, **options)
-        from ..model import FrictionModel
-
-        assumed = FrictionModel.from_datasheet(datasheet).assumptions()
+            model = FrictionModel.from_datasheet(datasheet)  # read once: export and notes
+            result = export(model, target, out, **options)
+        assumed = model.assumptions()
         for line in assumed:  # on stderr, whatever is printed on stdout
             err_console.print(f"[yellow]note:[/yellow] {terminal(line)}", highlight=False)
         notes = list(dict.fromkeys(str(w.message) for w in caught))

@@ -235,6 +235,29 @@ def _png(fig) -> bytes:
     return buffer.getvalue()
 
 
+def _curves_figure(curves, quantity: str, ylabel: str, title: str):
+    """One log's curve against rod position per line, with its band: the load [N] or the
+    effective mass [kg] of ``fit.loads`` / ``fit.masses``, drawn in kN or t (``1e-3``)."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from ..escape import plot_text
+
+    unit = quantity.split("[")[1].rstrip("]")  # "N" or "kg": the band's key carries it too
+    fig = Figure(figsize=(7, 4.5))
+    ax = fig.add_subplot()
+    for curve in curves:
+        x = 1e3 * np.array(curve["position [m]"])
+        y = 1e-3 * np.array(curve[quantity])
+        b = 1e-3 * np.array(curve[f"band [{unit}]"])
+        ax.plot(x, y, label=plot_text(curve["log"]))
+        ax.fill_between(x, y - b, y + b, alpha=0.3)
+    ax.set(xlabel="rod position [mm]", ylabel=ylabel, title=title)
+    ax.legend(fontsize=7)
+    fig.subplots_adjust(left=0.12, right=0.97, top=0.92, bottom=0.12)
+    return fig
+
+
 def _figures(fit) -> dict[str, bytes]:
     import numpy as np
     from matplotlib.figure import Figure
@@ -244,31 +267,11 @@ def _figures(fit) -> dict[str, bytes]:
     out: dict[str, bytes] = {}
     if not fit.identified:
         return out
-    fig = Figure(figsize=(7, 4.5))
-    ax = fig.add_subplot()
-    for load in fit.loads:
-        x = 1e3 * np.array(load["position [m]"])
-        y = 1e-3 * np.array(load["load [N]"])
-        b = 1e-3 * np.array(load["band [N]"])
-        ax.plot(x, y, label=plot_text(load["log"]))
-        ax.fill_between(x, y - b, y + b, alpha=0.3)
-    ax.set(xlabel="rod position [mm]", ylabel="external load [kN]", title="Load against position")
-    ax.legend(fontsize=7)
-    fig.subplots_adjust(left=0.12, right=0.97, top=0.92, bottom=0.12)
-    out["load.png"] = _png(fig)
-
-    fig = Figure(figsize=(7, 4.5))
-    ax = fig.add_subplot()
-    for mass in fit.masses:
-        x = 1e3 * np.array(mass["position [m]"])
-        y = 1e-3 * np.array(mass["mass [kg]"])
-        b = 1e-3 * np.array(mass["band [kg]"])
-        ax.plot(x, y, label=plot_text(mass["log"]))
-        ax.fill_between(x, y - b, y + b, alpha=0.3)
-    ax.set(xlabel="rod position [mm]", ylabel="effective mass [t]", title="Reflected mass")
-    ax.legend(fontsize=7)
-    fig.subplots_adjust(left=0.12, right=0.97, top=0.92, bottom=0.12)
-    out["mass.png"] = _png(fig)
+    for name, curves, quantity, ylabel, title in (
+        ("load.png", fit.loads, "load [N]", "external load [kN]", "Load against position"),
+        ("mass.png", fit.masses, "mass [kg]", "effective mass [t]", "Reflected mass"),
+    ):
+        out[name] = _png(_curves_figure(curves, quantity, ylabel, title))
 
     fig = Figure(figsize=(7, 4.5))
     ax = fig.add_subplot()

@@ -432,9 +432,7 @@ def demo(
     result = run_fit(campaign, out / "fit", FitOptions(), quiet=True)
     sheet = result.datasheet
     print_table(_summary_table(sheet, "Recovered from the virtual campaign"))
-    from ..model import FrictionModel
-
-    truth = truth_check(FrictionModel.from_datasheet(sheet), settings)
+    truth = truth_check(result.model, settings)
     print_table(_demo_table(sheet, truth, clean))
     for line in _demo_truth_lines(truth, clean):
         console.print(terminal(line, markup=False), markup=False)

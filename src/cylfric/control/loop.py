@@ -52,9 +52,11 @@ import numpy as np
 from .axis import DEFAULT_AXIS, Axis
 from .kernel import (
     COMPENSATOR_CODES,
+    COMPENSATOR_STATE,
     OUTPUTS,
     REFERENCE_CODES,
     closed_loop,
+    compensator_step,
     friction_table,
     run_compensator,
 )
@@ -79,6 +81,7 @@ __all__ = [
     "FORCE_FILTER",
     "PlantFriction",
     "compensator_constants",
+    "compensator_function",
     "compensator_outputs",
     "MEASUREMENTS",
     "ramp_in",
@@ -327,6 +330,31 @@ def compensator_constants(
     )
     ctrl[:4] = 0.0
     return ctrl
+
+
+def compensator_function(
+    model: FrictionModel,
+    axis: Axis = DEFAULT_AXIS,
+    kind: str = "lugre",
+    *,
+    force_filter: float = FORCE_FILTER,
+):
+    """The compensator step (:func:`~.kernel.compensator_step`, what the C, FMU and MATLAB
+    exports run) as a per-sample callable with its own state:
+    ``step(x, pa, pb, x_ref, v_ref) -> (force [N], command [-])`` from the position [m],
+    the chamber pressures [Pa] and the reference [m, m/s], one call per controller sample
+    (to drive it in an axis model of one's own, as tests/test_control_reference.py does)."""
+    table, rule = friction_table(model), REFERENCE_CODES[model.reference]
+    ctrl = compensator_constants(model, axis, force_filter=force_filter)
+    vector, code = axis.vector(), COMPENSATOR_CODES[kind]
+    state = np.zeros(len(COMPENSATOR_STATE))
+
+    def step(x, pa, pb, x_ref, v_ref):
+        return compensator_step(
+            code, table, rule, ctrl, vector, state, x, pa, pb, x_ref, v_ref, 0.0
+        )
+
+    return step
 
 
 MEASUREMENTS = (

@@ -574,13 +574,7 @@ class FieldFit:
     status: dict[str, str]
     covariance: np.ndarray
     friction_names: list[str]
-    loads: list[dict[str, Any]]
-    masses: list[dict[str, Any]]
     cross_check: list[dict[str, Any]]
-    bands: list[dict[str, Any]]
-    days: list[dict[str, Any]]
-    changes: list[dict[str, Any]]
-    reproducibility: dict[str, Any]
     selection: dict[str, Any]
     flags: list[str]
     notes: list[str]
@@ -589,6 +583,13 @@ class FieldFit:
     rmse: float
     identified: bool
     force_check: dict[str, list[float]] = field(default_factory=dict)
+    # filled by fit_field once the friction is identified (empty until then)
+    loads: list[dict[str, Any]] = field(default_factory=list)
+    masses: list[dict[str, Any]] = field(default_factory=list)
+    bands: list[dict[str, Any]] = field(default_factory=list)
+    days: list[dict[str, Any]] = field(default_factory=list)
+    changes: list[dict[str, Any]] = field(default_factory=list)
+    reproducibility: dict[str, Any] = field(default_factory=dict)
 
     def friction(self, velocity, pressure=None) -> np.ndarray:
         """The identified friction law at ``velocity`` [m/s] (and mean pressure [Pa])."""
@@ -851,13 +852,7 @@ def _fit_field(records, config, options) -> FieldFit:
             status=status,
             covariance=np.zeros((0, 0)),
             friction_names=[],
-            loads=[],
-            masses=[],
             cross_check=[],
-            bands=[],
-            days=[],
-            changes=[],
-            reproducibility={},
             selection=selection,
             flags=flags,
             notes=notes,
@@ -941,13 +936,7 @@ def _fit_field(records, config, options) -> FieldFit:
         status=status,
         covariance=friction_cov,
         friction_names=names,
-        loads=[],
-        masses=[],
         cross_check=cross_check(signals, ranges, o),
-        bands=[],
-        days=[],
-        changes=[],
-        reproducibility={},
         selection=selection,
         flags=flags,
         notes=notes,

@@ -44,6 +44,7 @@ __all__ = [
     "FieldLog",
     "crane_geometry",
     "simulate_log",
+    "field_records",
     "generate_field",
     "GRAVITY",
     "write_log",
@@ -463,6 +464,46 @@ def _valve_side_pressure(chamber, velocity, valve, settings: FieldSettings) -> n
         value += alpha * (target - value) if valve[i] <= 0.01 else target - value
         line[i] = value
     return line
+
+
+def field_records(
+    settings: FieldSettings,
+    day_scales,
+    *,
+    duration: float = 300.0,
+    seed: int = 0,
+    logs_per_day: int = 2,
+) -> tuple[list, list]:
+    """Simulated logs in memory, as :func:`cylfric.io.fieldlog.read_field_logs` returns
+    them: ``logs_per_day`` logs [s of ``duration``] per day, day ``d`` at friction scale
+    ``day_scales[d]`` [-], payloads in turn, seeds ``seed + 10 d + j``. Returns
+    (:class:`~cylfric.io.fieldlog.FieldRecord` list, their truths)."""
+    from ..io.fieldlog import FieldRecord
+
+    records, truths = [], []
+    for d, scale in enumerate(day_scales):
+        for j in range(logs_per_day):
+            log = simulate_log(
+                settings,
+                duration=duration,
+                payload=settings.payloads[j % len(settings.payloads)],
+                friction_scale=scale,
+                seed=seed + 10 * d + j,
+            )
+            records.append(
+                FieldRecord(
+                    f"d{d}l{j}",
+                    f"day{d}",
+                    log.time,
+                    log.position,
+                    log.pressure_a,
+                    log.pressure_b,
+                    log.valve,
+                    {"kind": "memory"},
+                )
+            )
+            truths.append(log.truth)
+    return records, truths
 
 
 def generate_field(
