@@ -286,3 +286,26 @@ def test_leftovers_cylfric_made_are_removed(campaign, tmp_path):
     fit_campaign(campaign, out, report=False)
     assert not killed.exists() and not old.exists()
     assert (out / MARKER).is_file() and not (out / _outfolder.STAGING_MARKER).exists()
+
+
+def test_a_full_disk_while_writing_the_lock_names_the_lock_file(tmp_path, monkeypatch):
+    """The lock's process id not written (ENOSPC): the error names the lock file and the
+    action, and no lock is left behind."""
+    import errno
+
+    out = tmp_path / "res"
+    real_write = os.write
+
+    def full(handle, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "write", full)
+    with pytest.raises(OSError) as caught, _outfolder.lock(out):
+        pass
+    monkeypatch.setattr(os, "write", real_write)
+    from cylfric._paths import os_error_message
+
+    said = os_error_message(caught.value)  # what the command line prints
+    assert said.startswith(f"writing --out {out}: writing the lock file {tmp_path / '.res.lock'}")
+    assert said.endswith("No space left on device")
+    assert not (tmp_path / ".res.lock").exists()

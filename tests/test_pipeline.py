@@ -189,3 +189,14 @@ def test_the_report_says_what_its_degrees_of_freedom_and_scatter_components_are(
     assert f"runs - variables = {runs} - {stats['n_variables']}" in line
     page = scatter_html(model.record["fit"]["scatter"], None)
     assert "what it measures" in page and "stroke to stroke in one file" in page
+
+
+def test_identify_refuses_a_basis_without_its_keys(tmp_path):
+    folder = tmp_path / "bench"
+    generate_campaign(
+        folder,
+        BenchSettings(pressures_bar=(10, 159), speeds_mm_s=(2, 5, 10, 20, 50, 100), seed=1),
+    )
+    points = cylfric.fit(folder).points
+    with pytest.raises(ValueError, match=r"a basis needs \['chamber', 'kind', 'stated_by'\] too"):
+        identify(points, pressure_reference={"rule": "a"})
